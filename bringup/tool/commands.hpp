@@ -1,0 +1,14 @@
+#pragma once
+
+/// @file
+/// The `ugvsense` subcommands. Each takes main's argc/argv unchanged (argv[1] is the subcommand name) and
+/// returns the process exit code: 0 success, 1 failure of the job, 2 usage error.
+
+namespace ugv::tool {
+
+int runCalibrate(int argc, char** argv);
+int runCheckConfig(int argc, char** argv);
+int runRectify(int argc, char** argv);
+int runSim(int argc, char** argv);
+
+} // namespace ugv::tool

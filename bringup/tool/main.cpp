@@ -1,0 +1,47 @@
+// ugvsense: the command-line tool (calibration, config checks, simulation; later detection, evaluation,
+// recording, benchmarks, correlation). The service itself is ugvsensed.
+
+#include <cstring>
+#include <iostream>
+
+#include "commands.hpp"
+
+namespace {
+
+struct Subcommand {
+    const char* name;
+    const char* summary;
+    int (*run)(int argc, char** argv);
+};
+
+constexpr Subcommand kSubcommands[] = {
+    {"calibrate", "calibrate a stereo rig from chessboard image pairs", ugv::tool::runCalibrate},
+    {"check-config", "validate a service config file and print the effective config", ugv::tool::runCheckConfig},
+    {"rectify", "rectify image pairs with a calibration and report the row alignment", ugv::tool::runRectify},
+    {"sim", "generate synthetic stereo data (chessboard pairs for calibration)", ugv::tool::runSim},
+};
+
+void printHelp(std::ostream& out)
+{
+    out << "usage: ugvsense SUBCOMMAND [options]   (ugvsense SUBCOMMAND --help for its options)\n\nsubcommands:\n";
+    for (const auto& sub : kSubcommands) {
+        out << "  " << sub.name << std::string(16 - std::strlen(sub.name), ' ') << sub.summary << '\n';
+    }
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+        printHelp(argc < 2 ? std::cerr : std::cout);
+        return argc < 2 ? 2 : 0;
+    }
+    for (const auto& sub : kSubcommands) {
+        if (std::strcmp(argv[1], sub.name) == 0) {
+            return sub.run(argc, argv);
+        }
+    }
+    std::cerr << "ugvsense: error: unknown subcommand '" << argv[1] << "' (fix: run 'ugvsense --help' for the list)\n";
+    return 2;
+}
