@@ -1,1 +1,411 @@
-namespace ugv::bringup {}
+#include "ugv/bringup/config.hpp"
+
+#include <cmath>
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+namespace ugv::bringup {
+namespace {
+
+enum class Kind { Int, Double, Text, Path, Choice };
+
+/// One config key: its type, range, description, and how to read and write it in ServiceConfig.
+struct KeySpec {
+    std::string path;
+    std::string description;
+    Kind kind = Kind::Double;
+    double min = 0.0;
+    double max = 0.0;
+    std::vector<std::string> choices;
+    std::function<void(ServiceConfig&, double)> setNumber;
+    std::function<double(const ServiceConfig&)> getNumber;
+    std::function<void(ServiceConfig&, const std::string&)> setText;
+    std::function<std::string(const ServiceConfig&)> getText;
+};
+
+template <class Ref>
+KeySpec numberKey(std::string path, Kind kind, double min, double max, std::string description, Ref ref)
+{
+    KeySpec key{std::move(path), std::move(description), kind, min, max, {}, {}, {}, {}, {}};
+    key.setNumber = [ref](ServiceConfig& c, double v) { ref(c) = static_cast<std::remove_reference_t<decltype(ref(c))>>(v); };
+    key.getNumber = [ref](const ServiceConfig& c) { return static_cast<double>(ref(const_cast<ServiceConfig&>(c))); }; // NOLINT: read only
+    return key;
+}
+
+template <class Ref>
+KeySpec textKey(std::string path, Kind kind, std::string description, Ref ref)
+{
+    KeySpec key{std::move(path), std::move(description), kind, 0, 0, {}, {}, {}, {}, {}};
+    key.setText = [ref](ServiceConfig& c, const std::string& v) { ref(c) = v; };
+    key.getText = [ref](const ServiceConfig& c) { return ref(const_cast<ServiceConfig&>(c)); }; // NOLINT: read only
+    return key;
+}
+
+template <class E, class Ref>
+KeySpec choiceKey(std::string path, std::string description, std::vector<std::pair<std::string, E>> names, Ref ref)
+{
+    KeySpec key{std::move(path), std::move(description), Kind::Choice, 0, 0, {}, {}, {}, {}, {}};
+    for (const auto& [name, value] : names) {
+        key.choices.push_back(name);
+    }
+    key.setText = [ref, names](ServiceConfig& c, const std::string& v) {
+        for (const auto& [name, value] : names) {
+            if (name == v) {
+                ref(c) = value;
+            }
+        }
+    };
+    key.getText = [ref, names](const ServiceConfig& c) {
+        for (const auto& [name, value] : names) {
+            if (ref(const_cast<ServiceConfig&>(c)) == value) { // NOLINT: read only
+                return name;
+            }
+        }
+        return std::string("?");
+    };
+    return key;
+}
+
+#define UGV_REF(member) [](ServiceConfig& c) -> auto& { return c.member; }
+
+const std::vector<KeySpec>& schema()
+{
+    static const std::vector<KeySpec> keys = {
+        textKey("vehicle_id", Kind::Text, "name of this vehicle in published messages", UGV_REF(vehicleId)),
+        textKey("calibration", Kind::Path, "stereo calibration file written by 'ugvsense calibrate' ($UGV_CALIBRATION overrides)",
+                UGV_REF(calibrationPath)),
+        choiceKey<CameraBackend>("camera.backend", "where frames come from",
+                                 {{"v4l2", CameraBackend::V4l2}, {"libcamera", CameraBackend::Libcamera}, {"replay", CameraBackend::Replay}},
+                                 UGV_REF(camera.backend)),
+        textKey("camera.left_device", Kind::Text, "V4L2 device of the left camera (or the side-by-side stereo device)",
+                UGV_REF(camera.leftDevice)),
+        textKey("camera.right_device", Kind::Text, "V4L2 device of the right camera; empty for a side-by-side device",
+                UGV_REF(camera.rightDevice)),
+        numberKey("camera.width", Kind::Int, 64, 4096, "image width per camera [px]", UGV_REF(camera.width)),
+        numberKey("camera.height", Kind::Int, 48, 4096, "image height per camera [px]", UGV_REF(camera.height)),
+        numberKey("camera.fps", Kind::Double, 1, 240, "camera frame rate [Hz]; the frame deadline is 1/fps", UGV_REF(camera.fps)),
+        numberKey("camera.max_pair_skew_ms", Kind::Double, 0, 100, "left/right timestamps further apart are not paired [ms]",
+                  UGV_REF(camera.maxPairSkewMs)),
+        textKey("camera.replay_path", Kind::Path, "recording to replay (backend: replay)", UGV_REF(camera.replayPath)),
+        choiceKey<ReplayPace>("camera.replay_pace", "replay pace: as recorded, at replay_fps, or as fast as possible",
+                              {{"recorded", ReplayPace::Recorded}, {"fixed", ReplayPace::Fixed}, {"fastest", ReplayPace::Fastest}},
+                              UGV_REF(camera.replayPace)),
+        numberKey("camera.replay_fps", Kind::Double, 0.1, 1000, "replay rate when replay_pace is fixed [Hz]", UGV_REF(camera.replayFps)),
+        numberKey("roi.top_fraction", Kind::Double, 0.0, 0.9, "first row of the region of interest, as a fraction of the height",
+                  UGV_REF(roi.topFraction)),
+        numberKey("roi.matcher_margin_rows", Kind::Int, 0, 64, "rows above the region of interest that the matcher reads [px]",
+                  UGV_REF(roi.matcherMarginRows)),
+        choiceKey<MatcherMode>("stereo.mode", "OpenCV StereoSGBM mode",
+                               {{"sgbm", MatcherMode::Sgbm}, {"sgbm_3way", MatcherMode::Sgbm3Way}, {"hh4", MatcherMode::Hh4}},
+                               UGV_REF(stereo.mode)),
+        numberKey("stereo.num_disparities", Kind::Int, 16, 256, "disparity search range [px], a multiple of 16",
+                  UGV_REF(stereo.numDisparities)),
+        numberKey("stereo.block_size", Kind::Int, 1, 11, "matching block size [px], odd", UGV_REF(stereo.blockSize)),
+        choiceKey<DetectorMode>("obstacles.detector", "stereo (two cameras), colour (one camera) or both",
+                                {{"stereo", DetectorMode::Stereo}, {"colour", DetectorMode::Colour}, {"both", DetectorMode::Both}},
+                                UGV_REF(obstacles.detector)),
+        numberKey("obstacles.sector_count", Kind::Int, 4, 360, "bearing sectors across the horizontal field of view",
+                  UGV_REF(obstacles.sectorCount)),
+        numberKey("obstacles.danger_distance_m", Kind::Double, 0.1, 50, "obstacles closer than this are red [m]",
+                  UGV_REF(obstacles.dangerDistanceM)),
+        numberKey("obstacles.caution_distance_m", Kind::Double, 0.1, 100, "obstacles closer than this are blue, beyond green [m]",
+                  UGV_REF(obstacles.cautionDistanceM)),
+        numberKey("obstacles.min_height_m", Kind::Double, 0.02, 2, "positive obstacles taller than this count [m]",
+                  UGV_REF(obstacles.minHeightM)),
+        numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
+                  UGV_REF(obstacles.minDepthM)),
+    };
+    return keys;
+}
+
+#undef UGV_REF
+
+const KeySpec* findKey(const std::string& path)
+{
+    for (const auto& key : schema()) {
+        if (key.path == path) {
+            return &key;
+        }
+    }
+    return nullptr;
+}
+
+/// Edit distance, for "did you mean" hints on misspelt keys.
+std::size_t editDistance(const std::string& a, const std::string& b)
+{
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) {
+        row[j] = j;
+    }
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t above = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diagonal = above;
+        }
+    }
+    return row[b.size()];
+}
+
+std::string closestKey(const std::string& path)
+{
+    std::string best;
+    std::size_t bestDistance = 3; // suggest only close spellings
+    for (const auto& key : schema()) {
+        if (const std::size_t d = editDistance(path, key.path); d < bestDistance) {
+            best = key.path;
+            bestDistance = d;
+        }
+    }
+    return best;
+}
+
+bool isSection(const std::string& path)
+{
+    for (const auto& key : schema()) {
+        if (key.path.rfind(path + ".", 0) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+std::string formatNumber(double value)
+{
+    std::ostringstream out;
+    out << value;
+    return out.str();
+}
+
+std::string rangeText(const KeySpec& key)
+{
+    switch (key.kind) {
+    case Kind::Int:
+        return "an integer in [" + formatNumber(key.min) + ", " + formatNumber(key.max) + "]";
+    case Kind::Double:
+        return "a number in [" + formatNumber(key.min) + ", " + formatNumber(key.max) + "]";
+    case Kind::Choice: {
+        std::string text = "one of";
+        for (const auto& choice : key.choices) {
+            text += " " + choice;
+        }
+        return text;
+    }
+    case Kind::Text:
+    case Kind::Path:
+        return "a string";
+    }
+    return {};
+}
+
+class Parser {
+public:
+    Parser(std::string source, std::string baseDir) : source_(std::move(source)), baseDir_(std::move(baseDir)) {}
+
+    void walk(const YAML::Node& map, const std::string& prefix)
+    {
+        for (const auto& item : map) {
+            const std::string name = item.first.as<std::string>();
+            const std::string path = prefix.empty() ? name : prefix + "." + name;
+            const YAML::Node& value = item.second;
+            if (const KeySpec* key = findKey(path)) {
+                setLeaf(*key, value);
+            } else if (isSection(path)) {
+                if (!value.IsMap()) {
+                    error(value, path, "is a section and needs nested keys", "indent its keys below '" + name + ":'");
+                } else {
+                    walk(value, path);
+                }
+            } else {
+                const std::string hint = closestKey(path);
+                error(item.first, path, "unknown key",
+                      (hint.empty() ? std::string("remove it") : "did you mean '" + hint + "'?") +
+                          " ('ugvsense check-config --schema' lists every key)");
+            }
+        }
+    }
+
+    void crossCheck(const YAML::Node& root)
+    {
+        const auto at = [&root](const char* section) { return root[section] ? root[section] : root; };
+        if (config_.obstacles.cautionDistanceM <= config_.obstacles.dangerDistanceM) {
+            error(at("obstacles"), "obstacles.caution_distance_m",
+                  "value " + formatNumber(config_.obstacles.cautionDistanceM) + " is not above danger_distance_m (" +
+                      formatNumber(config_.obstacles.dangerDistanceM) + ")",
+                  "make caution_distance_m larger than danger_distance_m");
+        }
+        if (config_.stereo.numDisparities % 16 != 0) {
+            error(at("stereo"), "stereo.num_disparities", "value " + std::to_string(config_.stereo.numDisparities) + " is not a multiple of 16",
+                  "use 16, 32, 64, 128 or 256");
+        }
+        if (config_.stereo.numDisparities >= config_.camera.width) {
+            error(at("stereo"), "stereo.num_disparities", "value " + std::to_string(config_.stereo.numDisparities) +
+                  " is not below the image width " + std::to_string(config_.camera.width), "lower num_disparities");
+        }
+        if (config_.stereo.blockSize % 2 == 0) {
+            error(at("stereo"), "stereo.block_size", "value " + std::to_string(config_.stereo.blockSize) + " is even", "use an odd size such as 5");
+        }
+        if (config_.camera.backend == CameraBackend::Replay && config_.camera.replayPath.empty()) {
+            error(at("camera"), "camera.replay_path", "is empty but camera.backend is replay", "set replay_path to a recording");
+        }
+        if (config_.camera.backend == CameraBackend::V4l2 && config_.camera.leftDevice.empty()) {
+            error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2", "set it, e.g. /dev/video0");
+        }
+        if (config_.calibrationPath.empty()) {
+            error(root, "calibration", "is empty", "set it to the file written by 'ugvsense calibrate'");
+        }
+    }
+
+    ServiceConfig& config() { return config_; }
+    ConfigErrors& errors() { return errors_; }
+
+    void error(const YAML::Node& node, const std::string& key, const std::string& what, const std::string& fix)
+    {
+        std::string where = source_;
+        if (node.IsDefined() && node.Mark().line >= 0) {
+            where += ":" + std::to_string(node.Mark().line + 1);
+        }
+        errors_.push_back(Error{where + " (" + key + ")", what, fix});
+    }
+
+private:
+    void setLeaf(const KeySpec& key, const YAML::Node& value)
+    {
+        if (!value.IsScalar()) {
+            error(value, key.path, value.IsNull() ? "has no value" : "must be a single value, not a list or map",
+                  "give " + rangeText(key) + ": " + key.description);
+            return;
+        }
+        const std::string text = value.Scalar();
+        if (key.kind == Kind::Text || key.kind == Kind::Path) {
+            std::string resolved = text;
+            if (key.kind == Kind::Path && !text.empty() && std::filesystem::path(text).is_relative()) {
+                resolved = (std::filesystem::path(baseDir_) / text).lexically_normal().string();
+            }
+            key.setText(config_, resolved);
+            return;
+        }
+        if (key.kind == Kind::Choice) {
+            for (const auto& choice : key.choices) {
+                if (choice == text) {
+                    key.setText(config_, text);
+                    return;
+                }
+            }
+            error(value, key.path, "value '" + text + "' is not allowed", "give " + rangeText(key));
+            return;
+        }
+        char* end = nullptr;
+        const double number = std::strtod(text.c_str(), &end);
+        const bool parsed = !text.empty() && end == text.c_str() + text.size();
+        if (!parsed || !std::isfinite(number) || number < key.min || number > key.max ||
+            (key.kind == Kind::Int && number != std::floor(number))) {
+            error(value, key.path, "value '" + text + "' is " + (parsed && std::isfinite(number) ? "out of range" : "not a valid number"),
+                  "give " + rangeText(key) + ": " + key.description);
+            return;
+        }
+        key.setNumber(config_, number);
+    }
+
+    std::string source_;
+    std::string baseDir_;
+    ServiceConfig config_;
+    ConfigErrors errors_;
+};
+
+} // namespace
+
+Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, const std::string& sourceName,
+                                                const std::string& baseDir)
+{
+    YAML::Node root;
+    try {
+        root = YAML::Load(yamlText);
+    } catch (const YAML::Exception& e) {
+        return Unexpected(ConfigErrors{Error{sourceName + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1),
+                                             "not valid YAML: " + e.msg, "fix the syntax at that line (is the file truncated?)"}});
+    }
+    if (root.IsNull()) {
+        return Unexpected(ConfigErrors{Error{sourceName, "the file is empty", "start from bringup/config.example.yaml"}});
+    }
+    if (!root.IsMap()) {
+        return Unexpected(ConfigErrors{Error{sourceName, "the top level is not a map of keys", "start from bringup/config.example.yaml"}});
+    }
+    Parser parser(sourceName, baseDir);
+    try {
+        parser.walk(root, "");
+    } catch (const YAML::Exception& e) {
+        parser.errors().push_back(Error{sourceName + ":" + std::to_string(e.mark.line + 1), "unexpected YAML: " + e.msg,
+                                        "keys must be plain strings"});
+    }
+    if (const char* env = std::getenv("UGV_CALIBRATION"); env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
+        parser.config().calibrationPath = env;
+    }
+    parser.crossCheck(root);
+    if (!parser.errors().empty()) {
+        return Unexpected(std::move(parser.errors()));
+    }
+    parser.config().sourceFile = sourceName;
+    return std::move(parser.config());
+}
+
+Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path)
+{
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        return Unexpected(ConfigErrors{Error{path, "config file not found or not a regular file",
+                                             "pass an existing file, e.g. 'ugvsense check-config bringup/config.example.yaml'"}});
+    }
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!in) {
+        return Unexpected(ConfigErrors{Error{path, "cannot read the file", "check its permissions"}});
+    }
+    const std::string baseDir = std::filesystem::absolute(path, ec).parent_path().string();
+    return parseConfig(text.str(), path, baseDir);
+}
+
+std::string formatConfig(const ServiceConfig& config)
+{
+    std::ostringstream out;
+    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile) << ")\n";
+    std::string section;
+    for (const auto& key : schema()) {
+        const auto dot = key.path.find('.');
+        const std::string keySection = dot == std::string::npos ? "" : key.path.substr(0, dot);
+        const std::string name = dot == std::string::npos ? key.path : key.path.substr(dot + 1);
+        if (keySection != section) {
+            section = keySection;
+            out << section << ":\n";
+        }
+        const std::string value = key.getText ? "\"" + key.getText(config) + "\"" : formatNumber(key.getNumber(config));
+        std::string line = (section.empty() ? "" : "  ") + name + ": " + value;
+        if (line.size() < 44) {
+            line.resize(44, ' ');
+        }
+        out << line << " # " << key.description << "; " << rangeText(key) << '\n';
+    }
+    return out.str();
+}
+
+std::string configPath(const char* fromArgs)
+{
+    if (fromArgs != nullptr && *fromArgs != '\0') {
+        return fromArgs;
+    }
+    if (const char* env = std::getenv("UGV_CONFIG"); env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
+        return env;
+    }
+    return "/etc/ugvsense/config.yaml";
+}
+
+} // namespace ugv::bringup

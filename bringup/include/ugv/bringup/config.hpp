@@ -1,0 +1,85 @@
+#pragma once
+
+/// @file
+/// The service configuration: one YAML file (default /etc/ugvsense/config.yaml; path from argv or
+/// $UGV_CONFIG), parsed once at start into immutable typed structs. Every key has a type, a default, an
+/// allowed range and a description (the schema in config.cpp, which `ugvsense check-config` prints).
+/// Unknown keys, wrong types and out-of-range values are errors; all errors are collected, each naming
+/// the file, line, key, bad value and allowed range. A config with any error refuses to start.
+///
+/// Environment overrides (paths and log levels only): $UGV_CALIBRATION replaces `calibration`.
+///
+/// Thread-safety: load/parse are reentrant; the result is immutable. RT-safe: no (init only).
+
+#include <string>
+#include <vector>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+
+namespace ugv::bringup {
+
+enum class CameraBackend { V4l2, Libcamera, Replay };
+enum class ReplayPace { Recorded, Fixed, Fastest };
+enum class DetectorMode { Stereo, Colour, Both };
+enum class MatcherMode { Sgbm, Sgbm3Way, Hh4 };
+
+struct CameraConfig {
+    CameraBackend backend = CameraBackend::Replay;
+    std::string leftDevice = "/dev/video0";  ///< V4L2 left device (or the side-by-side device)
+    std::string rightDevice = "/dev/video1"; ///< V4L2 right device; empty = side-by-side on leftDevice
+    int width = 640;                         ///< [px] per camera
+    int height = 480;                        ///< [px]
+    double fps = 30.0;                       ///< [Hz] frame rate; the frame deadline is 1/fps
+    double maxPairSkewMs = 5.0;              ///< [ms] left/right timestamps further apart are not paired
+    std::string replayPath;                  ///< recording for the replay backend
+    ReplayPace replayPace = ReplayPace::Recorded;
+    double replayFps = 30.0; ///< [Hz] rate when replayPace is Fixed
+};
+
+struct RoiConfig {
+    double topFraction = 0.5; ///< first image row of the region of interest, as a fraction of the height
+    int matcherMarginRows = 8; ///< [px] extra rows above the ROI that the block matcher reads
+};
+
+struct StereoConfig {
+    MatcherMode mode = MatcherMode::Sgbm;
+    int numDisparities = 128; ///< [px] multiple of 16
+    int blockSize = 5;        ///< [px] odd
+};
+
+struct ObstacleConfig {
+    DetectorMode detector = DetectorMode::Stereo;
+    int sectorCount = 64;             ///< bearing bins across the horizontal field of view
+    double dangerDistanceM = 1.5;     ///< [m] closer than this: red
+    double cautionDistanceM = 5.0;    ///< [m] closer than this: blue; beyond: green
+    double minHeightM = 0.10;         ///< [m] positive obstacles taller than this count
+    double minDepthM = 0.10;          ///< [m] negative obstacles deeper than this count
+};
+
+struct ServiceConfig {
+    std::string sourceFile;  ///< the file this came from (for messages)
+    std::string vehicleId = "ugv-1";
+    std::string calibrationPath = "/var/lib/ugvsense/calibration.yaml"; ///< absolute after loading
+    CameraConfig camera;
+    RoiConfig roi;
+    StereoConfig stereo;
+    ObstacleConfig obstacles;
+};
+
+using ConfigErrors = std::vector<Error>;
+
+/// Reads and validates the file; relative paths in it resolve against the file's folder.
+Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path);
+
+/// Validates YAML text; `sourceName` is used in messages and `baseDir` resolves relative paths.
+Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, const std::string& sourceName,
+                                                const std::string& baseDir);
+
+/// The effective config as YAML, every key with its description and range as a comment.
+std::string formatConfig(const ServiceConfig& config);
+
+/// The config file path: argv's value if given, else $UGV_CONFIG, else /etc/ugvsense/config.yaml.
+std::string configPath(const char* fromArgs);
+
+} // namespace ugv::bringup

@@ -1,0 +1,47 @@
+#pragma once
+
+/// @file
+/// The one place errno is read. Device backends (V4L2 ioctl/poll/mmap, file I/O of recordings) call the
+/// OS through `sysCall`, which retries EINTR and turns a failure into a `SysError` holding errno, so that
+/// errno never leaks out of hal/.
+///
+/// Thread-safety: reentrant. RT-safe: yes (no allocation; the call itself may block, which is the caller's
+/// decision: only the frame wait may block on the frame path).
+
+#include <cerrno>
+#include <cstdint>
+#include <utility>
+
+#include "ugv/platform/result.hpp"
+
+namespace ugv::hal {
+
+/// errno of a failed system call.
+struct SysError {
+    int code = 0;
+    /// strerror text, e.g. "No such device" (static storage, never allocates).
+    [[nodiscard]] const char* text() const noexcept;
+    /// The errno symbol, e.g. "ENODEV", or "errno" for codes we do not name.
+    [[nodiscard]] const char* name() const noexcept;
+    friend bool operator==(const SysError&, const SysError&) = default;
+};
+
+/// Calls `f(args...)`; retries while it fails with EINTR. Success is any return value other than
+/// `failure` (-1 for most calls); the error carries errno. `maxRetries` bounds the retry loop.
+template <class F, class... Args>
+auto sysCall(F&& f, Args&&... args) noexcept -> Result<decltype(f(std::forward<Args>(args)...)), SysError>
+{
+    constexpr int kMaxEintrRetries = 100;
+    for (int attempt = 0;; ++attempt) {
+        const auto value = f(args...);
+        if (value != -1) {
+            return value;
+        }
+        const int code = errno;
+        if (code != EINTR || attempt >= kMaxEintrRetries) {
+            return Unexpected(SysError{code});
+        }
+    }
+}
+
+} // namespace ugv::hal

@@ -1,0 +1,255 @@
+#include "ugv/bringup/config.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+namespace ugv::bringup {
+namespace {
+
+constexpr const char* kValidMinimal = "calibration: calib.yaml\ncamera:\n  replay_path: rec.bin\n";
+
+/// All error messages joined, for substring assertions.
+std::string joined(const ConfigErrors& errors)
+{
+    std::string text;
+    for (const auto& e : errors) {
+        text += e.message() + "\n";
+    }
+    return text;
+}
+
+ConfigErrors parseErrors(const std::string& yaml)
+{
+    auto result = parseConfig(yaml, "test.yaml", "/etc/ugvsense");
+    EXPECT_FALSE(result.has_value()) << "expected errors for:\n" << yaml;
+    return result.has_value() ? ConfigErrors{} : result.error();
+}
+
+TEST(Config, MinimalFileGivesDefaultsAndResolvesRelativePaths)
+{
+    const auto sut = parseConfig(kValidMinimal, "test.yaml", "/etc/ugvsense");
+
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+    EXPECT_EQ(sut->calibrationPath, "/etc/ugvsense/calib.yaml");
+    EXPECT_EQ(sut->camera.replayPath, "/etc/ugvsense/rec.bin");
+    EXPECT_EQ(sut->camera.width, 640);
+    EXPECT_EQ(sut->stereo.numDisparities, 128);
+    EXPECT_EQ(sut->obstacles.sectorCount, 64);
+    EXPECT_DOUBLE_EQ(sut->obstacles.minHeightM, 0.10);
+}
+
+TEST(Config, EveryKeyIsParsed)
+{
+    const std::string yaml = "vehicle_id: rover-7\ncalibration: /c.yaml\n"
+                             "camera:\n  backend: v4l2\n  left_device: /dev/video4\n  right_device: ''\n  width: 1280\n"
+                             "  height: 720\n  fps: 15\n  max_pair_skew_ms: 2.5\n  replay_path: /r\n  replay_pace: fixed\n  replay_fps: 60\n"
+                             "roi:\n  top_fraction: 0.4\n  matcher_margin_rows: 4\n"
+                             "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n"
+                             "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
+                             "  min_height_m: 0.2\n  min_depth_m: 0.15\n";
+
+    const auto sut = parseConfig(yaml, "test.yaml", "/");
+
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+    EXPECT_EQ(sut->vehicleId, "rover-7");
+    EXPECT_EQ(sut->camera.backend, CameraBackend::V4l2);
+    EXPECT_EQ(sut->camera.leftDevice, "/dev/video4");
+    EXPECT_EQ(sut->camera.rightDevice, "");
+    EXPECT_EQ(sut->camera.width, 1280);
+    EXPECT_EQ(sut->camera.height, 720);
+    EXPECT_DOUBLE_EQ(sut->camera.fps, 15.0);
+    EXPECT_DOUBLE_EQ(sut->camera.maxPairSkewMs, 2.5);
+    EXPECT_EQ(sut->camera.replayPace, ReplayPace::Fixed);
+    EXPECT_DOUBLE_EQ(sut->camera.replayFps, 60.0);
+    EXPECT_DOUBLE_EQ(sut->roi.topFraction, 0.4);
+    EXPECT_EQ(sut->roi.matcherMarginRows, 4);
+    EXPECT_EQ(sut->stereo.mode, MatcherMode::Sgbm3Way);
+    EXPECT_EQ(sut->stereo.numDisparities, 64);
+    EXPECT_EQ(sut->stereo.blockSize, 7);
+    EXPECT_EQ(sut->obstacles.detector, DetectorMode::Both);
+    EXPECT_EQ(sut->obstacles.sectorCount, 32);
+    EXPECT_DOUBLE_EQ(sut->obstacles.dangerDistanceM, 1.0);
+    EXPECT_DOUBLE_EQ(sut->obstacles.cautionDistanceM, 4.0);
+    EXPECT_DOUBLE_EQ(sut->obstacles.minHeightM, 0.2);
+    EXPECT_DOUBLE_EQ(sut->obstacles.minDepthM, 0.15);
+}
+
+TEST(Config, UnknownKeyIsAnErrorWithLineAndSuggestion)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "stereo:\n  num_disparites: 64\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].where, "test.yaml:5 (stereo.num_disparites)");
+    EXPECT_EQ(errors[0].what, "unknown key");
+    EXPECT_NE(errors[0].fix.find("did you mean 'stereo.num_disparities'"), std::string::npos);
+}
+
+TEST(Config, OutOfRangeValueNamesKeyValueAndRange)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "stereo:\n  block_size: 13\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].where, "test.yaml:5 (stereo.block_size)");
+    EXPECT_NE(errors[0].what.find("'13'"), std::string::npos);
+    EXPECT_NE(errors[0].fix.find("[1, 11]"), std::string::npos);
+}
+
+TEST(Config, NonNumbersNanAndFractionalIntegersAreRejected)
+{
+    for (const char* bad : {"fps: fast", "fps: .nan", "fps: nan", "fps: 1e999", "width: 640.5", "width: ''", "fps: [1, 2]", "fps:"}) {
+        const auto errors = parseErrors(std::string(kValidMinimal) + "  " + bad + "\n");
+        ASSERT_EQ(errors.size(), 1u) << bad << "\n" << joined(errors);
+        EXPECT_NE(errors[0].where.find("camera."), std::string::npos) << bad;
+    }
+}
+
+TEST(Config, BadChoiceListsTheAllowedValues)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "  backend: usb\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_NE(errors[0].what.find("'usb'"), std::string::npos);
+    EXPECT_NE(errors[0].fix.find("v4l2 libcamera replay"), std::string::npos);
+}
+
+TEST(Config, CrossFieldRulesAreChecked)
+{
+    const auto errors = parseErrors("calibration: c\ncamera:\n  backend: replay\nstereo:\n  num_disparities: 40\n  block_size: 4\n"
+                                    "obstacles:\n  danger_distance_m: 5\n  caution_distance_m: 2\n");
+    const std::string text = joined(errors);
+
+    EXPECT_EQ(errors.size(), 4u) << text;
+    EXPECT_NE(text.find("camera.replay_path"), std::string::npos);
+    EXPECT_NE(text.find("multiple of 16"), std::string::npos);
+    EXPECT_NE(text.find("is even"), std::string::npos);
+    EXPECT_NE(text.find("not above danger_distance_m"), std::string::npos);
+}
+
+TEST(Config, DisparityRangeMustFitTheImage)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "  width: 128\nstereo:\n  num_disparities: 128\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_NE(errors[0].what.find("not below the image width"), std::string::npos);
+}
+
+TEST(Config, SectionGivenAsScalarIsAnError)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "stereo: 5\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_NE(errors[0].what.find("is a section"), std::string::npos);
+}
+
+TEST(Config, AllErrorsAreCollectedNotJustTheFirst)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "  fps: 0\n  width: 9999\nbogus: 1\n");
+
+    EXPECT_EQ(errors.size(), 3u) << joined(errors);
+}
+
+TEST(Config, SyntaxErrorGivesLineAndColumn)
+{
+    const auto errors = parseErrors("camera:\n  fps: [30\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_NE(errors[0].where.find("test.yaml:"), std::string::npos);
+    EXPECT_NE(errors[0].what.find("not valid YAML"), std::string::npos);
+    EXPECT_NE(errors[0].fix.find("truncated"), std::string::npos);
+}
+
+TEST(Config, EmptyAndNonMapFilesAreRejected)
+{
+    EXPECT_EQ(parseErrors("").at(0).what, "the file is empty");
+    EXPECT_EQ(parseErrors("- a\n- b\n").at(0).what, "the top level is not a map of keys");
+    EXPECT_EQ(parseErrors("just text").at(0).what, "the top level is not a map of keys");
+}
+
+TEST(Config, BinaryGarbageIsAnErrorNotACrash)
+{
+    std::string garbage;
+    for (int i = 0; i < 512; ++i) {
+        garbage.push_back(static_cast<char>((i * 7919) % 256));
+    }
+    const auto result = parseConfig(garbage, "garbage.yaml", "/");
+
+    EXPECT_FALSE(result.has_value());
+}
+
+TEST(Config, LoadConfigReportsMissingFile)
+{
+    const auto result = loadConfig("/nonexistent/ugvsense.yaml");
+
+    ASSERT_FALSE(result.has_value());
+    EXPECT_EQ(result.error().at(0).where, "/nonexistent/ugvsense.yaml");
+    EXPECT_NE(result.error().at(0).what.find("not found"), std::string::npos);
+}
+
+TEST(Config, LoadConfigResolvesAgainstTheFilesFolder)
+{
+    const auto dir = std::filesystem::temp_directory_path() / "ugv-config-test";
+    std::filesystem::create_directories(dir);
+    const auto file = dir / "config.yaml";
+    std::ofstream(file) << kValidMinimal;
+
+    const auto sut = loadConfig(file.string());
+
+    ASSERT_TRUE(sut.has_value());
+    EXPECT_EQ(sut->calibrationPath, (dir / "calib.yaml").string());
+    EXPECT_EQ(sut->sourceFile, file.string());
+    std::filesystem::remove_all(dir);
+}
+
+TEST(Config, TruncatedFileIsReportedNotSilentlyDefaulted)
+{
+    // A config cut in the middle of a key: the partial key is unknown and named.
+    const auto errors = parseErrors(std::string(kValidMinimal) + "stereo:\n  num_dispar");
+
+    ASSERT_FALSE(errors.empty());
+    EXPECT_NE(joined(errors).find("stereo"), std::string::npos);
+}
+
+TEST(Config, ShippedExampleIsValid)
+{
+    const auto sut = loadConfig(UGV_SOURCE_DIR "/bringup/config.example.yaml");
+
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+}
+
+TEST(Config, FormatConfigRoundTrips)
+{
+    auto original = parseConfig(std::string(kValidMinimal) + "  fps: 12.5\nstereo:\n  mode: hh4\n", "t.yaml", "/d");
+    ASSERT_TRUE(original.has_value());
+
+    const auto again = parseConfig(formatConfig(*original), "formatted.yaml", "/");
+
+    ASSERT_TRUE(again.has_value()) << joined(again.error());
+    EXPECT_DOUBLE_EQ(again->camera.fps, 12.5);
+    EXPECT_EQ(again->stereo.mode, MatcherMode::Hh4);
+    EXPECT_EQ(again->calibrationPath, "/d/calib.yaml");
+}
+
+TEST(Config, ConfigPathPrecedence)
+{
+    EXPECT_EQ(configPath("/a.yaml"), "/a.yaml");
+    ::setenv("UGV_CONFIG", "/env.yaml", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test
+    EXPECT_EQ(configPath(nullptr), "/env.yaml");
+    ::unsetenv("UGV_CONFIG"); // NOLINT(concurrency-mt-unsafe)
+    EXPECT_EQ(configPath(nullptr), "/etc/ugvsense/config.yaml");
+}
+
+TEST(Config, CalibrationEnvironmentOverride)
+{
+    ::setenv("UGV_CALIBRATION", "/override.yaml", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test
+    const auto sut = parseConfig(kValidMinimal, "t.yaml", "/d");
+    ::unsetenv("UGV_CALIBRATION"); // NOLINT(concurrency-mt-unsafe)
+
+    ASSERT_TRUE(sut.has_value());
+    EXPECT_EQ(sut->calibrationPath, "/override.yaml");
+}
+
+} // namespace
+} // namespace ugv::bringup

@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 host (see README "Quick start"):
+#   toolchain/host.sh run    install missing packages, build (release), run the main job on the embedded default
+#   toolchain/host.sh test   install missing packages, build (release + asan), run every test with a summary
+#   toolchain/host.sh deps   only install the Debian packages
+#   toolchain/host.sh build  only configure and build the release preset
+# Environment: UGV_SHARED_DATA (real test data, default ../shared/data), UGV_SKIP_ASAN=1 (test: release only).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# Debian 12 packages: what each is for is in README.md "Dependencies".
+packages=(
+    g++ cmake ninja-build pkg-config ccache
+    libopencv-dev          # core/imgproc/calib3d (service), imgcodecs (host tool), with CMake config
+    libyaml-cpp-dev        # service config file
+    libeigen3-dev          # small dense linear algebra (ground plane, correlator)
+    libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
+)
+
+as_root() {
+    if [ "$(id -u)" -eq 0 ]; then "$@"
+    elif command -v sudo >/dev/null; then sudo "$@"
+    else echo "host.sh: need root to install packages: run as root or install sudo" >&2; exit 1; fi
+}
+
+deps() {
+    local missing=()
+    for p in "${packages[@]}"; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+    done
+    if [ ${#missing[@]} -eq 0 ]; then
+        echo "host.sh: all ${#packages[@]} Debian packages present"
+        return
+    fi
+    echo "host.sh: installing ${missing[*]}"
+    as_root apt-get update -q
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
+        -o DPkg::Lock::Timeout=600 "${missing[@]}"
+}
+
+build() {
+    local preset=$1
+    local launcher=()
+    command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+    cmake --preset "$preset" "${launcher[@]}" >/dev/null
+    cmake --build --preset "$preset" -j "$(nproc)"
+}
+
+run_main_job() {
+    local tool=build/release/bringup/ugvsense out=build/run
+    rm -rf "$out" && mkdir -p "$out"
+    echo "== 1/3 simulate: chessboard pairs seen by a known stereo rig"
+    "$tool" sim --scene chessboard --out "$out/pairs" --pairs 12
+    echo "== 2/3 calibrate"
+    "$tool" calibrate --images "$out/pairs" --board 9x6 --square 0.025 --out "$out/calibration.yaml" \
+        --json "$out/calibration.json"
+    echo "== 3/3 rectify (fixed-point region-of-interest maps) and check row alignment"
+    "$tool" rectify --calib "$out/calibration.yaml" --images "$out/pairs" --out "$out/rectified"
+    echo "== done: calibration in $out/calibration.yaml, report in $out/calibration.json, images in $out/rectified/"
+}
+
+run_tests() {
+    build release
+    echo "== release: unit and data tests"
+    local status=0
+    ctest --preset release -j "$(nproc)" || status=1
+    if [ "${UGV_SKIP_ASAN:-0}" != 1 ]; then
+        build asan
+        echo "== asan (address + undefined sanitizers): unit tests"
+        ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+            ctest --preset asan -j "$(nproc)" || status=1
+    fi
+    return $status
+}
+
+case "${1:-}" in
+    deps) deps ;;
+    build) deps; build release ;;
+    run) deps; build release; run_main_job ;;
+    test) deps; run_tests ;;
+    *) echo "usage: toolchain/host.sh run|test|deps|build" >&2; exit 2 ;;
+esac
