@@ -1,7 +1,7 @@
 #include "ugv/bringup/config.hpp"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -33,8 +33,12 @@ template <class Ref>
 KeySpec numberKey(std::string path, Kind kind, double min, double max, std::string description, Ref ref)
 {
     KeySpec key{std::move(path), std::move(description), kind, min, max, {}, {}, {}, {}, {}};
-    key.setNumber = [ref](ServiceConfig& c, double v) { ref(c) = static_cast<std::remove_reference_t<decltype(ref(c))>>(v); };
-    key.getNumber = [ref](const ServiceConfig& c) { return static_cast<double>(ref(const_cast<ServiceConfig&>(c))); }; // NOLINT: read only
+    key.setNumber = [ref](ServiceConfig& c, double v) {
+        ref(c) = static_cast<std::remove_reference_t<decltype(ref(c))>>(v);
+    };
+    key.getNumber = [ref](const ServiceConfig& c) {
+        return static_cast<double>(ref(const_cast<ServiceConfig&>(c)));
+    }; // NOLINT: read only
     return key;
 }
 
@@ -72,50 +76,61 @@ KeySpec choiceKey(std::string path, std::string description, std::vector<std::pa
     return key;
 }
 
-#define UGV_REF(member) [](ServiceConfig& c) -> auto& { return c.member; }
+#define UGV_REF(member)                                                                                                \
+    [](ServiceConfig & c) -> auto&                                                                                     \
+    {                                                                                                                  \
+        return c.member;                                                                                               \
+    }
 
 const std::vector<KeySpec>& schema()
 {
     static const std::vector<KeySpec> keys = {
         textKey("vehicle_id", Kind::Text, "name of this vehicle in published messages", UGV_REF(vehicleId)),
-        textKey("calibration", Kind::Path, "stereo calibration file written by 'ugvsense calibrate' ($UGV_CALIBRATION overrides)",
+        textKey("calibration", Kind::Path,
+                "stereo calibration file written by 'ugvsense calibrate' ($UGV_CALIBRATION overrides)",
                 UGV_REF(calibrationPath)),
-        choiceKey<CameraBackend>("camera.backend", "where frames come from",
-                                 {{"v4l2", CameraBackend::V4l2}, {"libcamera", CameraBackend::Libcamera}, {"replay", CameraBackend::Replay}},
-                                 UGV_REF(camera.backend)),
+        choiceKey<CameraBackend>(
+            "camera.backend", "where frames come from",
+            {{"v4l2", CameraBackend::V4l2}, {"libcamera", CameraBackend::Libcamera}, {"replay", CameraBackend::Replay}},
+            UGV_REF(camera.backend)),
         textKey("camera.left_device", Kind::Text, "V4L2 device of the left camera (or the side-by-side stereo device)",
                 UGV_REF(camera.leftDevice)),
         textKey("camera.right_device", Kind::Text, "V4L2 device of the right camera; empty for a side-by-side device",
                 UGV_REF(camera.rightDevice)),
         numberKey("camera.width", Kind::Int, 64, 4096, "image width per camera [px]", UGV_REF(camera.width)),
         numberKey("camera.height", Kind::Int, 48, 4096, "image height per camera [px]", UGV_REF(camera.height)),
-        numberKey("camera.fps", Kind::Double, 1, 240, "camera frame rate [Hz]; the frame deadline is 1/fps", UGV_REF(camera.fps)),
-        numberKey("camera.max_pair_skew_ms", Kind::Double, 0, 100, "left/right timestamps further apart are not paired [ms]",
-                  UGV_REF(camera.maxPairSkewMs)),
+        numberKey("camera.fps", Kind::Double, 1, 240, "camera frame rate [Hz]; the frame deadline is 1/fps",
+                  UGV_REF(camera.fps)),
+        numberKey("camera.max_pair_skew_ms", Kind::Double, 0, 100,
+                  "left/right timestamps further apart are not paired [ms]", UGV_REF(camera.maxPairSkewMs)),
         textKey("camera.replay_path", Kind::Path, "recording to replay (backend: replay)", UGV_REF(camera.replayPath)),
-        choiceKey<ReplayPace>("camera.replay_pace", "replay pace: as recorded, at replay_fps, or as fast as possible",
-                              {{"recorded", ReplayPace::Recorded}, {"fixed", ReplayPace::Fixed}, {"fastest", ReplayPace::Fastest}},
-                              UGV_REF(camera.replayPace)),
-        numberKey("camera.replay_fps", Kind::Double, 0.1, 1000, "replay rate when replay_pace is fixed [Hz]", UGV_REF(camera.replayFps)),
-        numberKey("roi.top_fraction", Kind::Double, 0.0, 0.9, "first row of the region of interest, as a fraction of the height",
-                  UGV_REF(roi.topFraction)),
-        numberKey("roi.matcher_margin_rows", Kind::Int, 0, 64, "rows above the region of interest that the matcher reads [px]",
-                  UGV_REF(roi.matcherMarginRows)),
-        choiceKey<MatcherMode>("stereo.mode", "OpenCV StereoSGBM mode",
-                               {{"sgbm", MatcherMode::Sgbm}, {"sgbm_3way", MatcherMode::Sgbm3Way}, {"hh4", MatcherMode::Hh4}},
-                               UGV_REF(stereo.mode)),
+        choiceKey<ReplayPace>(
+            "camera.replay_pace", "replay pace: as recorded, at replay_fps, or as fast as possible",
+            {{"recorded", ReplayPace::Recorded}, {"fixed", ReplayPace::Fixed}, {"fastest", ReplayPace::Fastest}},
+            UGV_REF(camera.replayPace)),
+        numberKey("camera.replay_fps", Kind::Double, 0.1, 1000, "replay rate when replay_pace is fixed [Hz]",
+                  UGV_REF(camera.replayFps)),
+        numberKey("roi.top_fraction", Kind::Double, 0.0, 0.9,
+                  "first row of the region of interest, as a fraction of the height", UGV_REF(roi.topFraction)),
+        numberKey("roi.matcher_margin_rows", Kind::Int, 0, 64,
+                  "rows above the region of interest that the matcher reads [px]", UGV_REF(roi.matcherMarginRows)),
+        choiceKey<MatcherMode>(
+            "stereo.mode", "OpenCV StereoSGBM mode",
+            {{"sgbm", MatcherMode::Sgbm}, {"sgbm_3way", MatcherMode::Sgbm3Way}, {"hh4", MatcherMode::Hh4}},
+            UGV_REF(stereo.mode)),
         numberKey("stereo.num_disparities", Kind::Int, 16, 256, "disparity search range [px], a multiple of 16",
                   UGV_REF(stereo.numDisparities)),
         numberKey("stereo.block_size", Kind::Int, 1, 11, "matching block size [px], odd", UGV_REF(stereo.blockSize)),
-        choiceKey<DetectorMode>("obstacles.detector", "stereo (two cameras), colour (one camera) or both",
-                                {{"stereo", DetectorMode::Stereo}, {"colour", DetectorMode::Colour}, {"both", DetectorMode::Both}},
-                                UGV_REF(obstacles.detector)),
+        choiceKey<DetectorMode>(
+            "obstacles.detector", "stereo (two cameras), colour (one camera) or both",
+            {{"stereo", DetectorMode::Stereo}, {"colour", DetectorMode::Colour}, {"both", DetectorMode::Both}},
+            UGV_REF(obstacles.detector)),
         numberKey("obstacles.sector_count", Kind::Int, 4, 360, "bearing sectors across the horizontal field of view",
                   UGV_REF(obstacles.sectorCount)),
         numberKey("obstacles.danger_distance_m", Kind::Double, 0.1, 50, "obstacles closer than this are red [m]",
                   UGV_REF(obstacles.dangerDistanceM)),
-        numberKey("obstacles.caution_distance_m", Kind::Double, 0.1, 100, "obstacles closer than this are blue, beyond green [m]",
-                  UGV_REF(obstacles.cautionDistanceM)),
+        numberKey("obstacles.caution_distance_m", Kind::Double, 0.1, 100,
+                  "obstacles closer than this are blue, beyond green [m]", UGV_REF(obstacles.cautionDistanceM)),
         numberKey("obstacles.min_height_m", Kind::Double, 0.02, 2, "positive obstacles taller than this count [m]",
                   UGV_REF(obstacles.minHeightM)),
         numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
@@ -243,21 +258,27 @@ public:
                   "make caution_distance_m larger than danger_distance_m");
         }
         if (config_.stereo.numDisparities % 16 != 0) {
-            error(at("stereo"), "stereo.num_disparities", "value " + std::to_string(config_.stereo.numDisparities) + " is not a multiple of 16",
+            error(at("stereo"), "stereo.num_disparities",
+                  "value " + std::to_string(config_.stereo.numDisparities) + " is not a multiple of 16",
                   "use 16, 32, 64, 128 or 256");
         }
         if (config_.stereo.numDisparities >= config_.camera.width) {
-            error(at("stereo"), "stereo.num_disparities", "value " + std::to_string(config_.stereo.numDisparities) +
-                  " is not below the image width " + std::to_string(config_.camera.width), "lower num_disparities");
+            error(at("stereo"), "stereo.num_disparities",
+                  "value " + std::to_string(config_.stereo.numDisparities) + " is not below the image width " +
+                      std::to_string(config_.camera.width),
+                  "lower num_disparities");
         }
         if (config_.stereo.blockSize % 2 == 0) {
-            error(at("stereo"), "stereo.block_size", "value " + std::to_string(config_.stereo.blockSize) + " is even", "use an odd size such as 5");
+            error(at("stereo"), "stereo.block_size", "value " + std::to_string(config_.stereo.blockSize) + " is even",
+                  "use an odd size such as 5");
         }
         if (config_.camera.backend == CameraBackend::Replay && config_.camera.replayPath.empty()) {
-            error(at("camera"), "camera.replay_path", "is empty but camera.backend is replay", "set replay_path to a recording");
+            error(at("camera"), "camera.replay_path", "is empty but camera.backend is replay",
+                  "set replay_path to a recording");
         }
         if (config_.camera.backend == CameraBackend::V4l2 && config_.camera.leftDevice.empty()) {
-            error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2", "set it, e.g. /dev/video0");
+            error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2",
+                  "set it, e.g. /dev/video0");
         }
         if (config_.calibrationPath.empty()) {
             error(root, "calibration", "is empty", "set it to the file written by 'ugvsense calibrate'");
@@ -308,7 +329,9 @@ private:
         const bool parsed = !text.empty() && end == text.c_str() + text.size();
         if (!parsed || !std::isfinite(number) || number < key.min || number > key.max ||
             (key.kind == Kind::Int && number != std::floor(number))) {
-            error(value, key.path, "value '" + text + "' is " + (parsed && std::isfinite(number) ? "out of range" : "not a valid number"),
+            error(value, key.path,
+                  "value '" + text + "' is " +
+                      (parsed && std::isfinite(number) ? "out of range" : "not a valid number"),
                   "give " + rangeText(key) + ": " + key.description);
             return;
         }
@@ -330,14 +353,17 @@ Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, con
     try {
         root = YAML::Load(yamlText);
     } catch (const YAML::Exception& e) {
-        return Unexpected(ConfigErrors{Error{sourceName + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1),
-                                             "not valid YAML: " + e.msg, "fix the syntax at that line (is the file truncated?)"}});
+        return Unexpected(ConfigErrors{
+            Error{sourceName + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1),
+                  "not valid YAML: " + e.msg, "fix the syntax at that line (is the file truncated?)"}});
     }
     if (root.IsNull()) {
-        return Unexpected(ConfigErrors{Error{sourceName, "the file is empty", "start from bringup/config.example.yaml"}});
+        return Unexpected(
+            ConfigErrors{Error{sourceName, "the file is empty", "start from bringup/config.example.yaml"}});
     }
     if (!root.IsMap()) {
-        return Unexpected(ConfigErrors{Error{sourceName, "the top level is not a map of keys", "start from bringup/config.example.yaml"}});
+        return Unexpected(ConfigErrors{
+            Error{sourceName, "the top level is not a map of keys", "start from bringup/config.example.yaml"}});
     }
     Parser parser(sourceName, baseDir);
     try {
@@ -346,7 +372,8 @@ Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, con
         parser.errors().push_back(Error{sourceName + ":" + std::to_string(e.mark.line + 1), "unexpected YAML: " + e.msg,
                                         "keys must be plain strings"});
     }
-    if (const char* env = std::getenv("UGV_CALIBRATION"); env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
+    if (const char* env = std::getenv("UGV_CALIBRATION");
+        env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
         parser.config().calibrationPath = env;
     }
     parser.crossCheck(root);
@@ -361,8 +388,9 @@ Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path)
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
-        return Unexpected(ConfigErrors{Error{path, "config file not found or not a regular file",
-                                             "pass an existing file, e.g. 'ugvsense check-config bringup/config.example.yaml'"}});
+        return Unexpected(
+            ConfigErrors{Error{path, "config file not found or not a regular file",
+                               "pass an existing file, e.g. 'ugvsense check-config bringup/config.example.yaml'"}});
     }
     std::ifstream in(path, std::ios::binary);
     std::stringstream text;
@@ -377,7 +405,8 @@ Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path)
 std::string formatConfig(const ServiceConfig& config)
 {
     std::ostringstream out;
-    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile) << ")\n";
+    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile)
+        << ")\n";
     std::string section;
     for (const auto& key : schema()) {
         const auto dot = key.path.find('.');
@@ -402,7 +431,8 @@ std::string configPath(const char* fromArgs)
     if (fromArgs != nullptr && *fromArgs != '\0') {
         return fromArgs;
     }
-    if (const char* env = std::getenv("UGV_CONFIG"); env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
+    if (const char* env = std::getenv("UGV_CONFIG");
+        env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
         return env;
     }
     return "/etc/ugvsense/config.yaml";

@@ -43,7 +43,8 @@ Result<void, Error> Args::parse(int argc, char** argv, int first)
         }
         const OptionSpec* spec = find(name);
         if (spec == nullptr) {
-            return Unexpected(Error{where, "unknown option '--" + name + "'", "see 'ugvsense " + command_ + " --help'"});
+            return Unexpected(
+                Error{where, "unknown option '--" + name + "'", "see 'ugvsense " + command_ + " --help'"});
         }
         if (spec->valueName.empty()) {
             if (inlineValue) {
@@ -83,7 +84,10 @@ std::string Args::usage() const
     return out.str();
 }
 
-bool Args::has(const std::string& name) const { return values_.count(name) != 0; }
+bool Args::has(const std::string& name) const
+{
+    return values_.count(name) != 0;
+}
 
 std::string Args::get(const std::string& name, const std::string& fallback) const
 {

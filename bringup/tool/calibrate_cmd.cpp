@@ -1,4 +1,7 @@
 #include "commands.hpp"
 namespace ugv::tool {
-int runCalibrate(int /*argc*/, char** /*argv*/) { return 1; } // replaced by the real command
+int runCalibrate(int /*argc*/, char** /*argv*/)
+{
+    return 1;
+} // replaced by the real command
 } // namespace ugv::tool

@@ -16,8 +16,9 @@ int runCheckConfig(int argc, char** argv)
         return reportUsageError("check-config", parsed.error());
     }
     if (args.helpRequested()) {
-        std::cout << args.usage()
-                  << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. Exit status: 0 valid, 1 invalid.\n";
+        std::cout
+            << args.usage()
+            << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. Exit status: 0 valid, 1 invalid.\n";
         return 0;
     }
     if (args.has("schema")) {
@@ -25,7 +26,8 @@ int runCheckConfig(int argc, char** argv)
         return 0;
     }
     if (args.positional().size() > 1) {
-        return reportUsageError("check-config", Error{"ugvsense check-config", "more than one FILE given", "give one config file"});
+        return reportUsageError("check-config",
+                                Error{"ugvsense check-config", "more than one FILE given", "give one config file"});
     }
     const std::string path = bringup::configPath(args.positional().empty() ? nullptr : args.positional()[0].c_str());
     const auto config = bringup::loadConfig(path);

@@ -1,4 +1,7 @@
 #include "commands.hpp"
 namespace ugv::tool {
-int runRectify(int /*argc*/, char** /*argv*/) { return 1; } // replaced by the real command
+int runRectify(int /*argc*/, char** /*argv*/)
+{
+    return 1;
+} // replaced by the real command
 } // namespace ugv::tool

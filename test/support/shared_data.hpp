@@ -22,9 +22,9 @@ std::string sharedDataMissingMessage(const std::string& sub);
 
 /// Declares `const std::filesystem::path var` for shared-data folder `sub`, or skips the test with a
 /// message saying where it looked and how to point it elsewhere.
-#define UGV_REQUIRE_SHARED_DATA(var, sub)                                          \
-    const auto maybe_##var = ::ugv::test::sharedData(sub);                         \
-    if (!maybe_##var) {                                                            \
-        GTEST_SKIP() << ::ugv::test::sharedDataMissingMessage(sub);                \
-    }                                                                              \
+#define UGV_REQUIRE_SHARED_DATA(var, sub)                                                                              \
+    const auto maybe_##var = ::ugv::test::sharedData(sub);                                                             \
+    if (!maybe_##var) {                                                                                                \
+        GTEST_SKIP() << ::ugv::test::sharedDataMissingMessage(sub);                                                    \
+    }                                                                                                                  \
     const std::filesystem::path var = *maybe_##var

@@ -43,13 +43,14 @@ TEST(Config, MinimalFileGivesDefaultsAndResolvesRelativePaths)
 
 TEST(Config, EveryKeyIsParsed)
 {
-    const std::string yaml = "vehicle_id: rover-7\ncalibration: /c.yaml\n"
-                             "camera:\n  backend: v4l2\n  left_device: /dev/video4\n  right_device: ''\n  width: 1280\n"
-                             "  height: 720\n  fps: 15\n  max_pair_skew_ms: 2.5\n  replay_path: /r\n  replay_pace: fixed\n  replay_fps: 60\n"
-                             "roi:\n  top_fraction: 0.4\n  matcher_margin_rows: 4\n"
-                             "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n"
-                             "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
-                             "  min_height_m: 0.2\n  min_depth_m: 0.15\n";
+    const std::string yaml =
+        "vehicle_id: rover-7\ncalibration: /c.yaml\n"
+        "camera:\n  backend: v4l2\n  left_device: /dev/video4\n  right_device: ''\n  width: 1280\n"
+        "  height: 720\n  fps: 15\n  max_pair_skew_ms: 2.5\n  replay_path: /r\n  replay_pace: fixed\n  replay_fps: 60\n"
+        "roi:\n  top_fraction: 0.4\n  matcher_margin_rows: 4\n"
+        "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n"
+        "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
+        "  min_height_m: 0.2\n  min_depth_m: 0.15\n";
 
     const auto sut = parseConfig(yaml, "test.yaml", "/");
 
@@ -99,7 +100,8 @@ TEST(Config, OutOfRangeValueNamesKeyValueAndRange)
 
 TEST(Config, NonNumbersNanAndFractionalIntegersAreRejected)
 {
-    for (const char* bad : {"fps: fast", "fps: .nan", "fps: nan", "fps: 1e999", "width: 640.5", "width: ''", "fps: [1, 2]", "fps:"}) {
+    for (const char* bad :
+         {"fps: fast", "fps: .nan", "fps: nan", "fps: 1e999", "width: 640.5", "width: ''", "fps: [1, 2]", "fps:"}) {
         const auto errors = parseErrors(std::string(kValidMinimal) + "  " + bad + "\n");
         ASSERT_EQ(errors.size(), 1u) << bad << "\n" << joined(errors);
         EXPECT_NE(errors[0].where.find("camera."), std::string::npos) << bad;
@@ -117,8 +119,9 @@ TEST(Config, BadChoiceListsTheAllowedValues)
 
 TEST(Config, CrossFieldRulesAreChecked)
 {
-    const auto errors = parseErrors("calibration: c\ncamera:\n  backend: replay\nstereo:\n  num_disparities: 40\n  block_size: 4\n"
-                                    "obstacles:\n  danger_distance_m: 5\n  caution_distance_m: 2\n");
+    const auto errors =
+        parseErrors("calibration: c\ncamera:\n  backend: replay\nstereo:\n  num_disparities: 40\n  block_size: 4\n"
+                    "obstacles:\n  danger_distance_m: 5\n  caution_distance_m: 2\n");
     const std::string text = joined(errors);
 
     EXPECT_EQ(errors.size(), 4u) << text;

@@ -38,7 +38,7 @@ struct CameraConfig {
 };
 
 struct RoiConfig {
-    double topFraction = 0.5; ///< first image row of the region of interest, as a fraction of the height
+    double topFraction = 0.5;  ///< first image row of the region of interest, as a fraction of the height
     int matcherMarginRows = 8; ///< [px] extra rows above the ROI that the block matcher reads
 };
 
@@ -50,15 +50,15 @@ struct StereoConfig {
 
 struct ObstacleConfig {
     DetectorMode detector = DetectorMode::Stereo;
-    int sectorCount = 64;             ///< bearing bins across the horizontal field of view
-    double dangerDistanceM = 1.5;     ///< [m] closer than this: red
-    double cautionDistanceM = 5.0;    ///< [m] closer than this: blue; beyond: green
-    double minHeightM = 0.10;         ///< [m] positive obstacles taller than this count
-    double minDepthM = 0.10;          ///< [m] negative obstacles deeper than this count
+    int sectorCount = 64;          ///< bearing bins across the horizontal field of view
+    double dangerDistanceM = 1.5;  ///< [m] closer than this: red
+    double cautionDistanceM = 5.0; ///< [m] closer than this: blue; beyond: green
+    double minHeightM = 0.10;      ///< [m] positive obstacles taller than this count
+    double minDepthM = 0.10;       ///< [m] negative obstacles deeper than this count
 };
 
 struct ServiceConfig {
-    std::string sourceFile;  ///< the file this came from (for messages)
+    std::string sourceFile; ///< the file this came from (for messages)
     std::string vehicleId = "ugv-1";
     std::string calibrationPath = "/var/lib/ugvsense/calibration.yaml"; ///< absolute after loading
     CameraConfig camera;

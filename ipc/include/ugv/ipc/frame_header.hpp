@@ -27,9 +27,9 @@ struct FrameHeader {
     std::uint32_t magic = kFrameMagic;
     std::uint16_t version = kFrameVersion;
     PixelFormat format = PixelFormat::Grey8;
-    std::uint32_t width = 0;        ///< [px] per camera
-    std::uint32_t height = 0;       ///< [px]
-    std::uint32_t strideBytes = 0;  ///< bytes between rows of one image
+    std::uint32_t width = 0;       ///< [px] per camera
+    std::uint32_t height = 0;      ///< [px]
+    std::uint32_t strideBytes = 0; ///< bytes between rows of one image
     std::uint32_t reserved = 0;
     std::uint64_t sequence = 0;     ///< capture sequence number, +1 per pair; gaps mean dropped frames
     std::int64_t leftStampNs = 0;   ///< [ns] CLOCK_MONOTONIC exposure time of the left image

@@ -9,10 +9,10 @@ namespace ugv::platform::detail {
 [[noreturn]] void contractFailed(const char* kind, const char* condition, const char* file, int line) noexcept;
 } // namespace ugv::platform::detail
 
-#define UGV_ASSERT(cond)                                                                                   \
+#define UGV_ASSERT(cond)                                                                                               \
     ((cond) ? static_cast<void>(0) : ::ugv::platform::detail::contractFailed("assertion", #cond, __FILE__, __LINE__))
-#define UGV_EXPECTS(cond)                                                                                  \
+#define UGV_EXPECTS(cond)                                                                                              \
     ((cond) ? static_cast<void>(0) : ::ugv::platform::detail::contractFailed("precondition", #cond, __FILE__, __LINE__))
-#define UGV_ENSURES(cond)                                                                                  \
-    ((cond) ? static_cast<void>(0)                                                                         \
+#define UGV_ENSURES(cond)                                                                                              \
+    ((cond) ? static_cast<void>(0)                                                                                     \
             : ::ugv::platform::detail::contractFailed("postcondition", #cond, __FILE__, __LINE__))

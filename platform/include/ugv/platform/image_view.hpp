@@ -52,8 +52,8 @@ public:
     }
     /// A mutable view converts to a const one.
     template <class U>
-        requires(std::is_const_v<T> && std::is_same_v<std::remove_const_t<T>, U>)
-    constexpr ImageView(const ImageView<U>& other) noexcept // NOLINT(google-explicit-constructor)
+    requires(std::is_const_v<T>&& std::is_same_v<std::remove_const_t<T>, U>) constexpr ImageView(
+        const ImageView<U>& other) noexcept // NOLINT(google-explicit-constructor)
         : data_(other.data()), width_(other.width()), height_(other.height()), strideBytes_(other.strideBytes())
     {
     }

@@ -41,23 +41,51 @@ public:
     using value_type = T;
     using error_type = E;
 
-    constexpr Result(const T& value) : storage_(std::in_place_index<0>, value) {}       // NOLINT(google-explicit-constructor)
-    constexpr Result(T&& value) : storage_(std::in_place_index<0>, std::move(value)) {} // NOLINT(google-explicit-constructor)
+    constexpr Result(const T& value) : storage_(std::in_place_index<0>, value) {} // NOLINT(google-explicit-constructor)
+    constexpr Result(T&& value)
+        : storage_(std::in_place_index<0>, std::move(value)) {} // NOLINT(google-explicit-constructor)
     template <class G>
     constexpr Result(Unexpected<G> error) // NOLINT(google-explicit-constructor)
         : storage_(std::in_place_index<1>, E(std::move(error).error()))
     {
     }
 
-    [[nodiscard]] constexpr bool has_value() const noexcept { return storage_.index() == 0; } // NOLINT(readability-identifier-naming)
+    [[nodiscard]] constexpr bool has_value() const noexcept
+    {
+        return storage_.index() == 0;
+    } // NOLINT(readability-identifier-naming)
     constexpr explicit operator bool() const noexcept { return has_value(); }
 
-    constexpr T& value() & { UGV_ASSERT(has_value()); return *std::get_if<0>(&storage_); }
-    constexpr const T& value() const& { UGV_ASSERT(has_value()); return *std::get_if<0>(&storage_); }
-    constexpr T&& value() && { UGV_ASSERT(has_value()); return std::move(*std::get_if<0>(&storage_)); }
-    constexpr const E& error() const& { UGV_ASSERT(!has_value()); return *std::get_if<1>(&storage_); }
-    constexpr E& error() & { UGV_ASSERT(!has_value()); return *std::get_if<1>(&storage_); }
-    constexpr E&& error() && { UGV_ASSERT(!has_value()); return std::move(*std::get_if<1>(&storage_)); }
+    constexpr T& value() &
+    {
+        UGV_ASSERT(has_value());
+        return *std::get_if<0>(&storage_);
+    }
+    constexpr const T& value() const&
+    {
+        UGV_ASSERT(has_value());
+        return *std::get_if<0>(&storage_);
+    }
+    constexpr T&& value() &&
+    {
+        UGV_ASSERT(has_value());
+        return std::move(*std::get_if<0>(&storage_));
+    }
+    constexpr const E& error() const&
+    {
+        UGV_ASSERT(!has_value());
+        return *std::get_if<1>(&storage_);
+    }
+    constexpr E& error() &
+    {
+        UGV_ASSERT(!has_value());
+        return *std::get_if<1>(&storage_);
+    }
+    constexpr E&& error() &&
+    {
+        UGV_ASSERT(!has_value());
+        return std::move(*std::get_if<1>(&storage_));
+    }
 
     constexpr T& operator*() & { return value(); }
     constexpr const T& operator*() const& { return value(); }
@@ -108,11 +136,22 @@ public:
     {
     }
 
-    [[nodiscard]] constexpr bool has_value() const noexcept { return !error_.has_value(); } // NOLINT(readability-identifier-naming)
+    [[nodiscard]] constexpr bool has_value() const noexcept
+    {
+        return !error_.has_value();
+    } // NOLINT(readability-identifier-naming)
     constexpr explicit operator bool() const noexcept { return has_value(); }
     constexpr void value() const { UGV_ASSERT(has_value()); }
-    constexpr const E& error() const& { UGV_ASSERT(!has_value()); return *error_; }
-    constexpr E& error() & { UGV_ASSERT(!has_value()); return *error_; }
+    constexpr const E& error() const&
+    {
+        UGV_ASSERT(!has_value());
+        return *error_;
+    }
+    constexpr E& error() &
+    {
+        UGV_ASSERT(!has_value());
+        return *error_;
+    }
 
     template <class F>
     constexpr auto and_then(F&& f) const // NOLINT(readability-identifier-naming)
