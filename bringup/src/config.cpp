@@ -82,9 +82,9 @@ KeySpec choiceKey(std::string path, std::string description, std::vector<std::pa
         return c.member;                                                                                               \
     }
 
-const std::vector<KeySpec>& schema()
+std::vector<KeySpec> baseKeys()
 {
-    static const std::vector<KeySpec> keys = {
+    std::vector<KeySpec> keys = {
         textKey("vehicle_id", Kind::Text, "name of this vehicle in published messages", UGV_REF(vehicleId)),
         textKey("calibration", Kind::Path,
                 "stereo calibration file written by 'ugvsense calibrate' ($UGV_CALIBRATION overrides)",
@@ -125,7 +125,7 @@ const std::vector<KeySpec>& schema()
             "obstacles.detector", "stereo (two cameras), colour (one camera) or both",
             {{"stereo", DetectorMode::Stereo}, {"colour", DetectorMode::Colour}, {"both", DetectorMode::Both}},
             UGV_REF(obstacles.detector)),
-        numberKey("obstacles.sector_count", Kind::Int, 4, 360, "bearing sectors across the horizontal field of view",
+        numberKey("obstacles.sector_count", Kind::Int, 4, 180, "bearing sectors across the horizontal field of view",
                   UGV_REF(obstacles.sectorCount)),
         numberKey("obstacles.danger_distance_m", Kind::Double, 0.1, 50, "obstacles closer than this are red [m]",
                   UGV_REF(obstacles.dangerDistanceM)),
@@ -136,6 +136,37 @@ const std::vector<KeySpec>& schema()
         numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
                   UGV_REF(obstacles.minDepthM)),
     };
+    return keys;
+}
+
+std::vector<KeySpec> taskKeys();
+
+const std::vector<KeySpec>& schema()
+{
+    static const std::vector<KeySpec> keys = [] {
+        std::vector<KeySpec> all = baseKeys();
+        for (auto& key : taskKeys()) {
+            all.push_back(std::move(key));
+        }
+        return all;
+    }();
+    return keys;
+}
+
+/// The `tasks.<name>.*` keys, one set per row of rt's default task table.
+std::vector<KeySpec> taskKeys()
+{
+    std::vector<KeySpec> keys;
+    for (std::size_t i = 0; i < rt::kDefaultTaskTable.size(); ++i) {
+        const std::string prefix = "tasks." + std::string(rt::kDefaultTaskTable[i].name) + ".";
+        keys.push_back(choiceKey<rt::SchedPolicy>(prefix + "policy", "scheduling policy of this thread",
+                                                  {{"fifo", rt::SchedPolicy::Fifo}, {"other", rt::SchedPolicy::Other}},
+                                                  [i](ServiceConfig& c) -> auto& { return c.tasks[i].policy; }));
+        keys.push_back(numberKey(prefix + "priority", Kind::Int, 0, 99, "priority: 1..99 with fifo (higher first), 0 with other",
+                                 [i](ServiceConfig& c) -> auto& { return c.tasks[i].priority; }));
+        keys.push_back(numberKey(prefix + "cpu", Kind::Int, -1, 1023, "CPU to pin the thread to, -1 for any",
+                                 [i](ServiceConfig& c) -> auto& { return c.tasks[i].cpu; }));
+    }
     return keys;
 }
 
@@ -280,6 +311,15 @@ public:
             error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2",
                   "set it, e.g. /dev/video0");
         }
+        const int cpus = rt::onlineCpuCount();
+        for (const auto& task : config_.tasks) {
+            if (auto valid = rt::validateTask(task, cpus); !valid) {
+                const YAML::Node tasks = at("tasks");
+                const std::string name(task.name);
+                error(tasks[name] ? tasks[name] : tasks, "tasks." + name, valid.error().what,
+                      "set tasks." + name + ".policy/priority/cpu within the range");
+            }
+        }
         if (config_.calibrationPath.empty()) {
             error(root, "calibration", "is empty", "set it to the file written by 'ugvsense calibrate'");
         }
@@ -405,19 +445,29 @@ Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path)
 std::string formatConfig(const ServiceConfig& config)
 {
     std::ostringstream out;
-    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile)
-        << ")\n";
-    std::string section;
+    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile) << ")\n";
+    std::vector<std::string> open; // the sections the previous key was in
     for (const auto& key : schema()) {
-        const auto dot = key.path.find('.');
-        const std::string keySection = dot == std::string::npos ? "" : key.path.substr(0, dot);
-        const std::string name = dot == std::string::npos ? key.path : key.path.substr(dot + 1);
-        if (keySection != section) {
-            section = keySection;
-            out << section << ":\n";
+        std::vector<std::string> parts;
+        for (std::size_t start = 0;;) {
+            const auto dot = key.path.find('.', start);
+            parts.push_back(key.path.substr(start, dot - start));
+            if (dot == std::string::npos) {
+                break;
+            }
+            start = dot + 1;
+        }
+        std::size_t common = 0;
+        while (common < open.size() && common + 1 < parts.size() && open[common] == parts[common]) {
+            ++common;
+        }
+        open.resize(common);
+        for (std::size_t level = common; level + 1 < parts.size(); ++level) {
+            out << std::string(2 * level, ' ') << parts[level] << ":\n";
+            open.push_back(parts[level]);
         }
         const std::string value = key.getText ? "\"" + key.getText(config) + "\"" : formatNumber(key.getNumber(config));
-        std::string line = (section.empty() ? "" : "  ") + name + ": " + value;
+        std::string line = std::string(2 * open.size(), ' ') + parts.back() + ": " + value;
         if (line.size() < 44) {
             line.resize(44, ' ');
         }

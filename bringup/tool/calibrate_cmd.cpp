@@ -1,7 +1,221 @@
+// ugvsense calibrate: stereo calibration from chessboard pairs in a folder; writes the calibration file and,
+// on request, a JSON report.
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "args.hpp"
 #include "commands.hpp"
+#include "pair_files.hpp"
+#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/vision/stereo_calibrator.hpp"
+
 namespace ugv::tool {
-int runCalibrate(int /*argc*/, char** /*argv*/)
+namespace {
+
+constexpr double kMinSquareM = 1e-4; // [m]
+constexpr double kMaxSquareM = 10.0; // [m]
+
+std::string jsonString(const std::string& text)
 {
+    std::string out = "\"";
+    for (const char c : text) {
+        switch (c) {
+        case '"': out += "\\\""; break;
+        case '\\': out += "\\\\"; break;
+        case '\n': out += "\\n"; break;
+        case '\r': out += "\\r"; break;
+        case '\t': out += "\\t"; break;
+        default:
+            if (static_cast<unsigned char>(c) < 0x20) {
+                char escaped[8];
+                std::snprintf(escaped, sizeof(escaped), "\\u%04x", static_cast<unsigned>(c));
+                out += escaped;
+            } else {
+                out += c;
+            }
+        }
+    }
+    return out + "\"";
+}
+
+std::string jsonNumber(double value)
+{
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.6g", value);
+    return text;
+}
+
+bool writeJson(const std::string& path, const vision::CalibrationReport& report)
+{
+    const vision::StereoCalibration& c = report.calibration;
+    std::ofstream out(path);
+    if (!out) {
+        return false;
+    }
+    out << "{\n  \"rms_px\": " << jsonNumber(c.rmsPx) << ",\n  \"epipolar_px\": " << jsonNumber(c.epipolarPx)
+        << ",\n  \"rectified_dy_px\": " << jsonNumber(c.rectifiedDyPx) << ",\n  \"pairs_used\": " << c.pairsUsed
+        << ",\n  \"pairs_rejected\": " << report.rejected.size()
+        << ",\n  \"rms_before_outliers_px\": " << jsonNumber(report.rmsBeforeOutliersPx)
+        << ",\n  \"baseline_m\": " << jsonNumber(c.baselineM()) << ",\n  \"rejected\": [";
+    for (std::size_t i = 0; i < report.rejected.size(); ++i) {
+        out << (i == 0 ? "\n" : ",\n") << "    {\"pair\": " << jsonString(report.rejected[i].name)
+            << ", \"reason\": " << jsonString(report.rejected[i].reason) << "}";
+    }
+    out << (report.rejected.empty() ? "],\n" : "\n  ],\n") << "  \"per_pair\": [";
+    for (std::size_t i = 0; i < report.perPair.size(); ++i) {
+        out << (i == 0 ? "\n" : ",\n") << "    {\"pair\": " << jsonString(report.perPair[i].name)
+            << ", \"error_px\": " << jsonNumber(report.perPair[i].errorPx) << "}";
+    }
+    out << (report.perPair.empty() ? "]\n}\n" : "\n  ]\n}\n");
+    out.flush();
+    return static_cast<bool>(out);
+}
+
+bool parentIsFolder(const std::string& path)
+{
+    std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    if (parent.empty()) {
+        parent = ".";
+    }
+    std::error_code ec;
+    return std::filesystem::is_directory(parent, ec);
+}
+
+int fail(const Error& error)
+{
+    std::cerr << "ugvsense calibrate: error: " << error.message() << '\n';
     return 1;
-} // replaced by the real command
+}
+
+} // namespace
+
+int runCalibrate(int argc, char** argv)
+{
+    Args args("calibrate", "--images DIR --board WxH --square M --out CALIB.yaml [--json REPORT.json] [--mount-*]",
+              {{"images", "DIR", "folder with left*/right* chessboard images (left01.jpg pairs with right01.jpg)", true},
+               {"board", "WxH", "inner corners per row x per column, e.g. 9x6", true},
+               {"square", "M", "square side in metres, e.g. 0.025", true},
+               {"out", "CALIB.yaml", "calibration file to write", true},
+               {"json", "REPORT.json", "also write a JSON report", false},
+               {"mount-height", "M", "camera height above ground, (0, 10] m (writes the mount section)", false},
+               {"mount-pitch", "DEG", "camera pitch, [-45, 45] deg, default 0", false},
+               {"mount-roll", "DEG", "camera roll, [-30, 30] deg, default 0", false}});
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError("calibrate", parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    vision::CalibratorConfig config;
+    const auto board = parseBoard("calibrate", args.get("board"));
+    if (!board) {
+        return reportUsageError("calibrate", board.error());
+    }
+    config.innerCorners = *board;
+    const auto square = args.number("square", 0.0, kMinSquareM, kMaxSquareM);
+    if (!square) {
+        return reportUsageError("calibrate", square.error());
+    }
+    config.squareM = *square;
+    std::optional<vision::Mount> mount;
+    if (args.has("mount-height") || args.has("mount-pitch") || args.has("mount-roll")) {
+        if (!args.has("mount-height")) {
+            return reportUsageError("calibrate", Error{"ugvsense calibrate", "--mount-pitch/--mount-roll without "
+                                                                             "--mount-height",
+                                                       "give --mount-height M too"});
+        }
+        const auto height = args.number("mount-height", 0.0, 1e-3, bringup::kMaxMountHeightM);
+        const auto pitch = args.number("mount-pitch", 0.0, -bringup::kMaxMountPitchDeg, bringup::kMaxMountPitchDeg);
+        const auto roll = args.number("mount-roll", 0.0, -bringup::kMaxMountRollDeg, bringup::kMaxMountRollDeg);
+        for (const auto* value : {&height, &pitch, &roll}) {
+            if (!*value) {
+                return reportUsageError("calibrate", value->error());
+            }
+        }
+        mount = vision::Mount{*height, *pitch, *roll};
+    }
+    const std::string outPath = args.get("out");
+    const std::string jsonPath = args.get("json");
+    for (const std::string& path : {outPath, jsonPath}) {
+        if (!path.empty() && !parentIsFolder(path)) {
+            return fail(Error{path, "the folder of the output file does not exist", "create it or choose another path"});
+        }
+    }
+
+    const auto listing = listPairs(args.get("images"));
+    if (!listing) {
+        return fail(listing.error());
+    }
+    if (listing->pairs.empty()) {
+        return fail(Error{args.get("images"), "no left*/right* image pairs found",
+                          "name the images leftNN.ext and rightNN.ext (e.g. left01.jpg, right01.jpg)"});
+    }
+    for (const auto& unpaired : listing->unpaired) {
+        std::cout << "unpaired image: " << unpaired << '\n';
+    }
+    std::vector<vision::CalibrationPair> pairs;
+    std::vector<vision::RejectedPair> unreadable;
+    for (const auto& files : listing->pairs) {
+        vision::CalibrationPair pair{files.name, readGrey(files.left), readGrey(files.right)};
+        if (pair.left.empty() || pair.right.empty()) {
+            unreadable.push_back({files.name, "unreadable image file " +
+                                                  (pair.left.empty() ? files.left : files.right).filename().string()});
+            continue;
+        }
+        pairs.push_back(std::move(pair));
+    }
+    for (const auto& rejected : unreadable) {
+        std::cout << "rejected " << rejected.name << ": " << rejected.reason << '\n';
+    }
+    auto result = vision::calibrateStereo(pairs, config);
+    if (!result) {
+        Error error = result.error();
+        error.where = args.get("images");
+        if (!unreadable.empty()) {
+            error.what += " (" + std::to_string(unreadable.size()) + " pair(s) unreadable)";
+        }
+        return fail(error);
+    }
+    vision::CalibrationReport& report = *result;
+    report.rejected.insert(report.rejected.begin(), unreadable.begin(), unreadable.end());
+    report.calibration.pairsRejected = static_cast<int>(report.rejected.size());
+    report.calibration.mount = mount;
+    const vision::StereoCalibration& c = report.calibration;
+
+    std::printf("per-pair reprojection error:\n");
+    for (const auto& pair : report.perPair) {
+        std::printf("  %-40s %.3f px\n", pair.name.c_str(), pair.errorPx);
+    }
+    for (std::size_t i = unreadable.size(); i < report.rejected.size(); ++i) {
+        std::printf("rejected %s: %s\n", report.rejected[i].name.c_str(), report.rejected[i].reason.c_str());
+    }
+    if (report.outlierRounds > 0) {
+        std::printf("dropped outliers and recalibrated (%d round(s)): RMS %.3f -> %.3f px (%.1f %% better)\n",
+                    report.outlierRounds, report.rmsBeforeOutliersPx, c.rmsPx,
+                    100.0 * (report.rmsBeforeOutliersPx - c.rmsPx) / report.rmsBeforeOutliersPx);
+    }
+    std::printf("pairs used %d, rejected %d\n", c.pairsUsed, c.pairsRejected);
+    std::printf("RMS reprojection error %.4f px\nmean epipolar error    %.4f px\nrectified mean |dy|    %.4f px\n",
+                c.rmsPx, c.epipolarPx, c.rectifiedDyPx);
+    std::printf("fx %.2f px, baseline %.4f m, rectified f %.2f px\n", c.K1.at<double>(0, 0), c.baselineM(),
+                c.rectifiedFocalPx());
+
+    if (auto saved = bringup::saveCalibration(outPath, c); !saved) {
+        return fail(saved.error());
+    }
+    std::printf("wrote %s\n", outPath.c_str());
+    if (!jsonPath.empty()) {
+        if (!writeJson(jsonPath, report)) {
+            return fail(Error{jsonPath, "cannot write the JSON report", "check that the folder is writable"});
+        }
+        std::printf("wrote %s\n", jsonPath.c_str());
+    }
+    return 0;
+}
+
 } // namespace ugv::tool

@@ -4,21 +4,23 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/config.hpp"
 
 namespace ugv::tool {
 
 int runCheckConfig(int argc, char** argv)
 {
-    Args args("check-config", "[FILE] [--schema]",
-              {{"schema", "", "print every key with its default, range and description, then exit", false}});
+    Args args("check-config", "[FILE] [--schema] [--no-calibration]",
+              {{"schema", "", "print every key with its default, range and description, then exit", false},
+               {"no-calibration", "", "do not load the calibration file the config names", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError("check-config", parsed.error());
     }
     if (args.helpRequested()) {
         std::cout
             << args.usage()
-            << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. Exit status: 0 valid, 1 invalid.\n";
+            << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. It also loads the calibration file the config names\n(unless --no-calibration) and checks its image size. Exit status: 0 valid, 1 invalid.\n";
         return 0;
     }
     if (args.has("schema")) {
@@ -39,6 +41,23 @@ int runCheckConfig(int argc, char** argv)
         return 1;
     }
     std::cout << bringup::formatConfig(config.value());
+    if (!args.has("no-calibration")) {
+        const auto calibration = bringup::loadCalibration(config->calibrationPath);
+        if (!calibration) {
+            std::cerr << "error: " << calibration.error().message() << '\n'
+                      << path << ": the calibration it names cannot be used; the service would refuse to start\n";
+            return 1;
+        }
+        const cv::Size size = calibration->imageSize;
+        if (size.width != config->camera.width || size.height != config->camera.height) {
+            std::cerr << "error: " << config->calibrationPath << ": calibrated for " << size.width << "x" << size.height
+                      << " but camera.width/height in " << path << " are " << config->camera.width << "x"
+                      << config->camera.height << " (fix: recalibrate at the camera resolution or fix the config)\n";
+            return 1;
+        }
+        std::cerr << config->calibrationPath << ": OK (" << (calibration->rectified ? "rectified" : "full") << " form, "
+                  << size.width << "x" << size.height << ", baseline " << calibration->baselineM() << " m)\n";
+    }
     std::cerr << path << ": OK\n";
     return 0;
 }

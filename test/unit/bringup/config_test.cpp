@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "ugv/rt/task.hpp"
+
 namespace ugv::bringup {
 namespace {
 
@@ -233,6 +235,40 @@ TEST(Config, FormatConfigRoundTrips)
     EXPECT_DOUBLE_EQ(again->camera.fps, 12.5);
     EXPECT_EQ(again->stereo.mode, MatcherMode::Hh4);
     EXPECT_EQ(again->calibrationPath, "/d/calib.yaml");
+}
+
+TEST(Config, TaskTableOverrides)
+{
+    const auto sut = parseConfig(std::string(kValidMinimal) + "tasks:\n  vision:\n    priority: 75\n    cpu: 0\n"
+                                                               "  logger:\n    policy: other\n",
+                                 "t.yaml", "/");
+
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+    const auto vision = rt::findTask(sut->tasks, "vision");
+    ASSERT_TRUE(vision.has_value());
+    EXPECT_EQ(vision->priority, 75);
+    EXPECT_EQ(vision->cpu, 0);
+    EXPECT_EQ(rt::findTask(sut->tasks, "capture")->priority, rt::findTask(rt::kDefaultTaskTable, "capture")->priority);
+}
+
+TEST(Config, InvalidTaskOverrideNamesTheTaskAndField)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "tasks:\n  vision:\n    priority: 0\n  logger:\n"
+                                                                 "    policy: fifo\n  capture:\n    cpu: 1000\n");
+    const std::string text = joined(errors);
+
+    ASSERT_EQ(errors.size(), 3u) << text;
+    EXPECT_NE(text.find("(tasks.vision): field 'priority' = 0"), std::string::npos) << text;
+    EXPECT_NE(text.find("(tasks.logger): field 'priority' = 0"), std::string::npos) << text;
+    EXPECT_NE(text.find("(tasks.capture): field 'cpu' = 1000"), std::string::npos) << text;
+}
+
+TEST(Config, UnknownTaskIsAnUnknownKey)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "tasks:\n  camera:\n    priority: 50\n");
+
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].what, "unknown key");
 }
 
 TEST(Config, ConfigPathPrecedence)

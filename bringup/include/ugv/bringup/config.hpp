@@ -11,11 +11,13 @@
 ///
 /// Thread-safety: load/parse are reentrant; the result is immutable. RT-safe: no (init only).
 
+#include <array>
 #include <string>
 #include <vector>
 
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
+#include "ugv/rt/task.hpp"
 
 namespace ugv::bringup {
 
@@ -65,6 +67,8 @@ struct ServiceConfig {
     RoiConfig roi;
     StereoConfig stereo;
     ObstacleConfig obstacles;
+    /// The service's threads: rt's default table with the `tasks.<name>.{policy,priority,cpu}` overrides.
+    std::array<rt::TaskSpec, rt::kDefaultTaskTable.size()> tasks = rt::kDefaultTaskTable;
 };
 
 using ConfigErrors = std::vector<Error>;

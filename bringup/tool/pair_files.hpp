@@ -1,0 +1,39 @@
+#pragma once
+
+/// @file
+/// Finding left/right image pairs in a folder for the calibrate and rectify commands: `left<rest>` pairs
+/// with `right<rest>` (left01.jpg/right01.jpg, left_03.png/right_03.png). Host tool only.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+
+namespace ugv::tool {
+
+struct PairFiles {
+    std::string name; ///< "left01.jpg/right01.jpg"
+    std::filesystem::path left;
+    std::filesystem::path right;
+};
+
+struct PairListing {
+    std::vector<PairFiles> pairs;      ///< sorted by name
+    std::vector<std::string> unpaired; ///< "left07.jpg: no matching right07.jpg"
+};
+
+/// Lists `dir`; an error when it is missing or not a folder. Only image files (png, jpg, jpeg, bmp, pgm, ppm,
+/// tif, tiff) count.
+Result<PairListing, Error> listPairs(const std::filesystem::path& dir);
+
+/// Reads an image as 8-bit grey; empty on failure (unreadable or not an image).
+cv::Mat readGrey(const std::filesystem::path& path);
+
+/// Parses "9x6" into inner corners (each in [2, 50]).
+Result<cv::Size, Error> parseBoard(const std::string& command, const std::string& text);
+
+} // namespace ugv::tool

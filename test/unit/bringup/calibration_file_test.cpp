@@ -1,0 +1,279 @@
+#include "ugv/bringup/calibration_file.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+
+namespace {
+
+using ugv::bringup::loadCalibration;
+using ugv::bringup::saveCalibration;
+using ugv::vision::StereoCalibration;
+
+std::filesystem::path tempPath(const std::string& name)
+{
+    const auto dir = std::filesystem::temp_directory_path() / "ugv-calibration-test";
+    std::filesystem::create_directories(dir);
+    return dir / name;
+}
+
+StereoCalibration makeFull()
+{
+    StereoCalibration c;
+    c.imageSize = cv::Size(640, 480);
+    c.K1 = (cv::Mat_<double>(3, 3) << 540, 0, 322, 0, 541, 238, 0, 0, 1);
+    c.K2 = (cv::Mat_<double>(3, 3) << 545, 0, 318, 0, 544, 243, 0, 0, 1);
+    c.D1 = (cv::Mat_<double>(1, 5) << -0.12, 0.05, 0.001, -0.0005, 0);
+    c.D2 = (cv::Mat_<double>(1, 5) << -0.10, 0.04, -0.0007, 0.0003, 0);
+    cv::Rodrigues(cv::Vec3d(0.01, -0.02, 0.005), c.R);
+    c.T = (cv::Mat_<double>(3, 1) << -0.12, 0.002, 0.001);
+    c.E = cv::Mat::eye(3, 3, CV_64F);
+    c.F = cv::Mat::eye(3, 3, CV_64F);
+    cv::stereoRectify(c.K1, c.D1, c.K2, c.D2, c.imageSize, c.R, c.T, c.R1, c.R2, c.P1, c.P2, c.Q,
+                      cv::CALIB_ZERO_DISPARITY, 0.0);
+    c.rmsPx = 0.21;
+    c.epipolarPx = 0.26;
+    c.rectifiedDyPx = 0.12;
+    c.pairsUsed = 13;
+    c.pairsRejected = 1;
+    return c;
+}
+
+std::string readText(const std::filesystem::path& path)
+{
+    std::ifstream in(path);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeText(const std::filesystem::path& path, const std::string& text)
+{
+    std::ofstream(path) << text;
+}
+
+/// Saves a valid full calibration, applies `edit` to its text and loads it; returns the error message.
+std::string loadEditedFull(const std::string& name, const std::string& from, const std::string& to)
+{
+    const auto path = tempPath(name);
+    EXPECT_TRUE(saveCalibration(path.string(), makeFull()).has_value());
+    std::string text = readText(path);
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) {
+        text.replace(at, from.size(), to);
+    }
+    writeText(path, text);
+    const auto loaded = loadCalibration(path.string());
+    EXPECT_FALSE(loaded.has_value());
+    return loaded.has_value() ? std::string() : loaded.error().message();
+}
+
+constexpr const char* kRectified = "%YAML:1.0\n---\nschema_version: 1\nrectified: 1\nimage_width: 640\n"
+                                   "image_height: 480\nfx: 500.\nfy: 501.\ncx: 320.\ncy: 240.\nbaseline_m: 0.12\n";
+
+std::string loadRectifiedText(const std::string& name, const std::string& text)
+{
+    const auto path = tempPath(name);
+    writeText(path, text);
+    const auto loaded = loadCalibration(path.string());
+    EXPECT_FALSE(loaded.has_value());
+    return loaded.has_value() ? std::string() : loaded.error().message();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to)
+{
+    text.replace(text.find(from), from.size(), to);
+    return text;
+}
+
+TEST(CalibrationFile, FullFormRoundTrips)
+{
+    const auto path = tempPath("full.yaml");
+    StereoCalibration original = makeFull();
+    original.mount = ugv::vision::Mount{0.45, 12.0, -1.5};
+
+    ASSERT_TRUE(saveCalibration(path.string(), original).has_value());
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_TRUE(loaded.has_value()) << loaded.error().message();
+    EXPECT_EQ(loaded->imageSize, original.imageSize);
+    for (const auto& [a, b] : {std::pair{&loaded->K1, &original.K1}, {&loaded->D2, &original.D2},
+                               {&loaded->R, &original.R}, {&loaded->T, &original.T}, {&loaded->P2, &original.P2},
+                               {&loaded->Q, &original.Q}}) {
+        EXPECT_LE(cv::norm(*a, *b, cv::NORM_INF), 1e-12);
+    }
+    EXPECT_DOUBLE_EQ(loaded->rmsPx, 0.21);
+    EXPECT_DOUBLE_EQ(loaded->rectifiedDyPx, 0.12);
+    EXPECT_EQ(loaded->pairsUsed, 13);
+    EXPECT_EQ(loaded->pairsRejected, 1);
+    EXPECT_FALSE(loaded->rectified);
+    ASSERT_TRUE(loaded->mount.has_value());
+    EXPECT_DOUBLE_EQ(loaded->mount->heightM, 0.45);
+    EXPECT_DOUBLE_EQ(loaded->mount->pitchDeg, 12.0);
+    EXPECT_DOUBLE_EQ(loaded->mount->rollDeg, -1.5);
+}
+
+TEST(CalibrationFile, RectifiedFormRoundTrips)
+{
+    const auto path = tempPath("rectified.yaml");
+    const StereoCalibration original =
+        ugv::vision::makeRectifiedCalibration(cv::Size(640, 480), 500.0, 501.0, 320.0, 240.0, 0.12);
+
+    ASSERT_TRUE(saveCalibration(path.string(), original).has_value());
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_TRUE(loaded.has_value()) << loaded.error().message();
+    EXPECT_TRUE(loaded->rectified);
+    EXPECT_DOUBLE_EQ(loaded->baselineM(), 0.12);
+    EXPECT_DOUBLE_EQ(loaded->rectifiedFocalPx(), 500.0);
+    EXPECT_DOUBLE_EQ(loaded->P2.at<double>(0, 3), -500.0 * 0.12);
+    EXPECT_FALSE(loaded->mount.has_value());
+}
+
+TEST(CalibrationFile, HandWrittenRectifiedFormNeedsOnlyItsKeys)
+{
+    const auto path = tempPath("hand.yaml");
+    writeText(path, std::string(kRectified) + "mount: { height_m: 0.6, pitch_deg: -10, roll_deg: 2 }\n");
+
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_TRUE(loaded.has_value()) << loaded.error().message();
+    EXPECT_DOUBLE_EQ(loaded->P1.at<double>(1, 1), 501.0);
+    ASSERT_TRUE(loaded->mount.has_value());
+    EXPECT_DOUBLE_EQ(loaded->mount->pitchDeg, -10.0);
+}
+
+TEST(CalibrationFile, MissingFileNamesThePath)
+{
+    const auto loaded = loadCalibration("/nonexistent/calib.yaml");
+    ASSERT_FALSE(loaded.has_value());
+    EXPECT_EQ(loaded.error().where, "/nonexistent/calib.yaml");
+    EXPECT_NE(loaded.error().what.find("not found"), std::string::npos);
+}
+
+TEST(CalibrationFile, TruncatedYamlIsAnErrorNotAThrow)
+{
+    const auto path = tempPath("truncated.yaml");
+    ASSERT_TRUE(saveCalibration(path.string(), makeFull()).has_value());
+    const std::string text = readText(path);
+    writeText(path, text.substr(0, text.find("data: [") + 12));
+
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_FALSE(loaded.has_value());
+    EXPECT_NE(loaded.error().message().find(path.string()), std::string::npos) << loaded.error().message();
+}
+
+TEST(CalibrationFile, CorruptYamlIsAnError)
+{
+    const std::string message = loadRectifiedText("corrupt.yaml", "%YAML:1.0\n---\nfx: [1, 2\n  }{ :\n");
+    EXPECT_NE(message.find("corrupt.yaml"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, MissingKeyIsNamed)
+{
+    const std::string message = loadEditedFull("missing-key.yaml", "R2:", "XX:");
+    EXPECT_NE(message.find("missing-key.yaml: R2"), std::string::npos) << message;
+    EXPECT_NE(message.find("missing key"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, WrongMatrixSizeIsNamed)
+{
+    const std::string message = loadEditedFull("wrong-size.yaml", "T: !!opencv-matrix\n   rows: 3\n   cols: 1",
+                                                "T: !!opencv-matrix\n   rows: 1\n   cols: 3");
+    EXPECT_NE(message.find("wrong-size.yaml: T"), std::string::npos) << message;
+    EXPECT_NE(message.find("expected 3x1"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, WrongMatrixTypeIsNamed)
+{
+    const std::string message = loadEditedFull("wrong-type.yaml", "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d",
+                                                "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f");
+    EXPECT_NE(message.find("wrong-type.yaml: Q"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, NanInMatrixIsNamed)
+{
+    const auto path = tempPath("nan.yaml");
+    StereoCalibration calib = makeFull();
+    calib.E.at<double>(1, 2) = std::numeric_limits<double>::quiet_NaN();
+    ASSERT_TRUE(saveCalibration(path.string(), calib).has_value());
+
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_FALSE(loaded.has_value());
+    EXPECT_NE(loaded.error().message().find("nan.yaml: E"), std::string::npos) << loaded.error().message();
+}
+
+TEST(CalibrationFile, InfiniteNumberIsNamed)
+{
+    const std::string message = loadRectifiedText("inf.yaml", replaced(kRectified, "fy: 501.", "fy: .Inf"));
+    EXPECT_NE(message.find("inf.yaml: fy"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, NonPositiveFocalIsNamed)
+{
+    const std::string message = loadRectifiedText("focal.yaml", replaced(kRectified, "fx: 500.", "fx: -3."));
+    EXPECT_NE(message.find("focal.yaml: fx"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, NonPositiveFocalInFullFormIsNamed)
+{
+    const std::string message = loadEditedFull("focal-full.yaml", "data: [ 540., 0.", "data: [ -540., 0.");
+    EXPECT_NE(message.find("focal-full.yaml: K1"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, BadBaselineIsNamedWithTheRange)
+{
+    const std::string message = loadRectifiedText("baseline.yaml", replaced(kRectified, "baseline_m: 0.12", "baseline_m: 0"));
+    EXPECT_NE(message.find("baseline.yaml: baseline_m"), std::string::npos) << message;
+    EXPECT_NE(message.find("(0, 5] metres"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, NonPositiveImageSizeIsNamed)
+{
+    const std::string message = loadRectifiedText("size.yaml", replaced(kRectified, "image_width: 640", "image_width: 0"));
+    EXPECT_NE(message.find("size.yaml: image_width"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, UnsupportedSchemaVersionIsNamed)
+{
+    const std::string message = loadRectifiedText("schema.yaml", replaced(kRectified, "schema_version: 1", "schema_version: 2"));
+    EXPECT_NE(message.find("schema.yaml: schema_version"), std::string::npos) << message;
+    EXPECT_NE(message.find("unsupported schema_version 2"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, NumberAsTextIsNamed)
+{
+    const std::string message = loadRectifiedText("text.yaml", replaced(kRectified, "cx: 320.", "cx: middle"));
+    EXPECT_NE(message.find("text.yaml: cx"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, MountHeightOutOfRangeIsNamed)
+{
+    const std::string message = loadRectifiedText(
+        "mount-height.yaml", std::string(kRectified) + "mount: { height_m: 12, pitch_deg: 0, roll_deg: 0 }\n");
+    EXPECT_NE(message.find("mount-height.yaml: height_m"), std::string::npos) << message;
+    EXPECT_NE(message.find("(0, 10] metres"), std::string::npos) << message;
+}
+
+TEST(CalibrationFile, MountPitchAndRollOutOfRangeAreNamed)
+{
+    const std::string pitch = loadRectifiedText(
+        "mount-pitch.yaml", std::string(kRectified) + "mount: { height_m: 0.5, pitch_deg: 50, roll_deg: 0 }\n");
+    EXPECT_NE(pitch.find("mount-pitch.yaml: pitch_deg"), std::string::npos) << pitch;
+    const std::string roll = loadRectifiedText(
+        "mount-roll.yaml", std::string(kRectified) + "mount: { height_m: 0.5, pitch_deg: 0, roll_deg: -31 }\n");
+    EXPECT_NE(roll.find("mount-roll.yaml: roll_deg"), std::string::npos) << roll;
+}
+
+TEST(CalibrationFile, UnwritablePathIsAnError)
+{
+    const auto saved = saveCalibration("/nonexistent/dir/calib.yaml", makeFull());
+    ASSERT_FALSE(saved.has_value());
+    EXPECT_EQ(saved.error().where, "/nonexistent/dir/calib.yaml");
+}
+
+} // namespace
