@@ -159,13 +159,19 @@ std::vector<KeySpec> taskKeys()
     std::vector<KeySpec> keys;
     for (std::size_t i = 0; i < rt::kDefaultTaskTable.size(); ++i) {
         const std::string prefix = "tasks." + std::string(rt::kDefaultTaskTable[i].name) + ".";
-        keys.push_back(choiceKey<rt::SchedPolicy>(prefix + "policy", "scheduling policy of this thread",
-                                                  {{"fifo", rt::SchedPolicy::Fifo}, {"other", rt::SchedPolicy::Other}},
-                                                  [i](ServiceConfig& c) -> auto& { return c.tasks[i].policy; }));
-        keys.push_back(numberKey(prefix + "priority", Kind::Int, 0, 99, "priority: 1..99 with fifo (higher first), 0 with other",
-                                 [i](ServiceConfig& c) -> auto& { return c.tasks[i].priority; }));
-        keys.push_back(numberKey(prefix + "cpu", Kind::Int, -1, 1023, "CPU to pin the thread to, -1 for any",
-                                 [i](ServiceConfig& c) -> auto& { return c.tasks[i].cpu; }));
+        keys.push_back(choiceKey<rt::SchedPolicy>(
+            prefix + "policy", "scheduling policy of this thread",
+            {{"fifo", rt::SchedPolicy::Fifo}, {"other", rt::SchedPolicy::Other}}, [i](ServiceConfig & c) -> auto& {
+                return c.tasks[i].policy;
+            }));
+        keys.push_back(numberKey(
+            prefix + "priority", Kind::Int, 0, 99,
+            "priority: 1..99 with fifo (higher first), 0 with other", [i](ServiceConfig & c) -> auto& {
+                return c.tasks[i].priority;
+            }));
+        keys.push_back(numberKey(
+            prefix + "cpu", Kind::Int, -1, 1023,
+            "CPU to pin the thread to, -1 for any", [i](ServiceConfig & c) -> auto& { return c.tasks[i].cpu; }));
     }
     return keys;
 }
@@ -445,7 +451,8 @@ Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path)
 std::string formatConfig(const ServiceConfig& config)
 {
     std::ostringstream out;
-    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile) << ")\n";
+    out << "# effective ugvsense config (from " << (config.sourceFile.empty() ? "defaults" : config.sourceFile)
+        << ")\n";
     std::vector<std::string> open; // the sections the previous key was in
     for (const auto& key : schema()) {
         std::vector<std::string> parts;

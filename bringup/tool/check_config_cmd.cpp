@@ -20,7 +20,8 @@ int runCheckConfig(int argc, char** argv)
     if (args.helpRequested()) {
         std::cout
             << args.usage()
-            << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. It also loads the calibration file the config names\n(unless --no-calibration) and checks its image size. Exit status: 0 valid, 1 invalid.\n";
+            << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. It also loads the calibration file the "
+               "config names\n(unless --no-calibration) and checks its image size. Exit status: 0 valid, 1 invalid.\n";
         return 0;
     }
     if (args.has("schema")) {

@@ -240,7 +240,7 @@ TEST(Config, FormatConfigRoundTrips)
 TEST(Config, TaskTableOverrides)
 {
     const auto sut = parseConfig(std::string(kValidMinimal) + "tasks:\n  vision:\n    priority: 75\n    cpu: 0\n"
-                                                               "  logger:\n    policy: other\n",
+                                                              "  logger:\n    policy: other\n",
                                  "t.yaml", "/");
 
     ASSERT_TRUE(sut.has_value()) << joined(sut.error());
