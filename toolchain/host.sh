@@ -54,8 +54,9 @@ run_main_job() {
     echo "== 2/3 calibrate"
     "$tool" calibrate --images "$out/pairs" --board 9x6 --square 0.025 --out "$out/calibration.yaml" \
         --json "$out/calibration.json"
-    echo "== 3/3 rectify (fixed-point region-of-interest maps) and check row alignment"
-    "$tool" rectify --calib "$out/calibration.yaml" --images "$out/pairs" --out "$out/rectified"
+    echo "== 3/3 rectify: the obstacle region of interest (the service's path), then full frames to check row alignment"
+    "$tool" rectify --calib "$out/calibration.yaml" --images "$out/pairs"
+    "$tool" rectify --calib "$out/calibration.yaml" --images "$out/pairs" --full --out "$out/rectified"
     echo "== done: calibration in $out/calibration.yaml, report in $out/calibration.json, images in $out/rectified/"
 }
 

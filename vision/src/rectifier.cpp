@@ -44,6 +44,12 @@ void remapBilinear(ConstImageViewU8 src, const cv::Mat& mapXY, const cv::Mat& ma
     constexpr int kRound = 1 << (kShift - 1);
     const int width = src.width();
     const int height = src.height();
+    const std::uint8_t* base = src.data();
+    const std::ptrdiff_t stride = src.strideBytes();
+    // Raw pointer arithmetic in the loop: ImageView::row() checks its precondition per call.
+    const auto at = [&](int px, int py) {
+        return px >= 0 && py >= 0 && px < width && py < height ? int{base[py * stride + px]} : 0;
+    };
     for (int y = 0; y < dst.height(); ++y) {
         const auto* xy = mapXY.ptr<std::int16_t>(y);
         const auto* frac = mapFrac.ptr<std::uint16_t>(y);
@@ -57,24 +63,23 @@ void remapBilinear(ConstImageViewU8 src, const cv::Mat& mapXY, const cv::Mat& ma
             int p01 = 0;
             int p10 = 0;
             int p11 = 0;
-            if (sx >= 0 && sy >= 0 && sx + 1 < width && sy + 1 < height) {
-                const std::uint8_t* r0 = src.row(sy) + sx;
-                const std::uint8_t* r1 = src.row(sy + 1) + sx;
+            if (static_cast<unsigned>(sx) < static_cast<unsigned>(width - 1) &&
+                static_cast<unsigned>(sy) < static_cast<unsigned>(height - 1)) {
+                const std::uint8_t* r0 = base + sy * stride + sx;
+                const std::uint8_t* r1 = r0 + stride;
                 p00 = r0[0];
                 p01 = r0[1];
                 p10 = r1[0];
                 p11 = r1[1];
             } else {
-                const auto at = [&](int px, int py) {
-                    return px >= 0 && py >= 0 && px < width && py < height ? int{src.row(py)[px]} : 0;
-                };
                 p00 = at(sx, sy);
                 p01 = at(sx + 1, sy);
                 p10 = at(sx, sy + 1);
                 p11 = at(sx + 1, sy + 1);
             }
-            const int sum = (kOne - fx) * (kOne - fy) * p00 + fx * (kOne - fy) * p01 + (kOne - fx) * fy * p10 +
-                            fx * fy * p11;
+            const int top = (kOne - fx) * p00 + fx * p01;
+            const int bottom = (kOne - fx) * p10 + fx * p11;
+            const int sum = (kOne - fy) * top + fy * bottom;
             out[x] = static_cast<std::uint8_t>((sum + kRound) >> kShift);
         }
     }
@@ -96,14 +101,20 @@ Result<Rectifier, Error> Rectifier::create(const StereoCalibration& calib, const
         return Unexpected(Error{"rectifier", "calibration matrices missing or of the wrong size/type",
                                 "load the calibration with loadCalibration() or calibrate again"});
     }
-    if (config.roiMarginRows < 0 || config.roiMarginRows > size.height / 2) {
+    if (!(config.roiTopFraction >= 0.0 && config.roiTopFraction < 1.0)) {
+        return Unexpected(Error{"rectifier", "roiTopFraction " + std::to_string(config.roiTopFraction) +
+                                                 " outside [0, 1)",
+                                "use 0.5 for the bottom half"});
+    }
+    const int roiTop = static_cast<int>(std::lround(size.height * config.roiTopFraction));
+    if (config.roiMarginRows < 0 || config.roiMarginRows > roiTop) {
         return Unexpected(Error{"rectifier", "roiMarginRows " + std::to_string(config.roiMarginRows) +
-                                                 " outside [0, height/2]",
+                                                 " outside [0, first ROI row " + std::to_string(roiTop) + "]",
                                 "use a small margin such as 8 rows"});
     }
     Rectifier sut;
     sut.imageSize_ = size;
-    const int top = config.fullFrame ? 0 : size.height / 2 - config.roiMarginRows;
+    const int top = config.fullFrame ? 0 : roiTop - config.roiMarginRows;
     sut.roi_ = Rect{0, top, size.width, size.height - top};
     const double fx = calib.P1.at<double>(0, 0);
     sut.projection_ = RectifiedProjection{fx, calib.P1.at<double>(1, 1), calib.P1.at<double>(0, 2),

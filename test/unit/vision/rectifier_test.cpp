@@ -2,6 +2,8 @@
 
 #include <cstdint>
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -177,6 +179,30 @@ TEST(Rectifier, CreateRejectsBadCalibrationAndMargin)
     StereoCalibration noSize = makeCalibration();
     noSize.imageSize = cv::Size(0, kHeight);
     EXPECT_FALSE(Rectifier::create(noSize, RectifierConfig{}).has_value());
+}
+
+TEST(Rectifier, RoiTopFractionMovesTheRoi)
+{
+    RectifierConfig config;
+    config.roiTopFraction = 0.4;
+    config.roiMarginRows = 4;
+
+    const auto sut = Rectifier::create(makeCalibration(), config);
+
+    ASSERT_TRUE(sut.has_value());
+    EXPECT_EQ(sut->roi().y, static_cast<int>(std::lround(kHeight * 0.4)) - 4);
+    EXPECT_EQ(sut->roi().height, kHeight - sut->roi().y);
+}
+
+TEST(Rectifier, CreateRejectsBadRoiFraction)
+{
+    for (const double fraction : {-0.1, 1.0, std::nan("")}) {
+        RectifierConfig config;
+        config.roiTopFraction = fraction;
+        const auto result = Rectifier::create(makeCalibration(), config);
+        ASSERT_FALSE(result.has_value()) << fraction;
+        EXPECT_NE(result.error().what.find("roiTopFraction"), std::string::npos);
+    }
 }
 
 TEST(Rectifier, RectifyAllocatesNothingOver300Frames)

@@ -15,8 +15,10 @@
 namespace ugv::vision {
 
 struct RectifierConfig {
-    /// Rows above the bottom half that are rectified too, so that the matcher's block has context at the
-    /// top of the obstacle ROI: ROI = rows [height/2 - roiMarginRows, height) [px].
+    /// First row of the obstacle region of interest as a fraction of the height (config roi.top_fraction).
+    double roiTopFraction = 0.5;
+    /// Rows above the region of interest that are rectified too, so that the matcher's block has context at
+    /// its top: ROI = rows [round(height * roiTopFraction) - roiMarginRows, height) [px].
     int roiMarginRows = 8;
     /// Rectify the whole frame instead (visual checks, tools).
     bool fullFrame = false;
