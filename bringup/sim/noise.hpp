@@ -96,8 +96,7 @@ inline double octaveWeight(double wavelengthM, double footprintM) noexcept
 }
 
 /// Zero-mean 2-D fBm: sum of amplitude * (noise - 0.5) over the octaves, band-limited to the footprint.
-inline double fbm2(double x, double y, std::span<const Octave> octaves, double footprintM,
-                   std::uint32_t seed) noexcept
+inline double fbm2(double x, double y, std::span<const Octave> octaves, double footprintM, std::uint32_t seed) noexcept
 {
     double sum = 0.0;
     std::uint32_t octaveSeed = seed;

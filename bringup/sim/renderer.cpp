@@ -19,17 +19,17 @@
 namespace ugv::sim {
 namespace {
 
-using Eigen::Vector3d;
 using detail::Octave;
+using Eigen::Vector3d;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-constexpr double kTinyDir = 1e-12;          // direction components below this count as parallel
-constexpr double kBehindEpsM = 1e-6;        // [m] restart distance behind a partially covering fence
-constexpr int kFenceLayers = 3;             // fences a ray may see through
-constexpr double kMinIncidence = 0.02;      // |cos| floor of the footprint stretch at grazing incidence
-constexpr double kAmbient = 0.55;           // Lambert shading: ambient + diffuse * max(0, n.sun)
+constexpr double kTinyDir = 1e-12;     // direction components below this count as parallel
+constexpr double kBehindEpsM = 1e-6;   // [m] restart distance behind a partially covering fence
+constexpr int kFenceLayers = 3;        // fences a ray may see through
+constexpr double kMinIncidence = 0.02; // |cos| floor of the footprint stretch at grazing incidence
+constexpr double kAmbient = 0.55;      // Lambert shading: ambient + diffuse * max(0, n.sun)
 constexpr double kDiffuse = 0.45;
 constexpr double kTableTopThicknessM = 0.04; // [m]
 constexpr double kTableLegInsetM = 0.05;     // [m]
@@ -46,7 +46,7 @@ enum class Surface : std::uint8_t { Sky, Ground, Object, HoleWall, HoleFloor, Ba
 struct Prim {
     PrimKind kind = PrimKind::Box;
     int obstacle = 0;
-    double cx = 0.0, cy = 0.0;        // [m]
+    double cx = 0.0, cy = 0.0; // [m]
     double cosYaw = 1.0, sinYaw = 0.0;
     double hx = 0.0, hy = 0.0;        // [m] half extents (fence: hx unused, hy half length)
     double z0 = 0.0, z1 = 0.0;        // [m]
@@ -103,10 +103,10 @@ double wireCoverage(double a, double w, double spacing, double wire) noexcept
     return std::clamp((cumulative(a + w / 2.0) - cumulative(a - w / 2.0)) / w, 0.0, 1.0);
 }
 
-constexpr std::array<Octave, 6> kAsphalt = {{{0.006, 0.35}, {0.015, 0.3}, {0.04, 0.2}, {0.12, 0.12}, {0.5, 0.1},
-                                            {2.0, 0.1}}};
-constexpr std::array<Octave, 6> kGrass = {{{0.008, 0.45}, {0.02, 0.4}, {0.06, 0.2}, {0.3, 0.2}, {1.2, 0.25},
-                                          {4.0, 0.2}}};
+constexpr std::array<Octave, 6> kAsphalt = {
+    {{0.006, 0.35}, {0.015, 0.3}, {0.04, 0.2}, {0.12, 0.12}, {0.5, 0.1}, {2.0, 0.1}}};
+constexpr std::array<Octave, 6> kGrass = {
+    {{0.008, 0.45}, {0.02, 0.4}, {0.06, 0.2}, {0.3, 0.2}, {1.2, 0.25}, {4.0, 0.2}}};
 constexpr std::array<Octave, 5> kGravel = {{{0.01, 0.35}, {0.025, 0.55}, {0.08, 0.15}, {0.4, 0.1}, {2.0, 0.1}}};
 constexpr std::array<Octave, 4> kPaint = {{{0.005, 0.2}, {0.05, 0.3}, {0.8, 0.5}, {3.0, 0.5}}};
 constexpr std::array<Octave, 5> kObject = {{{0.007, 0.3}, {0.02, 0.35}, {0.06, 0.25}, {0.2, 0.15}, {0.8, 0.1}}};
@@ -304,7 +304,7 @@ private:
             case ObstacleType::Person: {
                 const double k = o.heightM / 1.7; // body proportions for 1.7 m
                 for (const double side : {-1.0, 1.0}) {
-                    addCylinder(0.0, side * 0.1 * k, 0.07 * k, 0.0, 0.85 * k);    // leg
+                    addCylinder(0.0, side * 0.1 * k, 0.07 * k, 0.0, 0.85 * k);       // leg
                     addCylinder(0.0, side * 0.27 * k, 0.045 * k, 0.8 * k, 1.42 * k); // arm
                 }
                 addBox(0.0, 0.0, o.lengthM / 2.0, 0.2 * k, 0.85 * k, 1.45 * k); // torso
@@ -610,8 +610,8 @@ private:
         if (axis < 0 || tNear > tFar || tNear <= tMin || tNear >= best.t) {
             return;
         }
-        const Vector3d n = axis == 0 ? toWorld(sign, 0.0, 0.0)
-                                     : (axis == 1 ? toWorld(0.0, sign, 0.0) : Vector3d(0.0, 0.0, sign));
+        const Vector3d n =
+            axis == 0 ? toWorld(sign, 0.0, 0.0) : (axis == 1 ? toWorld(0.0, sign, 0.0) : Vector3d(0.0, 0.0, sign));
         accept(best, tNear, n, index, p.obstacle);
     }
 

@@ -41,13 +41,13 @@ struct RenderOptions {
 
 /// One rendered stereo pair with its ground truth (all images rig.width x rig.height).
 struct RenderResult {
-    cv::Mat left;      ///< CV_8UC1 grey
-    cv::Mat right;     ///< CV_8UC1 grey
-    cv::Mat disparity; ///< CV_32F [px] of the left image, fx * baseline / Z; exactly 0 for sky (Z = infinity)
-    cv::Mat depth;     ///< CV_32F [m] Z along the left optical axis; +inf for sky
-    cv::Mat labels;    ///< CV_8U, values of Label
-    cv::Mat ids;       ///< CV_16U, obstacle index + 1 (0: ground, sky, background)
-    cv::Mat height;    ///< CV_32F [m] hit point height above the flat ground (negative in holes); NaN for sky
+    cv::Mat left;            ///< CV_8UC1 grey
+    cv::Mat right;           ///< CV_8UC1 grey
+    cv::Mat disparity;       ///< CV_32F [px] of the left image, fx * baseline / Z; exactly 0 for sky (Z = infinity)
+    cv::Mat depth;           ///< CV_32F [m] Z along the left optical axis; +inf for sky
+    cv::Mat labels;          ///< CV_8U, values of Label
+    cv::Mat ids;             ///< CV_16U, obstacle index + 1 (0: ground, sky, background)
+    cv::Mat height;          ///< CV_32F [m] hit point height above the flat ground (negative in holes); NaN for sky
     ObstacleSectors sectors; ///< ground-truth sectors (see README.md)
 };
 

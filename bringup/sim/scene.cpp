@@ -8,16 +8,16 @@ namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-constexpr double kTableTopM = 0.75;          // [m]
-constexpr double kBarrierDepthM = 0.2;       // [m]
-constexpr double kAcrossLengthM = 40.0;      // [m] curb and trench length across the view
-constexpr double kWallLengthM = 6.0;         // [m]
-constexpr double kWallHeightM = 2.0;         // [m]
-constexpr double kWallThicknessM = 0.15;     // [m]
-constexpr double kPersonRefHeightM = 1.7;    // [m] body proportions are given for this height
-constexpr double kPersonTorsoDepthM = 0.25;  // [m] at the reference height
-constexpr double kOverhangThicknessM = 0.1;  // [m]
-constexpr double kFencePostRadiusM = 0.03;   // [m]
+constexpr double kTableTopM = 0.75;         // [m]
+constexpr double kBarrierDepthM = 0.2;      // [m]
+constexpr double kAcrossLengthM = 40.0;     // [m] curb and trench length across the view
+constexpr double kWallLengthM = 6.0;        // [m]
+constexpr double kWallHeightM = 2.0;        // [m]
+constexpr double kWallThicknessM = 0.15;    // [m]
+constexpr double kPersonRefHeightM = 1.7;   // [m] body proportions are given for this height
+constexpr double kPersonTorsoDepthM = 0.25; // [m] at the reference height
+constexpr double kOverhangThicknessM = 0.1; // [m]
+constexpr double kFencePostRadiusM = 0.03;  // [m]
 
 /// Centre offset along the bearing: half the object's depth (radius for round objects).
 double centreOffsetM(const Obstacle& o) noexcept
@@ -213,9 +213,9 @@ Obstacle overhang(double rangeM, double bearingDeg, double elevationM, double le
 
 const std::vector<std::string>& sceneNames()
 {
-    static const std::vector<std::string> kNames = {"empty",  "pole",   "table", "box",          "box_yawed",
-                                                    "barrier", "curb",  "fence", "wall_doorway", "trench",
-                                                    "hole",   "hole_square", "person", "overhang"};
+    static const std::vector<std::string> kNames = {"empty",   "pole",        "table",  "box",          "box_yawed",
+                                                    "barrier", "curb",        "fence",  "wall_doorway", "trench",
+                                                    "hole",    "hole_square", "person", "overhang"};
     return kNames;
 }
 
@@ -310,9 +310,9 @@ Result<void, Error> validate(const Scene& scene)
 {
     const Rig& rig = scene.rig;
     if (rig.width < 2 || rig.height < 2 || rig.width > 8192 || rig.height > 8192) {
-        return Unexpected(sceneError("image size " + std::to_string(rig.width) + "x" + std::to_string(rig.height) +
-                                         " out of range",
-                                     "use 2..8192 px per side"));
+        return Unexpected(
+            sceneError("image size " + std::to_string(rig.width) + "x" + std::to_string(rig.height) + " out of range",
+                       "use 2..8192 px per side"));
     }
     if (!positive(rig.focalPx) || !positive(rig.baselineM) || !positive(rig.heightM)) {
         return Unexpected(sceneError("focal, baseline and camera height must be > 0", "e.g. 546 px, 0.30 m, 0.59 m"));

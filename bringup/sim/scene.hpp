@@ -26,13 +26,13 @@ namespace ugv::sim {
 /// Ideal, already rectified stereo pair. The right camera is displaced by +baselineM along the camera x axis
 /// (to the right). Pixel centres are at integer coordinates; the principal point is the image centre.
 struct Rig {
-    int width = 640;          ///< [px]
-    int height = 480;         ///< [px]
-    double focalPx = 546.0;   ///< [px] fx = fy
-    double baselineM = 0.30;  ///< [m]
-    double heightM = 0.59;    ///< [m] left camera centre above the flat ground
-    double pitchDeg = 0.0;    ///< [deg] positive = looking down
-    double rollDeg = 0.0;     ///< [deg] about the optical axis, positive = right side down
+    int width = 640;         ///< [px]
+    int height = 480;        ///< [px]
+    double focalPx = 546.0;  ///< [px] fx = fy
+    double baselineM = 0.30; ///< [m]
+    double heightM = 0.59;   ///< [m] left camera centre above the flat ground
+    double pitchDeg = 0.0;   ///< [deg] positive = looking down
+    double rollDeg = 0.0;    ///< [deg] about the optical axis, positive = right side down
 
     [[nodiscard]] double cx() const noexcept { return (width - 1) / 2.0; }  ///< [px]
     [[nodiscard]] double cy() const noexcept { return (height - 1) / 2.0; } ///< [px]
@@ -46,12 +46,12 @@ enum class GroundTexture : std::uint8_t { Asphalt, Grass, Gravel, PaintedFloor }
 /// Photometric variation. Grey value = 255 * gain * cameraGain * gradient(u, v) * albedo * shading + offset
 /// + N(0, noiseSigma), clamped to [0, 255].
 struct Lighting {
-    double gain = 1.0;            ///< global gain
-    double offsetGrey = 0.0;      ///< [grey levels] global offset
-    double gradientX = 0.04;      ///< relative brightness change from the left to the right image edge
-    double gradientY = 0.03;      ///< relative brightness change from the top to the bottom image edge
-    double rightGain = 1.02;      ///< gain of the right camera relative to the left one
-    double noiseSigmaGrey = 1.5;  ///< [grey levels] Gaussian sensor noise (seeded by Scene::seed)
+    double gain = 1.0;           ///< global gain
+    double offsetGrey = 0.0;     ///< [grey levels] global offset
+    double gradientX = 0.04;     ///< relative brightness change from the left to the right image edge
+    double gradientY = 0.03;     ///< relative brightness change from the top to the bottom image edge
+    double rightGain = 1.02;     ///< gain of the right camera relative to the left one
+    double noiseSigmaGrey = 1.5; ///< [grey levels] Gaussian sensor noise (seeded by Scene::seed)
 };
 
 enum class BackgroundType : std::uint8_t { Sky, Walls };

@@ -137,8 +137,8 @@ std::string sectorsJson(const ObstacleSectors& sectors)
         } else {
             json << "null";
         }
-        json << ", \"kind\": \"" << kindName(s.kind) << "\", \"state\": \"" << stateName(s.state)
-             << "\", \"class\": \"" << className(s.danger) << "\", \"height_m\": " << s.heightM << "}"
+        json << ", \"kind\": \"" << kindName(s.kind) << "\", \"state\": \"" << stateName(s.state) << "\", \"class\": \""
+             << className(s.danger) << "\", \"height_m\": " << s.heightM << "}"
              << (i + 1 < sectors.count ? ",\n" : "\n");
     }
     json << "  ]\n}\n";

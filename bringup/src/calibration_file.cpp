@@ -49,8 +49,8 @@ public:
     Result<double, Error> number(const std::string& key) const { return number(key, root_); }
 
     /// A number within (min, max] (minOpen) or [min, max].
-    Result<double, Error> numberIn(const std::string& key, double min, double max, bool minOpen, const cv::FileNode& parent,
-                                   const std::string& fix) const
+    Result<double, Error> numberIn(const std::string& key, double min, double max, bool minOpen,
+                                   const cv::FileNode& parent, const std::string& fix) const
     {
         auto value = number(key, parent);
         if (!value) {
@@ -84,8 +84,9 @@ public:
             return Unexpected(error(key, "matrix type is not double (dt: d)", kRecalibrate));
         }
         if (rows > 0 && (m.rows != rows || m.cols != cols)) {
-            return Unexpected(error(key, "matrix is " + std::to_string(m.rows) + "x" + std::to_string(m.cols) +
-                                             ", expected " + std::to_string(rows) + "x" + std::to_string(cols),
+            return Unexpected(error(key,
+                                    "matrix is " + std::to_string(m.rows) + "x" + std::to_string(m.cols) +
+                                        ", expected " + std::to_string(rows) + "x" + std::to_string(cols),
                                     kRecalibrate));
         }
         if (!cv::checkRange(m)) {
@@ -114,9 +115,8 @@ public:
         const double fx = m.at<double>(0, 0);
         const double fy = m.at<double>(1, 1);
         if (fx <= 0.0 || fy <= 0.0) {
-            return Unexpected(error(key, "focal length fx " + numberText(fx) + ", fy " + numberText(fy) +
-                                             " not positive",
-                                    kRecalibrate));
+            return Unexpected(error(
+                key, "focal length fx " + numberText(fx) + ", fy " + numberText(fy) + " not positive", kRecalibrate));
         }
         return {};
     }
@@ -215,7 +215,8 @@ Result<StereoCalibration, Error> readFile(const Reader& in)
     if (!in.root()["rectified"].empty()) {
         UGV_TRY_ASSIGN(flag, in.number("rectified"));
         if (flag != 0.0 && flag != 1.0) {
-            return Unexpected(in.error("rectified", "value " + numberText(flag), "write 'rectified: 1' or leave it out"));
+            return Unexpected(
+                in.error("rectified", "value " + numberText(flag), "write 'rectified: 1' or leave it out"));
         }
         rectified = flag == 1.0;
     }
@@ -223,7 +224,8 @@ Result<StereoCalibration, Error> readFile(const Reader& in)
     const cv::FileNode mountNode = in.root()["mount"];
     if (!mountNode.empty() && !mountNode.isNone()) {
         if (!mountNode.isMap()) {
-            return Unexpected(in.error("mount", "not a map", "write mount: {height_m: .., pitch_deg: .., roll_deg: ..}"));
+            return Unexpected(
+                in.error("mount", "not a map", "write mount: {height_m: .., pitch_deg: .., roll_deg: ..}"));
         }
         UGV_TRY_ASSIGN(h, in.numberIn("height_m", 0.0, kMaxMountHeightM, true, mountNode,
                                       "mount.height_m must be in (0, 10] metres"));
@@ -258,8 +260,8 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
     try {
         cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
         if (!fs.isOpened()) {
-            return Unexpected(Error{path, "cannot open the file for writing",
-                                    "check that the folder exists and is writable"});
+            return Unexpected(
+                Error{path, "cannot open the file for writing", "check that the folder exists and is writable"});
         }
         fs << "schema_version" << kCalibrationSchemaVersion;
         fs << "image_width" << calib.imageSize.width << "image_height" << calib.imageSize.height;
@@ -276,15 +278,16 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
                << calib.rectifiedDyPx << "pairs_used" << calib.pairsUsed << "pairs_rejected" << calib.pairsRejected;
         }
         if (calib.mount) {
-            fs << "mount" << "{";
+            fs << "mount"
+               << "{";
             fs << "height_m" << calib.mount->heightM << "pitch_deg" << calib.mount->pitchDeg << "roll_deg"
                << calib.mount->rollDeg;
             fs << "}";
         }
         fs.release();
     } catch (const cv::Exception& e) {
-        return Unexpected(Error{path, std::string("writing failed: ") + e.what(),
-                                "check that the folder exists and is writable"});
+        return Unexpected(
+            Error{path, std::string("writing failed: ") + e.what(), "check that the folder exists and is writable"});
     }
     return {};
 }
@@ -293,8 +296,8 @@ Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
-        return Unexpected(Error{path, "calibration file not found",
-                                "give the path of a file written by 'ugvsense calibrate'"});
+        return Unexpected(
+            Error{path, "calibration file not found", "give the path of a file written by 'ugvsense calibrate'"});
     }
     try {
         const cv::FileStorage fs(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);

@@ -24,11 +24,21 @@ std::string jsonString(const std::string& text)
     std::string out = "\"";
     for (const char c : text) {
         switch (c) {
-        case '"': out += "\\\""; break;
-        case '\\': out += "\\\\"; break;
-        case '\n': out += "\\n"; break;
-        case '\r': out += "\\r"; break;
-        case '\t': out += "\\t"; break;
+        case '"':
+            out += "\\\"";
+            break;
+        case '\\':
+            out += "\\\\";
+            break;
+        case '\n':
+            out += "\\n";
+            break;
+        case '\r':
+            out += "\\r";
+            break;
+        case '\t':
+            out += "\\t";
+            break;
         default:
             if (static_cast<unsigned char>(c) < 0x20) {
                 char escaped[8];
@@ -95,15 +105,16 @@ int fail(const Error& error)
 
 int runCalibrate(int argc, char** argv)
 {
-    Args args("calibrate", "--images DIR --board WxH --square M --out CALIB.yaml [--json REPORT.json] [--mount-*]",
-              {{"images", "DIR", "folder with left*/right* chessboard images (left01.jpg pairs with right01.jpg)", true},
-               {"board", "WxH", "inner corners per row x per column, e.g. 9x6", true},
-               {"square", "M", "square side in metres, e.g. 0.025", true},
-               {"out", "CALIB.yaml", "calibration file to write", true},
-               {"json", "REPORT.json", "also write a JSON report", false},
-               {"mount-height", "M", "camera height above ground, (0, 10] m (writes the mount section)", false},
-               {"mount-pitch", "DEG", "camera pitch, [-45, 45] deg, default 0", false},
-               {"mount-roll", "DEG", "camera roll, [-30, 30] deg, default 0", false}});
+    Args args(
+        "calibrate", "--images DIR --board WxH --square M --out CALIB.yaml [--json REPORT.json] [--mount-*]",
+        {{"images", "DIR", "folder with left*/right* chessboard images (left01.jpg pairs with right01.jpg)", true},
+         {"board", "WxH", "inner corners per row x per column, e.g. 9x6", true},
+         {"square", "M", "square side in metres, e.g. 0.025", true},
+         {"out", "CALIB.yaml", "calibration file to write", true},
+         {"json", "REPORT.json", "also write a JSON report", false},
+         {"mount-height", "M", "camera height above ground, (0, 10] m (writes the mount section)", false},
+         {"mount-pitch", "DEG", "camera pitch, [-45, 45] deg, default 0", false},
+         {"mount-roll", "DEG", "camera roll, [-30, 30] deg, default 0", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError("calibrate", parsed.error());
     }
@@ -125,8 +136,9 @@ int runCalibrate(int argc, char** argv)
     std::optional<vision::Mount> mount;
     if (args.has("mount-height") || args.has("mount-pitch") || args.has("mount-roll")) {
         if (!args.has("mount-height")) {
-            return reportUsageError("calibrate", Error{"ugvsense calibrate", "--mount-pitch/--mount-roll without "
-                                                                             "--mount-height",
+            return reportUsageError("calibrate", Error{"ugvsense calibrate",
+                                                       "--mount-pitch/--mount-roll without "
+                                                       "--mount-height",
                                                        "give --mount-height M too"});
         }
         const auto height = args.number("mount-height", 0.0, 1e-3, bringup::kMaxMountHeightM);
@@ -143,7 +155,8 @@ int runCalibrate(int argc, char** argv)
     const std::string jsonPath = args.get("json");
     for (const std::string& path : {outPath, jsonPath}) {
         if (!path.empty() && !parentIsFolder(path)) {
-            return fail(Error{path, "the folder of the output file does not exist", "create it or choose another path"});
+            return fail(
+                Error{path, "the folder of the output file does not exist", "create it or choose another path"});
         }
     }
 

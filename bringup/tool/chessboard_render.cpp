@@ -7,14 +7,14 @@
 namespace ugv::tool {
 namespace {
 
-constexpr int kSamples = 3;                // supersampling per axis
-constexpr double kBackground = 110.0;      // grey level around the board
-constexpr double kWhite = 225.0;           // grey levels of the squares
+constexpr int kSamples = 3;           // supersampling per axis
+constexpr double kBackground = 110.0; // grey level around the board
+constexpr double kWhite = 225.0;      // grey levels of the squares
 constexpr double kBlack = 30.0;
-constexpr double kMinDistanceM = 0.65;     // board distance range [m]
+constexpr double kMinDistanceM = 0.65; // board distance range [m]
 constexpr double kMaxDistanceM = 1.10;
-constexpr double kMaxTiltRad = 0.45;       // about 25 deg about x and y
-constexpr double kMaxSpinRad = 0.15;       // about the optical axis
+constexpr double kMaxTiltRad = 0.45; // about 25 deg about x and y
+constexpr double kMaxSpinRad = 0.15; // about the optical axis
 constexpr int kInViewMarginPx = 12;
 constexpr int kMaxTries = 1000;
 
@@ -151,8 +151,8 @@ cv::Mat ChessboardRenderer::renderView(const cv::Matx33d& rotation, const cv::Ve
                             const int i = static_cast<int>(std::floor(bx / board_.squareM));
                             const int j = static_cast<int>(std::floor(by / board_.squareM));
                             value = ((i + j) & 1) == 0 ? kBlack : kWhite;
-                        } else if (bx >= x0 - board_.borderM && bx < x1 + board_.borderM &&
-                                   by >= y0 - board_.borderM && by < y1 + board_.borderM) {
+                        } else if (bx >= x0 - board_.borderM && bx < x1 + board_.borderM && by >= y0 - board_.borderM &&
+                                   by < y1 + board_.borderM) {
                             value = kWhite;
                         }
                     }

@@ -14,18 +14,18 @@ namespace ugv::tool {
 
 /// A stereo rig in OpenCV's conventions: X_right = R * X_left + T. Both cameras share K and distortion.
 struct SimRig {
-    cv::Size imageSize{640, 480}; ///< [px]
-    double fx = 546.0;            ///< [px]
-    double fy = 546.0;            ///< [px]
-    double cx = 320.0;            ///< [px]
-    double cy = 240.0;            ///< [px]
-    double k1 = -0.05;            ///< radial distortion of both cameras
-    double baselineM = 0.20;      ///< [m]
+    cv::Size imageSize{640, 480};                  ///< [px]
+    double fx = 546.0;                             ///< [px]
+    double fy = 546.0;                             ///< [px]
+    double cx = 320.0;                             ///< [px]
+    double cy = 240.0;                             ///< [px]
+    double k1 = -0.05;                             ///< radial distortion of both cameras
+    double baselineM = 0.20;                       ///< [m]
     cv::Vec3d rightRotation{0.004, -0.012, 0.006}; ///< Rodrigues vector of R [rad]
 
     [[nodiscard]] cv::Mat cameraMatrix() const;
-    [[nodiscard]] cv::Mat distortion() const; ///< 1x5: k1, 0, 0, 0, 0
-    [[nodiscard]] cv::Mat rotation() const;   ///< R, 3x3
+    [[nodiscard]] cv::Mat distortion() const;  ///< 1x5: k1, 0, 0, 0, 0
+    [[nodiscard]] cv::Mat rotation() const;    ///< R, 3x3
     [[nodiscard]] cv::Mat translation() const; ///< T = (-baseline, 0, 0) [m], 3x1
 };
 

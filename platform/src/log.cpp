@@ -20,9 +20,9 @@ constexpr std::array<const char*, 5> kLevelNames{"debug", "info", "warn", "error
 constexpr const char* kEnvName = "UGV_LOG_LEVELS";
 constexpr int kStderrFd = 2;
 
-std::array<std::atomic<LogLevel>, kLogCategoryCount> gThresholds{
-    kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel,
-    kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel};
+std::array<std::atomic<LogLevel>, kLogCategoryCount> gThresholds{kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel,
+                                                                 kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel,
+                                                                 kDefaultLogLevel};
 std::atomic<bool> gEnvRead{false};
 std::once_flag gEnvOnce;
 std::atomic<int> gOutputFd{kStderrFd};
@@ -55,8 +55,14 @@ void readEnvOnce()
 
 } // namespace
 
-const char* toString(LogCategory category) noexcept { return kCategoryNames[static_cast<std::size_t>(category)]; }
-const char* toString(LogLevel level) noexcept { return kLevelNames[static_cast<std::size_t>(level)]; }
+const char* toString(LogCategory category) noexcept
+{
+    return kCategoryNames[static_cast<std::size_t>(category)];
+}
+const char* toString(LogLevel level) noexcept
+{
+    return kLevelNames[static_cast<std::size_t>(level)];
+}
 
 LogLevelsParse parseLogLevels(std::string_view spec)
 {
@@ -104,7 +110,10 @@ LogLevelsParse parseLogLevels(std::string_view spec)
     return result;
 }
 
-void initLogLevelsFromEnv() { std::call_once(gEnvOnce, readEnvOnce); }
+void initLogLevelsFromEnv()
+{
+    std::call_once(gEnvOnce, readEnvOnce);
+}
 
 void setLogThresholds(const LogThresholds& thresholds)
 {
@@ -127,7 +136,10 @@ bool logEnabled(LogCategory category, LogLevel level)
     return level >= logThreshold(category);
 }
 
-int setLogOutputFd(int fd) noexcept { return gOutputFd.exchange(fd); }
+int setLogOutputFd(int fd) noexcept
+{
+    return gOutputFd.exchange(fd);
+}
 
 void writeLogLine(std::string_view line) noexcept
 {
@@ -177,7 +189,10 @@ std::string formatRtMessage(const char* format, const std::array<std::int64_t, 4
     return out;
 }
 
-RtLogChannel::RtLogChannel(const char* name) : name_(name) { initLogLevelsFromEnv(); }
+RtLogChannel::RtLogChannel(const char* name) : name_(name)
+{
+    initLogLevelsFromEnv();
+}
 
 void RtLogChannel::log(LogLevel level, LogCategory category, const char* format, std::int64_t a0, std::int64_t a1,
                        std::int64_t a2, std::int64_t a3) noexcept
@@ -191,13 +206,16 @@ void RtLogChannel::log(LogLevel level, LogCategory category, const char* format,
     }
 }
 
-LogDrain::~LogDrain() { stop(); }
+LogDrain::~LogDrain()
+{
+    stop();
+}
 
 Result<void, Error> LogDrain::addChannel(RtLogChannel& channel)
 {
     if (running()) {
-        return Unexpected(Error{"LogDrain", std::string("cannot add channel '") + channel.name() +
-                                                "' while the drain thread runs",
+        return Unexpected(Error{"LogDrain",
+                                std::string("cannot add channel '") + channel.name() + "' while the drain thread runs",
                                 "register all channels at init, before start()"});
     }
     if (channelCount_ == kMaxRtLogChannels) {
@@ -222,15 +240,15 @@ std::size_t LogDrain::drainOnce()
             std::string fraction = std::to_string(record.timestampNs % kNsPerSecond);
             fraction.insert(0, static_cast<std::size_t>(kFractionDigits) - fraction.size(), '0');
             writeLogLine(std::string("[") + toString(record.category) + "] " + toString(record.level) + ": " +
-                         formatRtMessage(record.format, record.args) + " [t=" +
-                         std::to_string(record.timestampNs / kNsPerSecond) + "." + fraction + "]\n");
+                         formatRtMessage(record.format, record.args) +
+                         " [t=" + std::to_string(record.timestampNs / kNsPerSecond) + "." + fraction + "]\n");
             ++written;
         }
         const std::uint64_t dropped = channel.dropped();
         if (dropped != reportedDrops_[i]) {
             writeLogLine(std::string("[platform] warn: RT log channel '") + channel.name() + "' dropped " +
-                         std::to_string(dropped - reportedDrops_[i]) + " record(s) (total " +
-                         std::to_string(dropped) + "); its ring holds " + std::to_string(kRtLogChannelCapacity) +
+                         std::to_string(dropped - reportedDrops_[i]) + " record(s) (total " + std::to_string(dropped) +
+                         "); its ring holds " + std::to_string(kRtLogChannelCapacity) +
                          ": log less often or drain more often\n");
             reportedDrops_[i] = dropped;
         }

@@ -18,10 +18,9 @@ MemoryReport lockMemory(const SysOps& ops)
 {
     MemoryReport report;
     if (const int error = ops.lockAll(MCL_CURRENT | MCL_FUTURE); error != 0) {
-        report.warnings.push_back(
-            "could not lock memory (mlockall): " + errnoText(error) +
-            "; page faults may stall RT tasks. Fix: run as root or raise the locked-memory limit "
-            "(systemd: LimitMEMLOCK=infinity; shell: ulimit -l unlimited)");
+        report.warnings.push_back("could not lock memory (mlockall): " + errnoText(error) +
+                                  "; page faults may stall RT tasks. Fix: run as root or raise the locked-memory limit "
+                                  "(systemd: LimitMEMLOCK=infinity; shell: ulimit -l unlimited)");
     } else {
         report.locked = true;
     }
@@ -58,8 +57,8 @@ std::optional<std::size_t> lockedBytesFromStatus(std::string_view statusText)
     rest.remove_prefix(std::min(rest.find_first_not_of(" \t"), rest.size()));
     std::size_t kb = 0;
     const auto [end, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), kb);
-    if (ec != std::errc{} || !std::string_view(end, static_cast<std::size_t>(rest.data() + rest.size() - end))
-                                 .starts_with(" kB")) {
+    if (ec != std::errc{} ||
+        !std::string_view(end, static_cast<std::size_t>(rest.data() + rest.size() - end)).starts_with(" kB")) {
         return std::nullopt;
     }
     return kb * kBytesPerKb;

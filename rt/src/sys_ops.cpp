@@ -9,8 +9,14 @@
 namespace ugv::rt {
 namespace {
 
-int lockAllReal(int flags) { return ::mlockall(flags) == 0 ? 0 : errno; }
-int mallocOptionReal(int option, int value) { return ::mallopt(option, value) == 1 ? 0 : EINVAL; }
+int lockAllReal(int flags)
+{
+    return ::mlockall(flags) == 0 ? 0 : errno;
+}
+int mallocOptionReal(int option, int value)
+{
+    return ::mallopt(option, value) == 1 ? 0 : EINVAL;
+}
 
 } // namespace
 

@@ -17,9 +17,15 @@ Error fieldError(const TaskSpec& spec, std::string_view field, const std::string
 
 } // namespace
 
-const char* toString(SchedPolicy policy) noexcept { return policy == SchedPolicy::Fifo ? "SCHED_FIFO" : "SCHED_OTHER"; }
+const char* toString(SchedPolicy policy) noexcept
+{
+    return policy == SchedPolicy::Fifo ? "SCHED_FIFO" : "SCHED_OTHER";
+}
 
-int onlineCpuCount() noexcept { return static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN)); }
+int onlineCpuCount() noexcept
+{
+    return static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN));
+}
 
 Result<void, Error> validateTask(const TaskSpec& spec, int cpuCount)
 {
@@ -37,8 +43,8 @@ Result<void, Error> validateTask(const TaskSpec& spec, int cpuCount)
                                      "-1 (any) or 0.." + std::to_string(cpuCount - 1) + " on this machine"));
     }
     if (spec.period.count() < 0) {
-        return Unexpected(fieldError(spec, "period", std::to_string(spec.period.count()) + " ns",
-                                     ">= 0 ns (0 = event-driven)"));
+        return Unexpected(
+            fieldError(spec, "period", std::to_string(spec.period.count()) + " ns", ">= 0 ns (0 = event-driven)"));
     }
     const auto minStack = static_cast<std::size_t>(PTHREAD_STACK_MIN);
     if (spec.stackBytes < minStack) {

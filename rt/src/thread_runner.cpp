@@ -47,7 +47,10 @@ std::string formatReport(const StartReport& report)
 
 ThreadRunner::ThreadRunner(SysOps ops) noexcept : ops_(ops) {}
 
-ThreadRunner::~ThreadRunner() { stopAll(); }
+ThreadRunner::~ThreadRunner()
+{
+    stopAll();
+}
 
 Result<void, Error> ThreadRunner::addTask(const TaskSpec& spec, TaskBody body, void* context)
 {
@@ -117,8 +120,7 @@ Result<void, Error> ThreadRunner::createAll()
             refusalWarning("SCHED_FIFO", fifoRefused, fifoError, "they run as SCHED_OTHER (no real-time guarantee)"));
     }
     if (!cpuRefused.empty()) {
-        report_.warnings.push_back(
-            refusalWarning("CPU affinity", cpuRefused, cpuError, "they may run on any CPU"));
+        report_.warnings.push_back(refusalWarning("CPU affinity", cpuRefused, cpuError, "they may run on any CPU"));
     }
     for (const std::string& warning : report_.warnings) {
         UGV_LOG(Rt, Warn) << warning;

@@ -21,12 +21,12 @@
 #if !UGV_ALLOC_COUNTER_SANITIZED
 // glibc's own allocator entry points (exported by libc.so.6 for exactly this use).
 extern "C" {
-void* __libc_malloc(std::size_t size);                    // NOLINT(bugprone-reserved-identifier)
-void* __libc_calloc(std::size_t count, std::size_t size); // NOLINT(bugprone-reserved-identifier)
-void* __libc_realloc(void* ptr, std::size_t size);        // NOLINT(bugprone-reserved-identifier)
+void* __libc_malloc(std::size_t size);                          // NOLINT(bugprone-reserved-identifier)
+void* __libc_calloc(std::size_t count, std::size_t size);       // NOLINT(bugprone-reserved-identifier)
+void* __libc_realloc(void* ptr, std::size_t size);              // NOLINT(bugprone-reserved-identifier)
 void* __libc_memalign(std::size_t alignment, std::size_t size); // NOLINT(bugprone-reserved-identifier)
-void* __libc_valloc(std::size_t size);                    // NOLINT(bugprone-reserved-identifier)
-void* __libc_pvalloc(std::size_t size);                   // NOLINT(bugprone-reserved-identifier)
+void* __libc_valloc(std::size_t size);                          // NOLINT(bugprone-reserved-identifier)
+void* __libc_pvalloc(std::size_t size);                         // NOLINT(bugprone-reserved-identifier)
 }
 #endif
 
@@ -91,8 +91,14 @@ void* countedAlignedNew(std::size_t size, std::align_val_t alignment)
 } // namespace
 
 // NOLINTBEGIN(cppcoreguidelines-no-malloc, misc-new-delete-overloads) NOLINTJUSTIFICATION: the allocator itself.
-void* operator new(std::size_t size) { return countedNew(size); }
-void* operator new[](std::size_t size) { return countedNew(size); }
+void* operator new(std::size_t size)
+{
+    return countedNew(size);
+}
+void* operator new[](std::size_t size)
+{
+    return countedNew(size);
+}
 void* operator new(std::size_t size, const std::nothrow_t& /*unused*/) noexcept
 {
     countOne();
@@ -103,8 +109,14 @@ void* operator new[](std::size_t size, const std::nothrow_t& /*unused*/) noexcep
     countOne();
     return rawAlloc(size == 0 ? 1 : size);
 }
-void* operator new(std::size_t size, std::align_val_t alignment) { return countedAlignedNew(size, alignment); }
-void* operator new[](std::size_t size, std::align_val_t alignment) { return countedAlignedNew(size, alignment); }
+void* operator new(std::size_t size, std::align_val_t alignment)
+{
+    return countedAlignedNew(size, alignment);
+}
+void* operator new[](std::size_t size, std::align_val_t alignment)
+{
+    return countedAlignedNew(size, alignment);
+}
 void* operator new(std::size_t size, std::align_val_t alignment, const std::nothrow_t& /*unused*/) noexcept
 {
     countOne();
@@ -116,16 +128,46 @@ void* operator new[](std::size_t size, std::align_val_t alignment, const std::no
     return rawAlignedAlloc(size == 0 ? 1 : size, alignment);
 }
 
-void operator delete(void* ptr) noexcept { std::free(ptr); }
-void operator delete[](void* ptr) noexcept { std::free(ptr); }
-void operator delete(void* ptr, std::size_t /*size*/) noexcept { std::free(ptr); }
-void operator delete[](void* ptr, std::size_t /*size*/) noexcept { std::free(ptr); }
-void operator delete(void* ptr, const std::nothrow_t& /*unused*/) noexcept { std::free(ptr); }
-void operator delete[](void* ptr, const std::nothrow_t& /*unused*/) noexcept { std::free(ptr); }
-void operator delete(void* ptr, std::align_val_t /*alignment*/) noexcept { std::free(ptr); }
-void operator delete[](void* ptr, std::align_val_t /*alignment*/) noexcept { std::free(ptr); }
-void operator delete(void* ptr, std::size_t /*size*/, std::align_val_t /*alignment*/) noexcept { std::free(ptr); }
-void operator delete[](void* ptr, std::size_t /*size*/, std::align_val_t /*alignment*/) noexcept { std::free(ptr); }
+void operator delete(void* ptr) noexcept
+{
+    std::free(ptr);
+}
+void operator delete[](void* ptr) noexcept
+{
+    std::free(ptr);
+}
+void operator delete(void* ptr, std::size_t /*size*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete[](void* ptr, std::size_t /*size*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete(void* ptr, const std::nothrow_t& /*unused*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete[](void* ptr, const std::nothrow_t& /*unused*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete(void* ptr, std::align_val_t /*alignment*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete[](void* ptr, std::align_val_t /*alignment*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete(void* ptr, std::size_t /*size*/, std::align_val_t /*alignment*/) noexcept
+{
+    std::free(ptr);
+}
+void operator delete[](void* ptr, std::size_t /*size*/, std::align_val_t /*alignment*/) noexcept
+{
+    std::free(ptr);
+}
 void operator delete(void* ptr, std::align_val_t /*alignment*/, const std::nothrow_t& /*unused*/) noexcept
 {
     std::free(ptr);
@@ -198,16 +240,34 @@ AllocationScope::AllocationScope() noexcept
     start_ = gGlobalCount.load(std::memory_order_relaxed);
 }
 
-AllocationScope::~AllocationScope() { gActiveScopes.fetch_sub(1, std::memory_order_relaxed); }
+AllocationScope::~AllocationScope()
+{
+    gActiveScopes.fetch_sub(1, std::memory_order_relaxed);
+}
 
-std::size_t AllocationScope::count() const noexcept { return gGlobalCount.load(std::memory_order_relaxed) - start_; }
+std::size_t AllocationScope::count() const noexcept
+{
+    return gGlobalCount.load(std::memory_order_relaxed) - start_;
+}
 
-ThreadAllocationScope::ThreadAllocationScope() noexcept : start_(tThreadCount) { ++tActiveScopes; }
+ThreadAllocationScope::ThreadAllocationScope() noexcept : start_(tThreadCount)
+{
+    ++tActiveScopes;
+}
 
-ThreadAllocationScope::~ThreadAllocationScope() { --tActiveScopes; }
+ThreadAllocationScope::~ThreadAllocationScope()
+{
+    --tActiveScopes;
+}
 
-std::size_t ThreadAllocationScope::count() const noexcept { return tThreadCount - start_; }
+std::size_t ThreadAllocationScope::count() const noexcept
+{
+    return tThreadCount - start_;
+}
 
-bool mallocFamilyCounted() noexcept { return UGV_ALLOC_COUNTER_SANITIZED == 0; }
+bool mallocFamilyCounted() noexcept
+{
+    return UGV_ALLOC_COUNTER_SANITIZED == 0;
+}
 
 } // namespace ugv::test

@@ -91,25 +91,26 @@ Result<Rectifier, Error> Rectifier::create(const StereoCalibration& calib, const
 {
     const cv::Size size = calib.imageSize;
     if (size.width <= 0 || size.height <= 0) {
-        return Unexpected(Error{"rectifier", "image size " + std::to_string(size.width) + "x" +
-                                                 std::to_string(size.height) + " is not positive",
-                                "load a valid calibration"});
+        return Unexpected(
+            Error{"rectifier",
+                  "image size " + std::to_string(size.width) + "x" + std::to_string(size.height) + " is not positive",
+                  "load a valid calibration"});
     }
-    if (!hasSize(calib.K1, 3, 3) || !hasSize(calib.K2, 3, 3) || !hasSize(calib.R1, 3, 3) ||
-        !hasSize(calib.R2, 3, 3) || !hasSize(calib.P1, 3, 4) || !hasSize(calib.P2, 3, 4) || calib.D1.empty() ||
-        calib.D2.empty()) {
+    if (!hasSize(calib.K1, 3, 3) || !hasSize(calib.K2, 3, 3) || !hasSize(calib.R1, 3, 3) || !hasSize(calib.R2, 3, 3) ||
+        !hasSize(calib.P1, 3, 4) || !hasSize(calib.P2, 3, 4) || calib.D1.empty() || calib.D2.empty()) {
         return Unexpected(Error{"rectifier", "calibration matrices missing or of the wrong size/type",
                                 "load the calibration with loadCalibration() or calibrate again"});
     }
     if (!(config.roiTopFraction >= 0.0 && config.roiTopFraction < 1.0)) {
-        return Unexpected(Error{"rectifier", "roiTopFraction " + std::to_string(config.roiTopFraction) +
-                                                 " outside [0, 1)",
+        return Unexpected(Error{"rectifier",
+                                "roiTopFraction " + std::to_string(config.roiTopFraction) + " outside [0, 1)",
                                 "use 0.5 for the bottom half"});
     }
     const int roiTop = static_cast<int>(std::lround(size.height * config.roiTopFraction));
     if (config.roiMarginRows < 0 || config.roiMarginRows > roiTop) {
-        return Unexpected(Error{"rectifier", "roiMarginRows " + std::to_string(config.roiMarginRows) +
-                                                 " outside [0, first ROI row " + std::to_string(roiTop) + "]",
+        return Unexpected(Error{"rectifier",
+                                "roiMarginRows " + std::to_string(config.roiMarginRows) +
+                                    " outside [0, first ROI row " + std::to_string(roiTop) + "]",
                                 "use a small margin such as 8 rows"});
     }
     Rectifier sut;
@@ -118,8 +119,7 @@ Result<Rectifier, Error> Rectifier::create(const StereoCalibration& calib, const
     sut.roi_ = Rect{0, top, size.width, size.height - top};
     const double fx = calib.P1.at<double>(0, 0);
     sut.projection_ = RectifiedProjection{fx, calib.P1.at<double>(1, 1), calib.P1.at<double>(0, 2),
-                                          calib.P1.at<double>(1, 2),
-                                          fx != 0.0 ? -calib.P2.at<double>(0, 3) / fx : 0.0};
+                                          calib.P1.at<double>(1, 2), fx != 0.0 ? -calib.P2.at<double>(0, 3) / fx : 0.0};
     sut.identity_ = calib.rectified;
     try {
         if (!sut.identity_) {
@@ -127,8 +127,8 @@ Result<Rectifier, Error> Rectifier::create(const StereoCalibration& calib, const
             buildMaps(calib.K2, calib.D2, calib.R2, calib.P2, size, sut.roi_, sut.mapRightXY_, sut.mapRightFrac_);
         }
     } catch (const cv::Exception& e) {
-        return Unexpected(Error{"rectifier", std::string("building the remap tables failed: ") + e.what(),
-                                "calibrate again"});
+        return Unexpected(
+            Error{"rectifier", std::string("building the remap tables failed: ") + e.what(), "calibrate again"});
     }
     sut.outLeft_ = Image<std::uint8_t>(sut.roi_.width, sut.roi_.height);
     sut.outRight_ = Image<std::uint8_t>(sut.roi_.width, sut.roi_.height);

@@ -14,7 +14,7 @@ constexpr int kMaxSubPixHalfWindow = 5; // 11x11 window, right for 640x480 board
 constexpr int kMinSubPixHalfWindow = 2;
 constexpr double kSubPixWindowPerSquare = 0.4; // half window as a fraction of the smallest square side [px/px]
 constexpr int kSubPixMaxIterations = 100;
-constexpr double kSubPixEpsilon = 1e-4;            // [px]
+constexpr double kSubPixEpsilon = 1e-4; // [px]
 constexpr int kStereoMaxIterations = 200;
 constexpr double kStereoEpsilon = 1e-7;
 
@@ -50,8 +50,7 @@ struct StereoRun {
 
 /// Per-camera calibration for a start, then the joint stereo refinement (best figures on the OpenCV sample
 /// pairs: RMS 0.445, epipolar 0.262, |dy| 0.127 px against 0.448/0.290/0.141 with CALIB_FIX_INTRINSIC).
-StereoRun runStereo(const std::vector<Detection>& detections, const std::vector<cv::Point3f>& board,
-                    cv::Size imageSize)
+StereoRun runStereo(const std::vector<Detection>& detections, const std::vector<cv::Point3f>& board, cv::Size imageSize)
 {
     std::vector<std::vector<cv::Point3f>> objectPoints(detections.size(), board);
     std::vector<std::vector<cv::Point2f>> left;
@@ -122,8 +121,8 @@ Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationP
     cv::Size imageSize;
     for (const auto& pair : pairs) {
         if (pair.left.empty() || pair.right.empty()) {
-            report.rejected.push_back({pair.name, std::string("empty image (") + (pair.left.empty() ? "left" : "right") +
-                                                      ")"});
+            report.rejected.push_back(
+                {pair.name, std::string("empty image (") + (pair.left.empty() ? "left" : "right") + ")"});
             continue;
         }
         if (pair.left.type() != CV_8UC1 || pair.right.type() != CV_8UC1) {
@@ -148,16 +147,17 @@ Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationP
         const bool foundLeft = findBoardCorners(pair.left, config.innerCorners, detection.left);
         const bool foundRight = foundLeft && findBoardCorners(pair.right, config.innerCorners, detection.right);
         if (!foundLeft || !foundRight) {
-            report.rejected.push_back({pair.name, std::string("board not found in ") +
-                                                      (foundLeft ? "right" : "left") + " image"});
+            report.rejected.push_back(
+                {pair.name, std::string("board not found in ") + (foundLeft ? "right" : "left") + " image"});
             continue;
         }
         imageSize = pair.left.size();
         detections.push_back(std::move(detection));
     }
     const auto tooFew = [&](std::size_t usable) {
-        return Error{"calibration", "only " + std::to_string(usable) + " usable pair(s), need at least " +
-                                        std::to_string(config.minPairs),
+        return Error{"calibration",
+                     "only " + std::to_string(usable) + " usable pair(s), need at least " +
+                         std::to_string(config.minPairs),
                      "take more pairs with the whole board visible in both cameras"};
     };
     if (detections.size() < static_cast<std::size_t>(config.minPairs)) {
@@ -215,11 +215,11 @@ bool findBoardCorners(const cv::Mat& grey, cv::Size innerCorners, std::vector<cv
     if (cv::findChessboardCorners(grey, innerCorners, corners,
                                   cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
         const double sidePx = smallestSquareSidePx(corners, innerCorners);
-        const int half = std::clamp(static_cast<int>(kSubPixWindowPerSquare * sidePx), kMinSubPixHalfWindow,
-                                    kMaxSubPixHalfWindow);
-        cv::cornerSubPix(grey, corners, cv::Size(half, half), cv::Size(-1, -1),
-                         cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, kSubPixMaxIterations,
-                                          kSubPixEpsilon));
+        const int half =
+            std::clamp(static_cast<int>(kSubPixWindowPerSquare * sidePx), kMinSubPixHalfWindow, kMaxSubPixHalfWindow);
+        cv::cornerSubPix(
+            grey, corners, cv::Size(half, half), cv::Size(-1, -1),
+            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, kSubPixMaxIterations, kSubPixEpsilon));
         return true;
     }
     // The sector-based detector finds boards the classic one misses (blur, strong perspective); its corners

@@ -40,7 +40,10 @@ cv::Mat makeImage(int seed)
     return image;
 }
 
-ugv::ConstImageViewU8 view(const cv::Mat& m) { return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)}; }
+ugv::ConstImageViewU8 view(const cv::Mat& m)
+{
+    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
+}
 
 void BM_RectifyOursRoi(benchmark::State& state)
 {
@@ -86,8 +89,14 @@ void remapBaseline(benchmark::State& state, bool roiOnly)
     state.SetBytesProcessed(state.iterations() * 2 * kWidth * (kHeight - top));
 }
 
-void BM_CvRemapRoi(benchmark::State& state) { remapBaseline(state, true); }
-void BM_CvRemapFullFrameBaseline(benchmark::State& state) { remapBaseline(state, false); }
+void BM_CvRemapRoi(benchmark::State& state)
+{
+    remapBaseline(state, true);
+}
+void BM_CvRemapFullFrameBaseline(benchmark::State& state)
+{
+    remapBaseline(state, false);
+}
 
 } // namespace
 

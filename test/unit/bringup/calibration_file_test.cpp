@@ -99,8 +99,11 @@ TEST(CalibrationFile, FullFormRoundTrips)
 
     ASSERT_TRUE(loaded.has_value()) << loaded.error().message();
     EXPECT_EQ(loaded->imageSize, original.imageSize);
-    for (const auto& [a, b] : {std::pair{&loaded->K1, &original.K1}, {&loaded->D2, &original.D2},
-                               {&loaded->R, &original.R}, {&loaded->T, &original.T}, {&loaded->P2, &original.P2},
+    for (const auto& [a, b] : {std::pair{&loaded->K1, &original.K1},
+                               {&loaded->D2, &original.D2},
+                               {&loaded->R, &original.R},
+                               {&loaded->T, &original.T},
+                               {&loaded->P2, &original.P2},
                                {&loaded->Q, &original.Q}}) {
         EXPECT_LE(cv::norm(*a, *b, cv::NORM_INF), 1e-12);
     }
@@ -182,15 +185,16 @@ TEST(CalibrationFile, MissingKeyIsNamed)
 TEST(CalibrationFile, WrongMatrixSizeIsNamed)
 {
     const std::string message = loadEditedFull("wrong-size.yaml", "T: !!opencv-matrix\n   rows: 3\n   cols: 1",
-                                                "T: !!opencv-matrix\n   rows: 1\n   cols: 3");
+                                               "T: !!opencv-matrix\n   rows: 1\n   cols: 3");
     EXPECT_NE(message.find("wrong-size.yaml: T"), std::string::npos) << message;
     EXPECT_NE(message.find("expected 3x1"), std::string::npos) << message;
 }
 
 TEST(CalibrationFile, WrongMatrixTypeIsNamed)
 {
-    const std::string message = loadEditedFull("wrong-type.yaml", "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d",
-                                                "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f");
+    const std::string message =
+        loadEditedFull("wrong-type.yaml", "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d",
+                       "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f");
     EXPECT_NE(message.find("wrong-type.yaml: Q"), std::string::npos) << message;
 }
 
@@ -227,20 +231,23 @@ TEST(CalibrationFile, NonPositiveFocalInFullFormIsNamed)
 
 TEST(CalibrationFile, BadBaselineIsNamedWithTheRange)
 {
-    const std::string message = loadRectifiedText("baseline.yaml", replaced(kRectified, "baseline_m: 0.12", "baseline_m: 0"));
+    const std::string message =
+        loadRectifiedText("baseline.yaml", replaced(kRectified, "baseline_m: 0.12", "baseline_m: 0"));
     EXPECT_NE(message.find("baseline.yaml: baseline_m"), std::string::npos) << message;
     EXPECT_NE(message.find("(0, 5] metres"), std::string::npos) << message;
 }
 
 TEST(CalibrationFile, NonPositiveImageSizeIsNamed)
 {
-    const std::string message = loadRectifiedText("size.yaml", replaced(kRectified, "image_width: 640", "image_width: 0"));
+    const std::string message =
+        loadRectifiedText("size.yaml", replaced(kRectified, "image_width: 640", "image_width: 0"));
     EXPECT_NE(message.find("size.yaml: image_width"), std::string::npos) << message;
 }
 
 TEST(CalibrationFile, UnsupportedSchemaVersionIsNamed)
 {
-    const std::string message = loadRectifiedText("schema.yaml", replaced(kRectified, "schema_version: 1", "schema_version: 2"));
+    const std::string message =
+        loadRectifiedText("schema.yaml", replaced(kRectified, "schema_version: 1", "schema_version: 2"));
     EXPECT_NE(message.find("schema.yaml: schema_version"), std::string::npos) << message;
     EXPECT_NE(message.find("unsupported schema_version 2"), std::string::npos) << message;
 }

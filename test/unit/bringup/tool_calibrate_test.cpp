@@ -58,7 +58,7 @@ TEST(ToolCalibrate, RenderedPairsCalibrateWriteFileAndJsonThenRectify)
     const auto jsonPath = dir / "report.json";
 
     const ToolRun calibrate = run("calibrate --images " + dir.string() + " --board 9x6 --square 0.025 --out " +
-                              calibPath.string() + " --json " + jsonPath.string() + " --mount-height 0.5");
+                                  calibPath.string() + " --json " + jsonPath.string() + " --mount-height 0.5");
 
     ASSERT_EQ(calibrate.exitCode, 0) << calibrate.output;
     EXPECT_NE(calibrate.output.find("RMS reprojection error"), std::string::npos) << calibrate.output;
@@ -80,8 +80,8 @@ TEST(ToolCalibrate, RenderedPairsCalibrateWriteFileAndJsonThenRectify)
 TEST(ToolCalibrate, EmptyFolderFailsNamingIt)
 {
     const auto dir = tempDir("empty");
-    const ToolRun r = run("calibrate --images " + dir.string() + " --board 9x6 --square 0.025 --out " +
-                      (dir / "c.yaml").string());
+    const ToolRun r =
+        run("calibrate --images " + dir.string() + " --board 9x6 --square 0.025 --out " + (dir / "c.yaml").string());
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("no left*/right* image pairs found"), std::string::npos) << r.output;
 }
@@ -96,7 +96,8 @@ TEST(ToolCalibrate, MissingFolderFailsNamingIt)
 TEST(ToolCalibrate, BadBoardIsAUsageError)
 {
     for (const char* board : {"9x", "0x6", "nine", "9x6x2"}) {
-        const ToolRun r = run(std::string("calibrate --images /tmp --board ") + board + " --square 0.025 --out /tmp/c.yaml");
+        const ToolRun r =
+            run(std::string("calibrate --images /tmp --board ") + board + " --square 0.025 --out /tmp/c.yaml");
         EXPECT_EQ(r.exitCode, 2) << board << ": " << r.output;
         EXPECT_NE(r.output.find("bad board '" + std::string(board) + "'"), std::string::npos) << r.output;
     }
@@ -105,7 +106,8 @@ TEST(ToolCalibrate, BadBoardIsAUsageError)
 TEST(ToolCalibrate, BadSquareIsAUsageError)
 {
     for (const char* square : {"0", "-0.025", "nan", "abc"}) {
-        const ToolRun r = run(std::string("calibrate --images /tmp --board 9x6 --square ") + square + " --out /tmp/c.yaml");
+        const ToolRun r =
+            run(std::string("calibrate --images /tmp --board 9x6 --square ") + square + " --out /tmp/c.yaml");
         EXPECT_EQ(r.exitCode, 2) << square << ": " << r.output;
         EXPECT_NE(r.output.find("--square"), std::string::npos) << r.output;
     }

@@ -62,10 +62,10 @@ TEST(AllocationScope, SeesMallocFamilyWhenNotSanitized)
         GTEST_SKIP() << "built with ASan/TSan: only operator new is counted";
     }
     const AllocationScope sut;
-    void* a = escape(std::malloc(16));                // NOLINT(cppcoreguidelines-no-malloc)
-    void* b = escape(std::calloc(2, 8));              // NOLINT(cppcoreguidelines-no-malloc)
-    a = escape(std::realloc(a, 64));                  // NOLINT(cppcoreguidelines-no-malloc)
-    void* c = escape(std::aligned_alloc(64, 64));     // NOLINT(cppcoreguidelines-no-malloc)
+    void* a = escape(std::malloc(16));            // NOLINT(cppcoreguidelines-no-malloc)
+    void* b = escape(std::calloc(2, 8));          // NOLINT(cppcoreguidelines-no-malloc)
+    a = escape(std::realloc(a, 64));              // NOLINT(cppcoreguidelines-no-malloc)
+    void* c = escape(std::aligned_alloc(64, 64)); // NOLINT(cppcoreguidelines-no-malloc)
     void* d = nullptr;
     ASSERT_EQ(::posix_memalign(&d, 64, 64), 0);
     std::free(a); // NOLINT(cppcoreguidelines-no-malloc)

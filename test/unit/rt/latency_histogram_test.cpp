@@ -18,8 +18,8 @@ using ugv::rt::LatencyHistogram;
 /// The sample of rank ceil(p/100 * n) (at least 1) of a sorted vector: the definition percentile() follows.
 std::int64_t exactPercentile(const std::vector<std::int64_t>& sorted, double p)
 {
-    const auto rank = std::max<std::size_t>(
-        1, static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size()))));
+    const auto rank =
+        std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size()))));
     return sorted[rank - 1];
 }
 
@@ -83,8 +83,10 @@ TEST(LatencyHistogram, BucketBoundaries)
         if (i + 1 < LatencyHistogram::kBucketCount) {
             ASSERT_EQ(LatencyHistogram::bucketHighest(i) + 1, LatencyHistogram::bucketLowest(i + 1));
         }
-        const double width = static_cast<double>(LatencyHistogram::bucketHighest(i) - LatencyHistogram::bucketLowest(i));
-        ASSERT_LE(width / 2.0, LatencyHistogram::kMaxRelativeError * static_cast<double>(LatencyHistogram::bucketLowest(i)) + 0.5);
+        const double width =
+            static_cast<double>(LatencyHistogram::bucketHighest(i) - LatencyHistogram::bucketLowest(i));
+        ASSERT_LE(width / 2.0,
+                  LatencyHistogram::kMaxRelativeError * static_cast<double>(LatencyHistogram::bucketLowest(i)) + 0.5);
     }
 }
 

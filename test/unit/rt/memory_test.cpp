@@ -19,9 +19,18 @@ int lockOk(int flags)
     gLockFlags = flags;
     return 0;
 }
-int lockRefused(int /*flags*/) { return EPERM; }
-int malloptOk(int /*option*/, int /*value*/) { return 0; }
-int malloptRefused(int /*option*/, int /*value*/) { return EINVAL; }
+int lockRefused(int /*flags*/)
+{
+    return EPERM;
+}
+int malloptOk(int /*option*/, int /*value*/)
+{
+    return 0;
+}
+int malloptRefused(int /*option*/, int /*value*/)
+{
+    return EINVAL;
+}
 
 ugv::rt::SysOps ops(int (*lock)(int), int (*mallopt)(int, int))
 {
@@ -47,8 +56,7 @@ TEST(LockMemory, RefusedMlockallDegradesToOneWarningWithFix)
     EXPECT_FALSE(sut.locked);
     EXPECT_TRUE(sut.mallocTuned);
     ASSERT_EQ(sut.warnings.size(), 1U);
-    EXPECT_NE(sut.warnings[0].find("mlockall): Operation not permitted (EPERM)"), std::string::npos)
-        << sut.warnings[0];
+    EXPECT_NE(sut.warnings[0].find("mlockall): Operation not permitted (EPERM)"), std::string::npos) << sut.warnings[0];
     EXPECT_NE(sut.warnings[0].find("LimitMEMLOCK=infinity"), std::string::npos);
 }
 
@@ -94,7 +102,10 @@ TEST(LockedBytesFromStatus, MissingOrMalformedIsNullopt)
     EXPECT_FALSE(ugv::rt::lockedBytesFromStatus("XVmLck:\t12 kB\n").has_value()); // key must start a line
 }
 
-TEST(ReadLockedBytes, ReadsThisProcess) { EXPECT_TRUE(ugv::rt::readLockedBytes().has_value()); }
+TEST(ReadLockedBytes, ReadsThisProcess)
+{
+    EXPECT_TRUE(ugv::rt::readLockedBytes().has_value());
+}
 
 TEST(PrefaultStack, ZeroAndSomeBytes)
 {

@@ -54,7 +54,10 @@ TEST(TaskTable, PolicyNames)
     EXPECT_STREQ(ugv::rt::toString(SchedPolicy::Other), "SCHED_OTHER");
 }
 
-TEST(TaskTable, OnlineCpuCountIsPositive) { EXPECT_GE(ugv::rt::onlineCpuCount(), 1); }
+TEST(TaskTable, OnlineCpuCountIsPositive)
+{
+    EXPECT_GE(ugv::rt::onlineCpuCount(), 1);
+}
 
 TEST(ValidateTask, AcceptsBoundaries)
 {
@@ -93,8 +96,7 @@ TEST(ValidateTask, CpuOutOfRange)
 {
     auto spec = kGoodFifo;
     spec.cpu = kCpus;
-    EXPECT_NE(validateMessage(spec).find("'cpu' = 4 is outside the allowed range -1 (any) or 0..3"),
-              std::string::npos);
+    EXPECT_NE(validateMessage(spec).find("'cpu' = 4 is outside the allowed range -1 (any) or 0..3"), std::string::npos);
     spec.cpu = -2;
     EXPECT_NE(validateMessage(spec).find("'cpu' = -2"), std::string::npos);
 }
@@ -103,16 +105,14 @@ TEST(ValidateTask, NegativePeriod)
 {
     auto spec = kGoodFifo;
     spec.period = -1ns;
-    EXPECT_NE(validateMessage(spec).find("'period' = -1 ns is outside the allowed range >= 0 ns"),
-              std::string::npos);
+    EXPECT_NE(validateMessage(spec).find("'period' = -1 ns is outside the allowed range >= 0 ns"), std::string::npos);
 }
 
 TEST(ValidateTask, StackBelowMinimum)
 {
     auto spec = kGoodFifo;
     spec.stackBytes = PTHREAD_STACK_MIN - 1;
-    EXPECT_NE(validateMessage(spec).find("'stackBytes' = " + std::to_string(PTHREAD_STACK_MIN - 1)),
-              std::string::npos);
+    EXPECT_NE(validateMessage(spec).find("'stackBytes' = " + std::to_string(PTHREAD_STACK_MIN - 1)), std::string::npos);
 }
 
 TEST(ValidateTask, EmptyName)

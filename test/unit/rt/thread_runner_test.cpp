@@ -217,7 +217,7 @@ TEST(ThreadRunner, AddTaskRejectsBadInput)
 TEST(ThreadRunner, AddTaskRejectsMoreThanMaxTasks)
 {
     static const std::array<std::string, ugv::rt::kMaxTasks + 1> kNames{"t0", "t1", "t2", "t3", "t4",
-                                                                       "t5", "t6", "t7", "t8"};
+                                                                        "t5", "t6", "t7", "t8"};
     Probe probe;
     ThreadRunner sut(fakeOps(true, true));
     for (std::size_t i = 0; i < ugv::rt::kMaxTasks; ++i) {

@@ -319,9 +319,8 @@ TEST(SimRenderer, ReportsRenderTimeOfDefaultCourseFrame)
     EXPECT_EQ(frame->left.cols, 640);
     EXPECT_GT(countState(frame->sectors, SectorState::Obstacle), 0);
     std::cout << "[ sim      ] 640x480 stereo pair + ground truth, 2x2 supersampling: default course frame ("
-              << course->scene.obstacles.size() << " obstacles) "
-              << std::chrono::duration_cast<Ms>(mid - start).count() << " ms, empty scene "
-              << std::chrono::duration_cast<Ms>(end - mid).count() << " ms\n";
+              << course->scene.obstacles.size() << " obstacles) " << std::chrono::duration_cast<Ms>(mid - start).count()
+              << " ms, empty scene " << std::chrono::duration_cast<Ms>(end - mid).count() << " ms\n";
 }
 
 } // namespace

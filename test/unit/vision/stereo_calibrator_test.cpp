@@ -10,9 +10,9 @@
 
 namespace {
 
+using ugv::vision::calibrateStereo;
 using ugv::vision::CalibrationPair;
 using ugv::vision::CalibratorConfig;
-using ugv::vision::calibrateStereo;
 
 constexpr int kPairs = 12;
 constexpr std::uint64_t kSeed = 7;
@@ -38,9 +38,8 @@ const std::vector<CalibrationPair>& renderedPairs()
 
 bool rejectedWith(const ugv::vision::CalibrationReport& report, const std::string& name, const std::string& reason)
 {
-    return std::any_of(report.rejected.begin(), report.rejected.end(), [&](const auto& r) {
-        return r.name == name && r.reason.find(reason) != std::string::npos;
-    });
+    return std::any_of(report.rejected.begin(), report.rejected.end(),
+                       [&](const auto& r) { return r.name == name && r.reason.find(reason) != std::string::npos; });
 }
 
 TEST(StereoCalibrator, RecoversTheRenderedRig)

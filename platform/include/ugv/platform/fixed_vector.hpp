@@ -73,10 +73,7 @@ public:
     [[nodiscard]] iterator begin() noexcept { return storage_.begin(); }
     [[nodiscard]] iterator end() noexcept { return storage_.begin() + static_cast<std::ptrdiff_t>(size_); }
     [[nodiscard]] const_iterator begin() const noexcept { return storage_.begin(); }
-    [[nodiscard]] const_iterator end() const noexcept
-    {
-        return storage_.begin() + static_cast<std::ptrdiff_t>(size_);
-    }
+    [[nodiscard]] const_iterator end() const noexcept { return storage_.begin() + static_cast<std::ptrdiff_t>(size_); }
 
     /// The used elements as a span.
     [[nodiscard]] std::span<T> span() noexcept { return {storage_.data(), size_}; }

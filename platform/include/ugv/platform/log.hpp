@@ -185,7 +185,7 @@ private:
 
 /// `UGV_LOG(Vision, Warn) << ...;` — the operands are evaluated only when the level passes the threshold.
 /// The empty if-branch keeps an outer `if/else` around the macro binding as written.
-#define UGV_LOG(category, level)                                                                           \
-    if (!::ugv::logEnabled(::ugv::LogCategory::category, ::ugv::LogLevel::level)) {                        \
-    } else                                                                                                 \
+#define UGV_LOG(category, level)                                                                                       \
+    if (!::ugv::logEnabled(::ugv::LogCategory::category, ::ugv::LogLevel::level)) {                                    \
+    } else                                                                                                             \
         ::ugv::LogLine(::ugv::LogCategory::category, ::ugv::LogLevel::level).stream()

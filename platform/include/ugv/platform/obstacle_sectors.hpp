@@ -29,21 +29,21 @@ enum class ObstacleKind : std::uint8_t { None = 0, Positive = 1, Negative = 2 };
 enum class DangerClass : std::uint8_t { Unknown = 0, Green = 1, Blue = 2, Red = 3 };
 
 struct Sector {
-    float bearingMinDeg = 0.0F; ///< [deg] right edge of the bin (smaller bearing)
-    float bearingMaxDeg = 0.0F; ///< [deg] left edge
+    float bearingMinDeg = 0.0F;                            ///< [deg] right edge of the bin (smaller bearing)
+    float bearingMaxDeg = 0.0F;                            ///< [deg] left edge
     float rangeM = std::numeric_limits<float>::infinity(); ///< [m] nearest obstacle, +inf when clear or unknown
-    float heightM = 0.0F;       ///< [m] height above ground (positive kind) or depth below it (negative kind)
-    float confidence = 0.0F;    ///< [0, 1]
+    float heightM = 0.0F;    ///< [m] height above ground (positive kind) or depth below it (negative kind)
+    float confidence = 0.0F; ///< [0, 1]
     SectorState state = SectorState::Unknown;
     ObstacleKind kind = ObstacleKind::None;
     DangerClass danger = DangerClass::Unknown;
 };
 
 struct ObstacleSectors {
-    std::uint64_t sequence = 0;    ///< frame sequence number from capture
+    std::uint64_t sequence = 0;      ///< frame sequence number from capture
     std::int64_t captureStampNs = 0; ///< [ns] CLOCK_MONOTONIC exposure time of the left image
-    std::int32_t count = 0;        ///< sectors in use, <= kMaxSectors
-    bool degraded = false;         ///< produced by a fallback path (ground-plane only, configured ground, ...)
+    std::int32_t count = 0;          ///< sectors in use, <= kMaxSectors
+    bool degraded = false;           ///< produced by a fallback path (ground-plane only, configured ground, ...)
     std::array<Sector, kMaxSectors> sectors{};
 };
 

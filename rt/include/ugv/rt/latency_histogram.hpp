@@ -22,8 +22,8 @@ namespace ugv::rt {
 
 class LatencyHistogram {
 public:
-    static constexpr unsigned kSubBucketBits = 5;                               ///< 32 sub-buckets per octave
-    static constexpr unsigned kMaxValueBits = 36;                               ///< values below 2^36 ns
+    static constexpr unsigned kSubBucketBits = 5; ///< 32 sub-buckets per octave
+    static constexpr unsigned kMaxValueBits = 36; ///< values below 2^36 ns
     static constexpr std::uint64_t kMaxTrackableNs = (std::uint64_t{1} << kMaxValueBits) - 1;
     static constexpr std::size_t kExactBuckets = std::size_t{2} << kSubBucketBits; ///< 0..63 exact
     static constexpr std::size_t kBucketCount =

@@ -19,10 +19,10 @@
 namespace ugv::rt {
 
 struct MemoryReport {
-    bool locked = false;                   ///< mlockall(MCL_CURRENT|MCL_FUTURE) succeeded
-    bool mallocTuned = false;              ///< both mallopt calls succeeded
+    bool locked = false;                    ///< mlockall(MCL_CURRENT|MCL_FUTURE) succeeded
+    bool mallocTuned = false;               ///< both mallopt calls succeeded
     std::optional<std::size_t> lockedBytes; ///< VmLck of /proc/self/status after the calls [B]
-    std::vector<std::string> warnings;     ///< one per refused step
+    std::vector<std::string> warnings;      ///< one per refused step
 };
 
 /// @brief mlockall(MCL_CURRENT|MCL_FUTURE), mallopt(M_TRIM_THRESHOLD, -1), mallopt(M_MMAP_MAX, 0).

@@ -16,10 +16,10 @@
 namespace ugv::rt {
 
 struct SysOps {
-    int (*setSchedParam)(pthread_t thread, int policy, const sched_param* param); ///< pthread_setschedparam
+    int (*setSchedParam)(pthread_t thread, int policy, const sched_param* param);    ///< pthread_setschedparam
     int (*setAffinity)(pthread_t thread, std::size_t setSize, const cpu_set_t* set); ///< pthread_setaffinity_np
-    int (*lockAll)(int flags);                       ///< mlockall
-    int (*mallocOption)(int option, int value);      ///< mallopt (0 = success, EINVAL when glibc refuses)
+    int (*lockAll)(int flags);                                                       ///< mlockall
+    int (*mallocOption)(int option, int value); ///< mallopt (0 = success, EINVAL when glibc refuses)
 };
 
 /// The real calls. Thread-safety: reentrant. RT-safe: yes.

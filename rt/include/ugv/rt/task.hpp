@@ -26,12 +26,12 @@ enum class SchedPolicy : std::uint8_t { Fifo, Other };
 [[nodiscard]] const char* toString(SchedPolicy policy) noexcept;
 
 struct TaskSpec {
-    std::string_view name;            ///< unique; the first 15 characters become the thread name
+    std::string_view name; ///< unique; the first 15 characters become the thread name
     SchedPolicy policy = SchedPolicy::Other;
-    int priority = 0;                 ///< 1..99 for Fifo (higher runs first), 0 for Other
-    int cpu = -1;                     ///< CPU to pin to, -1 = any
+    int priority = 0;                  ///< 1..99 for Fifo (higher runs first), 0 for Other
+    int cpu = -1;                      ///< CPU to pin to, -1 = any
     std::chrono::nanoseconds period{}; ///< 0 = event-driven (woken by its input)
-    std::size_t stackBytes = 0;       ///< >= PTHREAD_STACK_MIN
+    std::size_t stackBytes = 0;        ///< >= PTHREAD_STACK_MIN
 };
 
 inline constexpr std::size_t kDefaultStackBytes = 256UL * 1024UL;
@@ -49,7 +49,8 @@ inline constexpr std::array<TaskSpec, 5> kDefaultTaskTable{{
 }};
 
 /// @brief The row named `name`, if any. Thread-safety: reentrant. RT-safe: yes.
-[[nodiscard]] constexpr std::optional<TaskSpec> findTask(std::span<const TaskSpec> table, std::string_view name) noexcept
+[[nodiscard]] constexpr std::optional<TaskSpec> findTask(std::span<const TaskSpec> table,
+                                                         std::string_view name) noexcept
 {
     for (const TaskSpec& spec : table) {
         if (spec.name == name) {

@@ -91,8 +91,7 @@ private:
         pthread_t thread{};
     };
     static void* threadMain(void* slot) noexcept;
-    void applySettings(Slot& slot, std::string& fifoRefused, int& fifoError, std::string& cpuRefused,
-                       int& cpuError);
+    void applySettings(Slot& slot, std::string& fifoRefused, int& fifoError, std::string& cpuRefused, int& cpuError);
 
     SysOps ops_;
     std::array<Slot, kMaxTasks> slots_{};

@@ -25,17 +25,17 @@ struct Mount {
 /// Thread-safety: value type (cv::Mat shares its data on copy: clone before mutating a shared copy).
 /// RT-safe: no (copying allocates); read it at init.
 struct StereoCalibration {
-    cv::Size imageSize;                   ///< [px]
-    cv::Mat K1, D1, K2, D2;               ///< camera matrices 3x3 and distortion 1xN (N in 4,5,8,12,14)
-    cv::Mat R, T, E, F;                   ///< 3x3, 3x1 [m], 3x3, 3x3
-    cv::Mat R1, R2, P1, P2, Q;            ///< 3x3, 3x3, 3x4, 3x4, 4x4
-    double rmsPx = 0.0;                   ///< RMS reprojection error over both cameras [px]
-    double epipolarPx = 0.0;              ///< mean epipolar error (sum of both directions per corner) [px]
-    double rectifiedDyPx = 0.0;           ///< mean |y_left - y_right| of corners after rectification [px]
-    int pairsUsed = 0;                    ///< image pairs in the final calibration
-    int pairsRejected = 0;                ///< pairs rejected (no board, size mismatch, outlier, ...)
-    bool rectified = false;               ///< already-rectified form (see above)
-    std::optional<Mount> mount;           ///< rig mount pose, when known
+    cv::Size imageSize;         ///< [px]
+    cv::Mat K1, D1, K2, D2;     ///< camera matrices 3x3 and distortion 1xN (N in 4,5,8,12,14)
+    cv::Mat R, T, E, F;         ///< 3x3, 3x1 [m], 3x3, 3x3
+    cv::Mat R1, R2, P1, P2, Q;  ///< 3x3, 3x3, 3x4, 3x4, 4x4
+    double rmsPx = 0.0;         ///< RMS reprojection error over both cameras [px]
+    double epipolarPx = 0.0;    ///< mean epipolar error (sum of both directions per corner) [px]
+    double rectifiedDyPx = 0.0; ///< mean |y_left - y_right| of corners after rectification [px]
+    int pairsUsed = 0;          ///< image pairs in the final calibration
+    int pairsRejected = 0;      ///< pairs rejected (no board, size mismatch, outlier, ...)
+    bool rectified = false;     ///< already-rectified form (see above)
+    std::optional<Mount> mount; ///< rig mount pose, when known
 
     /// @return |T| (the distance between the optical centres) [m].
     [[nodiscard]] double baselineM() const;

@@ -23,12 +23,12 @@ struct CalibrationPair {
 };
 
 struct CalibratorConfig {
-    cv::Size innerCorners{9, 6};  ///< inner corners per row and column
-    double squareM = 0.025;       ///< square side [m]
-    int minPairs = 3;             ///< fewer usable pairs than this is an error
-    double outlierFactor = 2.0;   ///< a pair is an outlier when its error > factor * median ...
-    double outlierFloorPx = 0.3;  ///< ... and > this absolute floor [px]
-    int maxOutlierRounds = 3;     ///< drop-and-recalibrate rounds at most
+    cv::Size innerCorners{9, 6}; ///< inner corners per row and column
+    double squareM = 0.025;      ///< square side [m]
+    int minPairs = 3;            ///< fewer usable pairs than this is an error
+    double outlierFactor = 2.0;  ///< a pair is an outlier when its error > factor * median ...
+    double outlierFloorPx = 0.3; ///< ... and > this absolute floor [px]
+    int maxOutlierRounds = 3;    ///< drop-and-recalibrate rounds at most
 };
 
 /// Reprojection error of one pair in the final calibration.
