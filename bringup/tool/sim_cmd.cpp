@@ -1,9 +1,17 @@
-// ugvsense sim: synthetic stereo data. Scene "chessboard": calibration pairs rendered by a known rig, with
-// truth.yaml holding that rig, so that `ugvsense calibrate` can be checked against it.
+// ugvsense sim: synthetic stereo data.
+// - Scene "chessboard": calibration pairs rendered by a known rig, with truth.yaml holding that rig, so that
+//   `ugvsense calibrate` can be checked against it.
+// - Any scene of the ray-cast simulator's catalogue (bringup/sim): one sample with its ground truth
+//   (sim::writeSample) and calibration.yaml (sim::writeCalibration).
+// - A course: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, y, yaw).
 
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -12,6 +20,9 @@
 #include "args.hpp"
 #include "chessboard_render.hpp"
 #include "commands.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+#include "sim/writer.hpp"
 
 namespace ugv::tool {
 namespace {
@@ -20,6 +31,62 @@ constexpr int kDefaultPairs = 12;
 constexpr int kMaxPairs = 99;
 constexpr double kDefaultNoise = 1.0; // [grey levels]
 constexpr double kMaxNoise = 50.0;
+constexpr double kDefaultRangeM = 5.0;
+constexpr double kMaxRangeM = 200.0;
+constexpr double kMaxBearingDeg = 180.0;
+constexpr double kMaxTiltDeg = 45.0;   // [deg] pitch and roll
+constexpr double kMaxHeightM = 10.0;
+constexpr double kDefaultFps = 10.0;
+constexpr double kMaxFps = 100.0;
+constexpr double kCourseSpeedMps = 1.5;
+constexpr int kMaxFrames = 100000;
+constexpr double kMaxSeed = 1e9;
+constexpr const char* kChessboard = "chessboard";
+
+/// Prints an error of the job (not of the command line) and returns exit code 1.
+int reportFailure(const Error& error)
+{
+    std::cerr << "ugvsense sim: error: " << error.message() << '\n';
+    return 1;
+}
+
+std::string knownScenes()
+{
+    std::string names = kChessboard;
+    for (const auto& name : sim::sceneNames()) {
+        names += ", " + name;
+    }
+    return names;
+}
+
+std::optional<sim::GroundTexture> parseTexture(const std::string& name)
+{
+    if (name == "asphalt") {
+        return sim::GroundTexture::Asphalt;
+    }
+    if (name == "grass") {
+        return sim::GroundTexture::Grass;
+    }
+    if (name == "gravel") {
+        return sim::GroundTexture::Gravel;
+    }
+    if (name == "floor") {
+        return sim::GroundTexture::PaintedFloor;
+    }
+    return std::nullopt;
+}
+
+/// Creates `out` if needed; an Error (exit 1) when it cannot be created or is not a folder.
+Result<void, Error> prepareOutput(const std::filesystem::path& out)
+{
+    std::error_code ec;
+    std::filesystem::create_directories(out, ec);
+    if (!std::filesystem::is_directory(out, ec)) {
+        return Unexpected(Error{out.string(), "cannot create the output folder",
+                                "choose a writable --out folder (check the path and its permissions)"});
+    }
+    return {};
+}
 
 bool writeTruth(const std::string& path, const SimRig& rig, const SimBoard& board, int pairs)
 {
@@ -41,29 +108,11 @@ bool writeTruth(const std::string& path, const SimRig& rig, const SimBoard& boar
     }
 }
 
-} // namespace
 
-int runSim(int argc, char** argv)
+int runChessboard(const Args& args)
 {
-    Args args("sim", "--scene chessboard --out DIR [--pairs N] [--seed S] [--noise SIGMA]",
-              {{"scene", "NAME", "scene to render: chessboard (calibration pairs)", true},
-               {"out", "DIR", "output folder (created if missing)", true},
-               {"pairs", "N", "number of pairs, default 12", false},
-               {"seed", "S", "random seed for poses and noise, default 1", false},
-               {"noise", "SIGMA", "Gaussian noise in grey levels, default 1", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError("sim", parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
-    }
-    if (args.get("scene") != "chessboard") {
-        return reportUsageError("sim", Error{"ugvsense sim --scene", "unknown scene '" + args.get("scene") + "'",
-                                             "the available scene is: chessboard"});
-    }
     const auto pairs = args.number("pairs", kDefaultPairs, 1, kMaxPairs);
-    const auto seed = args.number("seed", 1, 0, 1e9);
+    const auto seed = args.number("seed", 1, 0, kMaxSeed);
     const auto noise = args.number("noise", kDefaultNoise, 0, kMaxNoise);
     for (const auto* number : {&pairs, &seed, &noise}) {
         if (!*number) {
@@ -71,11 +120,8 @@ int runSim(int argc, char** argv)
         }
     }
     const std::filesystem::path out = args.get("out");
-    std::error_code ec;
-    std::filesystem::create_directories(out, ec);
-    if (!std::filesystem::is_directory(out, ec)) {
-        std::cerr << "ugvsense sim: error: " << out.string() << ": cannot create the output folder\n";
-        return 1;
+    if (auto prepared = prepareOutput(out); !prepared) {
+        return reportFailure(prepared.error());
     }
 
     const SimRig rig;
@@ -98,18 +144,181 @@ int runSim(int argc, char** argv)
             written = false;
         }
         if (!written) {
-            std::cerr << "ugvsense sim: error: " << leftPath << ": cannot write the image (fix: check the folder)\n";
-            return 1;
+            return reportFailure(Error{leftPath, "cannot write the image", "check the folder"});
         }
     }
     const std::string truthPath = (out / "truth.yaml").string();
     if (!writeTruth(truthPath, rig, board, static_cast<int>(poses.size()))) {
-        std::cerr << "ugvsense sim: error: " << truthPath << ": cannot write the file (fix: check the folder)\n";
-        return 1;
+        return reportFailure(Error{truthPath, "cannot write the file", "check the folder"});
     }
     std::cout << "wrote " << poses.size() << " chessboard pairs and truth.yaml to " << out.string()
               << " (fx " << rig.fx << " px, baseline " << rig.baselineM << " m)\n";
     return 0;
+}
+
+int runCatalogueScene(const Args& args)
+{
+    const std::string name = args.get("scene");
+    const auto range = args.number("range", kDefaultRangeM, -kMaxRangeM, kMaxRangeM);
+    const auto bearing = args.number("bearing", 0.0, -kMaxBearingDeg, kMaxBearingDeg);
+    const auto seed = args.number("seed", 1, 0, kMaxSeed);
+    const sim::Rig defaults;
+    const auto pitch = args.number("pitch", defaults.pitchDeg, -kMaxTiltDeg, kMaxTiltDeg);
+    const auto roll = args.number("roll", defaults.rollDeg, -kMaxTiltDeg, kMaxTiltDeg);
+    const auto height = args.number("height", defaults.heightM, -kMaxHeightM, kMaxHeightM);
+    for (const auto* number : {&range, &bearing, &seed, &pitch, &roll, &height}) {
+        if (!*number) {
+            return reportUsageError("sim", number->error());
+        }
+    }
+    if (*range <= 0.0) {
+        return reportFailure(Error{"ugvsense sim --range", "range " + args.get("range") + " m is not positive",
+                                   "give the obstacle's distance in metres, e.g. --range 5"});
+    }
+    if (*height <= 0.0) {
+        return reportFailure(Error{"ugvsense sim --height", "camera height " + args.get("height") +
+                                                                " m is not positive",
+                                   "give the camera height above the ground in metres, e.g. --height 0.59"});
+    }
+    const std::string textureName = args.get("texture", "asphalt");
+    const auto texture = parseTexture(textureName);
+    if (!texture) {
+        return reportFailure(Error{"ugvsense sim --texture", "unknown texture '" + textureName + "'",
+                                   "use one of: asphalt, grass, gravel, floor"});
+    }
+    auto scene = sim::makeScene(name, *range, *bearing, *texture, static_cast<std::uint64_t>(*seed));
+    if (!scene) {
+        return reportFailure(Error{"ugvsense sim --scene", "unknown scene '" + name + "'",
+                                   "use one of: " + knownScenes() + " (ugvsense sim --list)"});
+    }
+    scene->rig.pitchDeg = *pitch;
+    scene->rig.rollDeg = *roll;
+    scene->rig.heightM = *height;
+
+    const std::filesystem::path out = args.get("out");
+    if (auto prepared = prepareOutput(out); !prepared) {
+        return reportFailure(prepared.error());
+    }
+    if (auto written = sim::writeCalibration(scene->rig, out); !written) { // fails fast before the render
+        return reportFailure(written.error());
+    }
+    auto frame = sim::render(*scene);
+    if (!frame) {
+        return reportFailure(frame.error());
+    }
+    if (auto written = sim::writeSample(*frame, scene->rig, out, name); !written) {
+        return reportFailure(written.error());
+    }
+    std::cout << "wrote scene '" << name << "' (range " << *range << " m, bearing " << *bearing << " deg, "
+              << textureName << ", pitch " << *pitch << " deg, roll " << *roll << " deg, height " << *height
+              << " m) to " << out.string() << ": " << name << "_{left,right,disparity,depth,labels,ids}.png, "
+              << name << "_sectors.json, calibration.yaml\n";
+    return 0;
+}
+
+int runCourse(const Args& args)
+{
+    const std::string name = args.get("course");
+    const auto fps = args.number("fps", kDefaultFps, 0.0, kMaxFps);
+    const auto frames = args.number("frames", 0, 0, kMaxFrames);
+    for (const auto* number : {&fps, &frames}) {
+        if (!*number) {
+            return reportUsageError("sim", number->error());
+        }
+    }
+    if (*fps <= 0.0) {
+        return reportFailure(Error{"ugvsense sim --fps", "frame rate " + args.get("fps") + " is not positive",
+                                   "give frames per second, e.g. --fps 10"});
+    }
+    auto course = sim::makeCourse(name, kCourseSpeedMps, *fps);
+    if (!course) {
+        return reportFailure(Error{"ugvsense sim --course", course.error().what, course.error().fix});
+    }
+    const std::size_t total = course->poses.size();
+    const std::size_t count = args.has("frames") && *frames >= 1.0
+                                  ? std::min(total, static_cast<std::size_t>(*frames))
+                                  : total;
+    const std::filesystem::path out = args.get("out");
+    if (auto prepared = prepareOutput(out); !prepared) {
+        return reportFailure(prepared.error());
+    }
+    if (auto written = sim::writeCalibration(course->scene.rig, out); !written) {
+        return reportFailure(written.error());
+    }
+    const auto posesPath = out / "poses.csv";
+    std::ofstream poses(posesPath);
+    poses << "frame,t,x,y,yaw\n";
+    for (std::size_t k = 0; k < count; ++k) {
+        auto frame = sim::renderCourseFrame(*course, k);
+        if (!frame) {
+            return reportFailure(frame.error());
+        }
+        char stem[32];
+        std::snprintf(stem, sizeof(stem), "frame_%04zu", k);
+        if (auto written = sim::writeSample(*frame, course->scene.rig, out, stem); !written) {
+            return reportFailure(written.error());
+        }
+        const sim::Pose& pose = course->poses[k];
+        poses << k << ',' << static_cast<double>(k) / *fps << ',' << pose.x << ',' << pose.y << ',' << pose.yawDeg
+              << '\n';
+    }
+    poses.flush();
+    if (!poses) {
+        return reportFailure(Error{posesPath.string(), "cannot write the file", "check the folder"});
+    }
+    std::cout << "wrote " << count << " of " << total << " frames of course '" << name << "' to " << out.string()
+              << " (frame_NNNN_*.png, frame_NNNN_sectors.json, calibration.yaml, poses.csv)\n";
+    return 0;
+}
+
+} // namespace
+
+int runSim(int argc, char** argv)
+{
+    Args args("sim",
+              "(--scene NAME | --course NAME) --out DIR [options] | --list\n"
+              "  --scene chessboard: calibration pairs and truth.yaml ([--pairs N] [--seed S] [--noise SIGMA])\n"
+              "  --scene NAME (ugvsense sim --list): one simulator sample with ground truth and calibration.yaml\n"
+              "  --course NAME: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, y, yaw);\n"
+              "    a plain folder of samples: the recording format proper comes in a later issue",
+              {{"scene", "NAME", "scene to render: chessboard, or a simulator scene (see --list)", false},
+               {"course", "NAME", "course to render as a sequence (see --list)", false},
+               {"out", "DIR", "output folder (created if missing)", false},
+               {"list", "", "print the scene and course names", false},
+               {"range", "M", "simulator scene: obstacle range in metres, default 5", false},
+               {"bearing", "DEG", "simulator scene: obstacle bearing, positive left, default 0", false},
+               {"texture", "NAME", "simulator scene: asphalt|grass|gravel|floor, default asphalt", false},
+               {"pitch", "DEG", "simulator scene: camera pitch, positive down, default 0", false},
+               {"roll", "DEG", "simulator scene: camera roll, positive right side down, default 0", false},
+               {"height", "M", "simulator scene: camera height above the ground, default 0.59", false},
+               {"frames", "N", "course: number of frames to write, default all", false},
+               {"fps", "F", "course: frame rate (poses 1.5 m/s apart in time), default 10", false},
+               {"pairs", "N", "chessboard: number of pairs, default 12", false},
+               {"seed", "S", "random seed (chessboard poses and noise; simulator noise), default 1", false},
+               {"noise", "SIGMA", "chessboard: Gaussian noise in grey levels, default 1", false}});
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError("sim", parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    if (args.has("list")) {
+        std::cout << "scenes: " << knownScenes() << "\ncourses: default\n";
+        return 0;
+    }
+    if (args.has("scene") == args.has("course")) {
+        return reportUsageError("sim", Error{"ugvsense sim", "give exactly one of --scene NAME and --course NAME",
+                                             "see 'ugvsense sim --help' and 'ugvsense sim --list'"});
+    }
+    if (!args.has("out")) {
+        return reportUsageError("sim", Error{"ugvsense sim", "missing required option '--out DIR'",
+                                             "see 'ugvsense sim --help'"});
+    }
+    if (args.has("course")) {
+        return runCourse(args);
+    }
+    return args.get("scene") == kChessboard ? runChessboard(args) : runCatalogueScene(args);
 }
 
 } // namespace ugv::tool

@@ -1,0 +1,299 @@
+// Colour-histogram free space on simulator scenes tinted by their ground-truth labels (the simulator renders grey):
+// green textured ground, brown or grey obstacles, blue-ish sky. Ranges are checked against the simulator's
+// ground-truth sectors.
+
+#include "ugv/vision/colour_free_space.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "alloc_counter.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+#include "ugv/vision/ground_plane.hpp"
+
+namespace {
+
+using ugv::ObstacleSectors;
+using ugv::SectorState;
+using ugv::vision::ColourFreeSpace;
+using ugv::vision::ColourFreeSpaceConfig;
+using ugv::vision::ColourFreeSpaceStatus;
+
+struct Tint {
+    int obstacleHue = 12;        // brown (OpenCV hue 0..179)
+    int obstacleSat = 120;
+    bool greyEverything = false; // the hard case: no colour at all
+};
+
+/// HSV per label: ground green with hue and saturation following the texture, obstacles `tint`, far blue-ish.
+cv::Mat tintByLabels(const ugv::sim::RenderResult& frame, const Tint& tint)
+{
+    cv::Mat hsv(frame.left.size(), CV_8UC3);
+    for (int y = 0; y < hsv.rows; ++y) {
+        for (int x = 0; x < hsv.cols; ++x) {
+            const int grey = frame.left.at<std::uint8_t>(y, x);
+            const auto label = static_cast<ugv::sim::Label>(frame.labels.at<std::uint8_t>(y, x));
+            int hue = 105;
+            int sat = 50;
+            if (label == ugv::sim::Label::Ground) {
+                hue = 50 + (grey - 128) / 16;
+                sat = std::clamp(140 + (grey - 128) / 4, 0, 255);
+            } else if (label != ugv::sim::Label::Far) {
+                hue = tint.obstacleHue;
+                sat = std::clamp(tint.obstacleSat + (grey - 128) / 8, 0, 255);
+            }
+            if (tint.greyEverything) {
+                sat = 0;
+            }
+            hsv.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<std::uint8_t>(hue), static_cast<std::uint8_t>(sat),
+                                                static_cast<std::uint8_t>(std::max(grey, 40)));
+        }
+    }
+    cv::Mat bgr;
+    cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+    return bgr;
+}
+
+ugv::sim::RenderResult renderScene(const ugv::sim::Scene& scene)
+{
+    ugv::sim::RenderOptions options;
+    options.samplesPerAxis = 1;
+    auto frame = ugv::sim::render(scene, {}, options);
+    EXPECT_TRUE(frame.has_value()) << frame.error().message();
+    return std::move(frame).value();
+}
+
+ugv::sim::Scene catalogue(const char* name, double rangeM, double bearingDeg)
+{
+    auto scene = ugv::sim::makeScene(name, rangeM, bearingDeg, ugv::sim::GroundTexture::Grass, 7);
+    EXPECT_TRUE(scene.has_value());
+    return std::move(scene).value();
+}
+
+ugv::vision::ConstBgrView bgrView(const cv::Mat& m)
+{
+    return {reinterpret_cast<const ugv::vision::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
+            static_cast<std::ptrdiff_t>(m.step)};
+}
+
+ColourFreeSpace makeSut(const ugv::sim::Rig& rig, const ColourFreeSpaceConfig& config = {})
+{
+    const ugv::vision::RectifiedProjection projection{rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM};
+    const auto ground = ugv::vision::GroundPlane::fromMount({rig.heightM, rig.pitchDeg, rig.rollDeg});
+    auto sut = ColourFreeSpace::create(config, {rig.width, rig.height}, projection, ground);
+    EXPECT_TRUE(sut.has_value()) << sut.error().message();
+    return std::move(sut).value();
+}
+
+std::size_t sectorAt(const ObstacleSectors& sectors, double bearingDeg)
+{
+    for (std::size_t i = 0; i < static_cast<std::size_t>(sectors.count); ++i) {
+        if (bearingDeg >= sectors.sectors[i].bearingMinDeg && bearingDeg < sectors.sectors[i].bearingMaxDeg) {
+            return i;
+        }
+    }
+    return 0;
+}
+
+TEST(ColourFreeSpace, EmptyGrassIsClearEverywhere)
+{
+    const auto scene = catalogue("empty", 5.0, 0.0);
+    const auto frame = renderScene(scene);
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    const auto status = sut.process(bgrView(tintByLabels(frame, {})), out);
+
+    ASSERT_EQ(status, ColourFreeSpaceStatus::Ok);
+    EXPECT_TRUE(sut.reference().groundLike) << sut.reference().meanSaturation << " " << sut.reference().consistency;
+    ASSERT_EQ(out.count, 64);
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << "sector " << i;
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].danger, ugv::DangerClass::Green) << "sector " << i;
+    }
+    EXPECT_TRUE(out.degraded);
+}
+
+void expectObstacleAt(double rangeM, double bearingDeg, const Tint& tint)
+{
+    const auto scene = catalogue("box", rangeM, bearingDeg);
+    const auto frame = renderScene(scene);
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, tint)), out), ColourFreeSpaceStatus::Ok);
+
+    ASSERT_TRUE(sut.reference().groundLike);
+    const std::size_t hit = sectorAt(out, bearingDeg);
+    const auto& truth = frame.sectors.sectors[hit];
+    ASSERT_EQ(truth.state, SectorState::Obstacle);
+    EXPECT_EQ(out.sectors[hit].state, SectorState::Obstacle);
+    EXPECT_EQ(out.sectors[hit].kind, ugv::ObstacleKind::Positive);
+    EXPECT_NEAR(out.sectors[hit].rangeM, truth.rangeM, 0.05 * truth.rangeM) << "truth " << truth.rangeM;
+    std::printf("box at %.1f m, %.0f deg: free range %.3f m, truth %.3f m, patch consistency %.2f\n", rangeM,
+                bearingDeg, out.sectors[hit].rangeM, truth.rangeM, sut.reference().consistency);
+    // Sectors well away from the box (10 deg beyond its bearing, on the far side of the axis) are clear.
+    const std::size_t away = sectorAt(out, bearingDeg > 0.0 ? bearingDeg - 20.0 : bearingDeg + 20.0);
+    EXPECT_EQ(out.sectors[away].state, SectorState::Clear);
+}
+
+TEST(ColourFreeSpace, BrownBoxAheadGivesItsRangeInItsSector)
+{
+    expectObstacleAt(5.0, 0.0, {});
+}
+
+TEST(ColourFreeSpace, GreyBoxToTheLeftGivesItsRangeInItsSector)
+{
+    expectObstacleAt(4.0, 12.0, Tint{0, 10, false});
+}
+
+TEST(ColourFreeSpace, BoxToTheRightAtThreeMetres)
+{
+    expectObstacleAt(3.0, -15.0, {});
+}
+
+TEST(ColourFreeSpace, GreyOnGreyIsUnknownNotClear)
+{
+    const auto scene = catalogue("box", 5.0, 0.0);
+    const auto frame = renderScene(scene);
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, Tint{0, 0, true})), out), ColourFreeSpaceStatus::Ok);
+
+    EXPECT_FALSE(sut.reference().groundLike);
+    EXPECT_LT(sut.reference().meanSaturation, ColourFreeSpaceConfig{}.minPatchSaturation);
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown) << "sector " << i;
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].confidence, 0.0F);
+    }
+}
+
+TEST(ColourFreeSpace, PartlyOccludedReferencePatchIsUnknown)
+{
+    ugv::sim::Scene scene = catalogue("empty", 5.0, 0.0);
+    scene.obstacles.push_back(ugv::sim::box(1.8, 0.0, 0.5, 0.4, 0.5)); // covers about a third of the patch
+    const auto frame = renderScene(scene);
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, {})), out), ColourFreeSpaceStatus::Ok);
+
+    EXPECT_FALSE(sut.reference().groundLike);
+    EXPECT_LT(sut.reference().consistency, ColourFreeSpaceConfig{}.minPatchConsistency);
+    std::printf("occluded patch: consistency %.2f, mean saturation %.0f\n", sut.reference().consistency,
+                sut.reference().meanSaturation);
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown) << "sector " << i;
+    }
+}
+
+TEST(ColourFreeSpace, IncrementalScoresEqualPerWindowRecomputation)
+{
+    const auto scene = catalogue("pole", 4.0, 5.0);
+    const auto frame = renderScene(scene);
+    ColourFreeSpaceConfig config;
+    config.windowRadius = 4;
+    auto sut = makeSut(scene.rig, config);
+    ObstacleSectors out;
+    ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, {})), out), ColourFreeSpaceStatus::Ok);
+
+    const int r = config.windowRadius;
+    const int area = (2 * r + 1) * (2 * r + 1);
+    const auto bins = sut.bins();
+    const auto scores = sut.scores();
+    const auto& ref = sut.referenceHistogram();
+    int mismatches = 0;
+    for (int y = sut.roiTop(); y < scene.rig.height - r; y += 3) {
+        for (int x = r; x < scene.rig.width - r; x += 2) {
+            std::array<int, ugv::vision::kColourBins> hist{};
+            for (int v = y - r; v <= y + r; ++v) {
+                for (int u = x - r; u <= x + r; ++u) {
+                    ++hist[bins.at(u, v - sut.binTop())];
+                }
+            }
+            int common = 0;
+            for (std::size_t b = 0; b < hist.size(); ++b) {
+                common += std::min(hist[b], static_cast<int>(ref[b]));
+            }
+            const int expected = std::min((common * 255 + area / 2) / area, 255);
+            mismatches += scores.at(x, y - sut.roiTop()) == expected ? 0 : 1;
+        }
+    }
+    EXPECT_EQ(mismatches, 0);
+}
+
+TEST(ColourFreeSpace, ProcessAllocatesNothingOver300Frames)
+{
+    const auto scene = catalogue("box", 4.0, 0.0);
+    const cv::Mat bgr = tintByLabels(renderScene(scene), {});
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+    ASSERT_EQ(sut.process(bgrView(bgr), out), ColourFreeSpaceStatus::Ok);
+    constexpr int kFrames = 300;
+    int ok = 0;
+
+    const ugv::test::AllocationScope scope;
+    for (int i = 0; i < kFrames; ++i) {
+        ok += sut.process(bgrView(bgr), out) == ColourFreeSpaceStatus::Ok ? 1 : 0;
+    }
+    const std::size_t allocations = scope.count();
+
+    EXPECT_EQ(allocations, 0U);
+    EXPECT_EQ(ok, kFrames);
+}
+
+TEST(ColourFreeSpace, WrongImageSizeGivesAllUnknown)
+{
+    const ugv::sim::Rig rig;
+    auto sut = makeSut(rig);
+    const cv::Mat small(240, 320, CV_8UC3, cv::Scalar(40, 160, 40));
+    ObstacleSectors out;
+
+    EXPECT_EQ(sut.process(bgrView(small), out), ColourFreeSpaceStatus::WrongInputSize);
+
+    ASSERT_EQ(out.count, 64);
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown);
+    }
+}
+
+TEST(ColourFreeSpace, CreateRejectsBadConfigNamingIt)
+{
+    const ugv::vision::RectifiedProjection projection{546, 546, 319.5, 239.5, 0.3};
+    const auto ground = ugv::vision::GroundPlane::fromMount({0.59, 0.0, 0.0});
+    ColourFreeSpaceConfig window;
+    window.windowRadius = 0;
+    ColourFreeSpaceConfig patch;
+    patch.patchHeight = 300;
+    ColourFreeSpaceConfig threshold;
+    threshold.matchThreshold = 0.0;
+    ColourFreeSpaceConfig sectors;
+    sectors.sectorCount = ugv::kMaxSectors + 1;
+
+    const auto badWindow = ColourFreeSpace::create(window, {640, 480}, projection, ground);
+    const auto badPatch = ColourFreeSpace::create(patch, {640, 480}, projection, ground);
+    const auto badThreshold = ColourFreeSpace::create(threshold, {640, 480}, projection, ground);
+    const auto badSectors = ColourFreeSpace::create(sectors, {640, 480}, projection, ground);
+    const auto badGround = ColourFreeSpace::create({}, {640, 480}, projection, ugv::vision::GroundPlane{});
+
+    ASSERT_FALSE(badWindow.has_value());
+    EXPECT_NE(badWindow.error().what.find("windowRadius"), std::string::npos);
+    ASSERT_FALSE(badPatch.has_value());
+    EXPECT_NE(badPatch.error().what.find("patch"), std::string::npos);
+    ASSERT_FALSE(badThreshold.has_value());
+    EXPECT_NE(badThreshold.error().what.find("matchThreshold"), std::string::npos);
+    ASSERT_FALSE(badSectors.has_value());
+    EXPECT_NE(badSectors.error().what.find("sectorCount"), std::string::npos);
+    ASSERT_FALSE(badGround.has_value());
+    EXPECT_FALSE(badGround.error().fix.empty());
+}
+
+} // namespace

@@ -1,0 +1,341 @@
+#include "ugv/vision/sector_builder.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string_view>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "alloc_counter.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+
+namespace ugv::vision {
+namespace {
+
+constexpr RectifiedProjection kProjection{546.0, 546.0, 319.5, 239.5, 0.30};
+constexpr double kHeightM = 0.59;
+constexpr Rect kRoi{0, 232, 640, 248};
+constexpr int kFirstRow = 240;
+constexpr double kFb = 546.0 * 0.30;
+
+SectorBuilder makeBuilder(const SectorBuilderConfig& config = {})
+{
+    auto result = SectorBuilder::create(config, kProjection, kRoi, kFirstRow);
+    EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
+    return std::move(result).value();
+}
+
+const GroundPlane kGround = GroundPlane::fromMount(Mount{kHeightM, 0.0, 0.0});
+
+/// Disparity x16 of flat ground (level camera) over the ROI; rows at or above the horizon invalid.
+cv::Mat groundDisparity()
+{
+    cv::Mat d16(kRoi.height, kRoi.width, CV_16SC1, cv::Scalar(-16));
+    const DisparityPlane plane = kGround.disparityPlane(kProjection);
+    for (int v = 0; v < kRoi.height; ++v) {
+        for (int u = 0; u < kRoi.width; ++u) {
+            const double d = plane.at(u, v + kRoi.y);
+            if (d > 0.0) {
+                d16.at<std::int16_t>(v, u) = static_cast<std::int16_t>(std::lround(d * 16.0));
+            }
+        }
+    }
+    return d16;
+}
+
+/// Pixel column of a camera-frame lateral offset X [m] (right positive) at depth Z [m].
+int column(double xM, double zM)
+{
+    return static_cast<int>(std::lround(kProjection.cx + kProjection.fx * xM / zM));
+}
+/// ROI row of a point at height z [m] above the ground at depth Z [m] (level camera).
+int roiRow(double zUp, double zM)
+{
+    return static_cast<int>(std::lround(kProjection.cy + kProjection.fy * (kHeightM - zUp) / zM)) - kRoi.y;
+}
+
+/// A fronto-parallel box face at depth Z, lateral [x0, x1] (camera X, right positive), from the ground up to top.
+void paintFace(cv::Mat& d16, double zM, double x0, double x1, double top)
+{
+    const auto value = static_cast<std::int16_t>(std::lround(kFb / zM * 16.0));
+    for (int v = std::max(0, roiRow(top, zM)); v <= std::min(d16.rows - 1, roiRow(0.0, zM)); ++v) {
+        for (int u = std::max(0, column(x0, zM)); u <= std::min(d16.cols - 1, column(x1, zM)); ++u) {
+            d16.at<std::int16_t>(v, u) = value;
+        }
+    }
+}
+
+int sectorOf(const ObstacleSectors& s, double bearingDeg)
+{
+    for (int i = 0; i < s.count; ++i) {
+        const Sector& sector = s.sectors[static_cast<std::size_t>(i)];
+        if (bearingDeg >= sector.bearingMinDeg && bearingDeg < sector.bearingMaxDeg) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+ConstImageViewU8 view(const cv::Mat& m)
+{
+    return {m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+}
+ImageView<const std::int16_t> view16(const cv::Mat& m)
+{
+    return {m.ptr<std::int16_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+}
+
+TEST(SectorBuilder, CreateRejectsInvalidConfigAndGeometry)
+{
+    SectorBuilderConfig tooManySectors;
+    tooManySectors.sectorCount = kMaxSectors + 1;
+    SectorBuilderConfig badPercentile;
+    badPercentile.rangePercentile = 1.0F;
+
+    EXPECT_FALSE(SectorBuilder::create(tooManySectors, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(badPercentile, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create({}, kProjection, kRoi, kRoi.y - 1).has_value());
+    EXPECT_FALSE(SectorBuilder::create({}, RectifiedProjection{}, kRoi, kFirstRow).has_value());
+}
+
+TEST(SectorBuilder, FlatGroundIsClearEverywhere)
+{
+    auto sut = makeBuilder();
+    const cv::Mat d16 = groundDisparity();
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 42U, 123456789), BuildStatus::Ok);
+
+    const ObstacleSectors& s = sut.sectors();
+    EXPECT_EQ(s.count, 64);
+    EXPECT_EQ(s.sequence, 42U);
+    EXPECT_EQ(s.captureStampNs, 123456789);
+    EXPECT_FALSE(s.degraded);
+    EXPECT_NEAR(sut.hfovDeg(), 60.7, 0.05);
+    for (int i = 0; i < s.count; ++i) {
+        EXPECT_EQ(s.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << i;
+        EXPECT_EQ(s.sectors[static_cast<std::size_t>(i)].danger, DangerClass::Green) << i;
+    }
+}
+
+TEST(SectorBuilder, PositiveFaceGivesExactRangeKindHeightAndDanger)
+{
+    constexpr double kRangeM = 3.0;
+    constexpr double kTopM = 0.5;
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, kRangeM, -0.2, 0.2, kTopM); // straight ahead, 0.4 m wide
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Obstacle);
+    EXPECT_EQ(ahead.kind, ObstacleKind::Positive);
+    EXPECT_NEAR(ahead.rangeM, kRangeM, 0.03);
+    EXPECT_NEAR(ahead.heightM, kTopM, 0.05);
+    EXPECT_EQ(ahead.danger, DangerClass::Blue);
+    EXPECT_GT(ahead.confidence, 0.5F);
+    const Sector& side = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 20.0))];
+    EXPECT_EQ(side.state, SectorState::Clear);
+}
+
+TEST(SectorBuilder, NegativeFloorGivesNegativeKind)
+{
+    // The floor of a trench 0.3 m deep, seen from 4 m to 5 m straight ahead.
+    constexpr double kDepthM = 0.3;
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    for (int v = 0; v < d16.rows; ++v) {
+        const double dy = v + kRoi.y - kProjection.cy;
+        const double z = dy > 0.0 ? kProjection.fy * (kHeightM + kDepthM) / dy : 1e9;
+        if (z < 4.0 || z > 5.0) {
+            continue;
+        }
+        for (int u = column(-0.5, z); u <= column(0.5, z); ++u) {
+            d16.at<std::int16_t>(v, u) = static_cast<std::int16_t>(std::lround(kFb / z * 16.0));
+        }
+    }
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Obstacle);
+    EXPECT_EQ(ahead.kind, ObstacleKind::Negative);
+    EXPECT_NEAR(ahead.rangeM, 4.0, 0.12);
+    EXPECT_NEAR(ahead.heightM, kDepthM, 0.03);
+}
+
+TEST(SectorBuilder, IsolatedOutliersNeitherCreateNorMoveObstacles)
+{
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, 4.0, -0.2, 0.2, 0.5);
+    const auto nearValue = static_cast<std::int16_t>(std::lround(kFb / 1.0 * 16.0)); // points at 1 m, high up
+    for (int k = 0; k < 8; ++k) {
+        d16.at<std::int16_t>(20 + 10 * k, 320) = nearValue; // in the obstacle's sector
+        d16.at<std::int16_t>(20 + 10 * k, 100) = nearValue; // in a clear sector
+    }
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const ObstacleSectors& s = sut.sectors();
+    EXPECT_NEAR(s.sectors[static_cast<std::size_t>(sectorOf(s, 0.0))].rangeM, 4.0, 0.04);
+    const double bearing100 = std::atan2(kProjection.cx - 100.0, kProjection.fx) * 180.0 / 3.14159265358979;
+    EXPECT_EQ(s.sectors[static_cast<std::size_t>(sectorOf(s, bearing100))].state, SectorState::Clear);
+}
+
+TEST(SectorBuilder, NoValidDisparityIsUnknownNeverClear)
+{
+    auto sut = makeBuilder();
+    const cv::Mat invalid(kRoi.height, kRoi.width, CV_16SC1, cv::Scalar(-16));
+
+    ASSERT_EQ(sut.build(view16(invalid), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    for (int i = 0; i < sut.sectors().count; ++i) {
+        EXPECT_EQ(sut.sectors().sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown) << i;
+        EXPECT_EQ(sut.sectors().sectors[static_cast<std::size_t>(i)].danger, DangerClass::Unknown) << i;
+    }
+}
+
+TEST(SectorBuilder, LabelsOnlyModeNeedsLabelsAndUnlabelledVotesForbidClear)
+{
+    SectorBuilderConfig config;
+    config.useDenseCue = false;
+    auto sut = makeBuilder(config);
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, 3.0, -0.2, 0.2, 0.5);
+    cv::Mat labels(kRoi.height, kRoi.width, CV_8UC1, cv::Scalar(0));
+
+    ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 1U, 0), BuildStatus::Ok);
+    const SectorState unlabelled = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))].state;
+    labels.setTo(kLabelPositive);
+    ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 2U, 0), BuildStatus::Ok);
+    const Sector labelled = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+
+    EXPECT_EQ(unlabelled, SectorState::Unknown);
+    EXPECT_EQ(labelled.state, SectorState::Obstacle);
+    EXPECT_NEAR(labelled.rangeM, 3.0, 0.03);
+}
+
+TEST(SectorBuilder, WrongInputSizesGiveAllUnknownDegraded)
+{
+    auto sut = makeBuilder();
+    const cv::Mat d16 = groundDisparity();
+    const cv::Mat small16(10, 10, CV_16SC1, cv::Scalar(0));
+    const cv::Mat smallLabels(10, 10, CV_8UC1, cv::Scalar(0));
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    EXPECT_EQ(sut.build(view16(small16), {}, kGround, 2U, 5), BuildStatus::WrongDisparitySize);
+    EXPECT_TRUE(sut.sectors().degraded);
+    EXPECT_EQ(sut.sectors().sequence, 2U);
+    EXPECT_EQ(sut.build(view16(d16), view(smallLabels), kGround, 3U, 5), BuildStatus::WrongLabelSize);
+
+    EXPECT_TRUE(sut.sectors().degraded);
+    for (int i = 0; i < sut.sectors().count; ++i) {
+        EXPECT_EQ(sut.sectors().sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown);
+    }
+}
+
+/// Perfect inputs (simulator ground-truth disparity and labels) reproduce the simulator's ground-truth sectors.
+void expectMatchesGroundTruth(const char* name, double rangeM, double bearingDeg)
+{
+    auto scene = sim::makeScene(name, rangeM, bearingDeg, sim::GroundTexture::Asphalt, 3);
+    ASSERT_TRUE(scene.has_value());
+    auto rendered = sim::render(scene.value(), {}, sim::RenderOptions{1});
+    ASSERT_TRUE(rendered.has_value());
+    const auto& frame = rendered.value();
+    cv::Mat d16(kRoi.height, kRoi.width, CV_16SC1);
+    cv::Mat labels(kRoi.height, kRoi.width, CV_8UC1);
+    for (int v = 0; v < kRoi.height; ++v) {
+        for (int u = 0; u < kRoi.width; ++u) {
+            const float d = frame.disparity.at<float>(v + kRoi.y, u);
+            d16.at<std::int16_t>(v, u) = d > 0.0F ? static_cast<std::int16_t>(std::lround(d * 16.0F)) : -16;
+            const std::uint8_t l = frame.labels.at<std::uint8_t>(v + kRoi.y, u);
+            labels.at<std::uint8_t>(v, u) = l == 1 || l == 2 ? l : 0;
+        }
+    }
+    // Qualifying ground-truth hits per sector (bearing of the hit point, level rig: x = depth).
+    std::array<int, kMaxSectors> support{};
+    const float binDeg = 60.7F / 64.0F;
+    for (int y = kFirstRow; y < frame.labels.rows; ++y) {
+        for (int u = 0; u < frame.labels.cols; ++u) {
+            const std::uint8_t l = frame.labels.at<std::uint8_t>(y, u);
+            const float h = frame.height.at<float>(y, u);
+            if ((l == 1 && h > 0.10F) || (l == 2 && h < -0.10F)) {
+                const double z = frame.depth.at<float>(y, u);
+                const double bearing = std::atan2(-(u - kProjection.cx) * z / kProjection.fx, z) * 180.0 / M_PI;
+                const int s = static_cast<int>(std::floor((bearing + 60.7 / 2.0) / binDeg));
+                if (s >= 0 && s < 64) {
+                    ++support[static_cast<std::size_t>(s)];
+                }
+            }
+        }
+    }
+    const SectorBuilderConfig config;
+    auto sut = makeBuilder(config);
+
+    ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 9U, 0), BuildStatus::Ok);
+
+    const ObstacleSectors& gt = frame.sectors;
+    ASSERT_EQ(sut.sectors().count, gt.count);
+    int obstacles = 0;
+    for (int i = 0; i < gt.count; ++i) {
+        const Sector& want = gt.sectors[static_cast<std::size_t>(i)];
+        const Sector& got = sut.sectors().sectors[static_cast<std::size_t>(i)];
+        EXPECT_NEAR(got.bearingMinDeg, want.bearingMinDeg, 1e-3F);
+        if (want.state == SectorState::Obstacle && support[static_cast<std::size_t>(i)] < config.minSupport) {
+            // By design (outlier rejection) fewer than minSupport hits do not make an obstacle: only the edge
+            // sector of an object, seen by a sliver of pixels.
+            std::printf("[ MEASURED ] %s sector %d: %d GT hits < minSupport, got state %d\n", name, i,
+                        support[static_cast<std::size_t>(i)], static_cast<int>(got.state));
+            continue;
+        }
+        EXPECT_EQ(got.state, want.state) << name << " sector " << i;
+        EXPECT_EQ(got.kind, want.kind) << name << " sector " << i;
+        EXPECT_EQ(got.danger, want.danger) << name << " sector " << i;
+        if (want.state == SectorState::Obstacle && got.state == SectorState::Obstacle) {
+            ++obstacles;
+            EXPECT_NEAR(got.rangeM, want.rangeM, std::max(0.10F, 0.03F * want.rangeM)) << name << " sector " << i;
+            std::printf("[ MEASURED ] %s sector %d: range %.3f m (GT %.3f m)\n", name, i, got.rangeM, want.rangeM);
+        }
+    }
+    if (std::string_view(name) != "empty") {
+        EXPECT_GT(obstacles, 0) << name;
+    }
+}
+
+TEST(SectorBuilder, GroundTruthInputsReproduceGroundTruthSectors)
+{
+    expectMatchesGroundTruth("empty", 5.0, 0.0);
+    expectMatchesGroundTruth("pole", 3.0, 5.0);
+    expectMatchesGroundTruth("box", 4.0, -10.0);
+    expectMatchesGroundTruth("person", 2.5, 15.0);
+    expectMatchesGroundTruth("hole", 3.0, 0.0);
+}
+
+TEST(SectorBuilder, SteadyStateBuildDoesNotAllocate)
+{
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, 3.0, -0.2, 0.2, 0.5);
+    const cv::Mat labels(kRoi.height, kRoi.width, CV_8UC1, cv::Scalar(kLabelPositive));
+    constexpr int kFrames = 300;
+
+    std::size_t allocations = 0;
+    {
+        const test::AllocationScope scope;
+        for (int i = 0; i < kFrames; ++i) {
+            (void)sut.build(view16(d16), view(labels), kGround, static_cast<std::uint64_t>(i), i);
+        }
+        allocations = scope.count();
+    }
+
+    EXPECT_EQ(allocations, 0U);
+    EXPECT_EQ(sut.sectors().sequence, static_cast<std::uint64_t>(kFrames - 1));
+}
+
+} // namespace
+} // namespace ugv::vision

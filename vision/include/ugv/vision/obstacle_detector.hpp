@@ -1,0 +1,117 @@
+#pragma once
+
+/// @file
+/// The per-frame stereo obstacle pipeline on the rectified ROI:
+/// RoiMatcher (StereoSGBM on the ROI) -> GroundEstimator (per-frame ground from that disparity, falling back to
+/// the configured plane) -> warpGround + GroundMismatch (edge pixels where the left image warped through the
+/// ground plane disagrees with the right one, with the sign of the residual disparity) -> SectorBuilder (dense
+/// disparity cue, confirmed and weighted by the mismatch labels) -> sectors.
+///
+/// The mismatch stage labels pixels of the right image; they are moved to the left image's grid (where the
+/// disparity lives) through the warp's row map plus the residual disparity.
+///
+/// Bad input never crashes and never yields a false Clear: wrong-size frames give all sectors Unknown with
+/// `degraded` set and status() == WrongInputSize; all-black, saturated and textureless frames give no valid
+/// disparity and therefore Unknown sectors (SectorBuilder needs ground support for Clear).
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/obstacle_sectors.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/vision/ground_estimator.hpp"
+#include "ugv/vision/ground_mismatch.hpp"
+#include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/ground_warp.hpp"
+#include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/roi_matcher.hpp"
+#include "ugv/vision/sector_builder.hpp"
+
+namespace ugv::vision {
+
+struct DetectorConfig {
+    RoiMatcherConfig matcher;
+    SectorBuilderConfig sectors;
+    /// Projection, mount and ROI geometry are filled in by create(). No temporal smoothing by default: the
+    /// sectors of a frame use the ground of that frame (a lagging ground turns a pitch step into obstacles).
+    GroundEstimatorConfig ground = [] {
+        GroundEstimatorConfig c;
+        c.smoothing = 1.0;
+        return c;
+    }();
+    GroundMismatchConfig mismatch;  ///< width and height are filled in by create()
+    /// Rows at the top of the ROI that only give the matcher's block context and are not analysed [px]
+    /// (RectifierConfig::roiMarginRows).
+    int marginRows = 8;
+};
+
+/// Outcome of the last ObstacleDetector::process(); no strings on the frame path.
+enum class DetectorStatus : std::uint8_t {
+    Ok,
+    WrongInputSize, ///< a frame is empty or not the ROI size: all Unknown, degraded
+    MatcherFailed,  ///< OpenCV failed inside the matcher: all Unknown, degraded
+    BuildFailed,    ///< the sector builder rejected its inputs (a bug): all Unknown, degraded
+};
+
+/// Thread-safety: thread-bound (process() writes the internal buffers). RT-safe: process() no allocation of
+/// ours and no exception; StereoSGBM::compute() allocates internally (see roi_matcher.hpp); create() no.
+class ObstacleDetector {
+public:
+    /// @param[in] projection       rectified projection (full-frame coordinates)
+    /// @param[in] roi              full-frame rectangle of the rectified ROI images (Rectifier::roi())
+    /// @param[in] configuredGround ground plane of the configured mount
+    /// @return the detector, or an error from one of the stages' configs.
+    static Result<ObstacleDetector, Error> create(const DetectorConfig& config, const RectifiedProjection& projection,
+                                                  Rect roi, const GroundPlane& configuredGround);
+
+    /// Runs the pipeline on one rectified ROI pair.
+    /// @param[in] rectLeftRoi, rectRightRoi  roi.width x roi.height each
+    /// @param[in] sequence, stampNs          carried into the sectors
+    /// @return the sectors of this frame (valid until the next call); see status().
+    const ObstacleSectors& process(ConstImageViewU8 rectLeftRoi, ConstImageViewU8 rectRightRoi, std::uint64_t sequence,
+                                   std::int64_t stampNs) noexcept;
+
+    [[nodiscard]] DetectorStatus status() const noexcept { return status_; }
+    [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return builder_.sectors(); }
+    /// Intermediate buffers of the last frame, read-only (tools, overlays).
+    [[nodiscard]] const cv::Mat& disparity16() const noexcept { return matcher_.disparity16(); }
+    /// Obstacle labels (GroundLabel values) of the ground-mismatch stage on the left image's ROI grid.
+    [[nodiscard]] ConstImageViewU8 labels() const noexcept { return leftLabels_.view(); }
+    /// The ground-mismatch stage's own labels, on the right image's grid.
+    [[nodiscard]] const GroundMismatch& mismatch() const noexcept { return mismatch_; }
+    /// The last ground estimate (reliable, or the configured plane with the reason).
+    [[nodiscard]] const GroundEstimate& groundEstimate() const noexcept { return estimator_.estimate(); }
+    /// The ground plane the last frame's sectors used.
+    [[nodiscard]] const GroundPlane& ground() const noexcept { return ground_; }
+    [[nodiscard]] Rect roi() const noexcept { return roi_; }
+
+private:
+    ObstacleDetector(RoiMatcher matcher, SectorBuilder builder, GroundEstimator estimator, GroundMismatch mismatch,
+                     Rect roi) noexcept
+        : matcher_(std::move(matcher)), builder_(std::move(builder)), estimator_(std::move(estimator)),
+          mismatch_(std::move(mismatch)), warped_(roi.width, roi.height), spans_(static_cast<std::size_t>(roi.height)),
+          leftLabels_(roi.width, roi.height)
+    {
+    }
+    /// Moves the mismatch labels from the right grid to the left grid (leftLabels_).
+    void labelsToLeftGrid(const DisparityPlane& plane) noexcept;
+
+    RoiMatcher matcher_;
+    SectorBuilder builder_;
+    GroundEstimator estimator_;
+    GroundMismatch mismatch_;
+    Image<std::uint8_t> warped_;
+    std::vector<WarpSpan> spans_;
+    Image<std::uint8_t> leftLabels_;
+    GroundPlane configuredGround_;
+    GroundPlane ground_;
+    Rect roi_;
+    DetectorStatus status_ = DetectorStatus::Ok;
+};
+
+} // namespace ugv::vision

@@ -1,0 +1,97 @@
+#pragma once
+
+/// @file
+/// Dense disparity of the rectified region of interest (the ROI rows, which include a margin of rows above
+/// for the block) with OpenCV's StereoSGBM, created once at configure.
+///
+/// Allocation: cv::StereoSGBM::compute() in OpenCV 4.6 allocates internally on every call (its cost/path
+/// buffers, and in SGBM_3WAY/HH4 per-stripe buffers) although our output Mats are preallocated and reused.
+/// The count is measured by unit-vision-detect test `RoiMatcher.ReportsAllocationsPerMatch` and printed; it
+/// is the only allocation on our frame path. Mitigation: preallocated, reused outputs and padded inputs;
+/// one thread (`cv::setNumThreads(1)`, called by create()); glibc keeps the freed blocks (the service sets
+/// M_TRIM_THRESHOLD/M_MMAP_MAX at start), so after warm-up the calls reuse the same heap memory.
+
+#include <cstdint>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/result.hpp"
+
+namespace ugv::vision {
+
+/// OpenCV StereoSGBM modes (config stereo.mode).
+enum class MatcherMode : std::uint8_t {
+    Sgbm,     ///< MODE_SGBM: 5 paths, single pass
+    Sgbm3Way, ///< MODE_SGBM_3WAY: 3 paths, faster (measured 28 vs 37 ms on 640x242)
+    Hh4,      ///< MODE_HH4: 8 paths with 4-way full-image passes, slowest
+};
+
+struct RoiMatcherConfig {
+    MatcherMode mode = MatcherMode::Sgbm3Way;
+    int numDisparities = 128; ///< [px] search range, multiple of 16
+    int blockSize = 5;        ///< [px] odd, 1..11; P1 = 8 bs^2, P2 = 32 bs^2 (OpenCV's recommendation, 1 channel)
+    int uniquenessRatio = 10; ///< [%] best cost must beat the second best by this margin, else invalid
+    int speckleWindowSize = 100; ///< [px] connected regions smaller than this are invalidated; 0 disables
+    int speckleRange = 2;     ///< [px] maximum disparity step within a speckle region
+    int disp12MaxDiff = 1;    ///< [px] left-right consistency tolerance; < 0 disables the check
+    int preFilterCap = 63;    ///< clip of the x-derivative prefilter
+    /// Pad both images on the left by numDisparities columns (zeros) so that the leftmost columns get a
+    /// disparity wherever their match lies inside the right image (OpenCV leaves columns < numDisparities
+    /// invalid, i.e. bearings above ~19 deg for the default rig). Off by default: measured on simulator ground,
+    /// the padded columns are biased (mean error over the ROI -0.12 -> -0.5 px, bad-1px +1 %), which would
+    /// show as false negative obstacles; it also costs (width + numDisparities) / width of the matching time.
+    bool padLeft = false;
+};
+
+/// Outcome of RoiMatcher::match; no strings on the frame path.
+enum class MatchStatus : std::uint8_t {
+    Ok,
+    WrongInputSize, ///< an input view is empty or not roiSize (disparity set to invalid)
+    OpenCvFailed,   ///< StereoSGBM threw despite the checked preconditions (disparity set to invalid)
+};
+
+/// Semi-global matching of the ROI of a rectified pair into a preallocated CV_16S disparity (x16 fixed point,
+/// kScale; invalid pixels < 0).
+/// Thread-safety: thread-bound (match() writes the internal buffers). RT-safe: match() no allocation of ours
+/// and no exception, but OpenCV allocates inside compute() (see the file comment); create() no.
+class RoiMatcher {
+public:
+    static constexpr int kScale = 16; ///< fixed-point scale of disparity16()
+
+    /// Validates the config, creates the StereoSGBM and allocates all buffers for images of `roiSize`.
+    /// @return the matcher, or an error naming the invalid field.
+    static Result<RoiMatcher, Error> create(const RoiMatcherConfig& config, cv::Size roiSize);
+
+    /// Computes the disparity of `left` (reference) against `right`.
+    /// @param[in] left, right  rectified ROI images, roiSize each, 8-bit grey
+    /// @return Ok, or why the disparity is all invalid.
+    MatchStatus match(ConstImageViewU8 left, ConstImageViewU8 right) noexcept;
+
+    /// Disparity of the last match, roiSize CV_16S, d * kScale with sub-pixel bits; invalid < 0. A header view
+    /// into the internal (padded) buffer: valid until the next match().
+    [[nodiscard]] const cv::Mat& disparity16() const noexcept { return disp16_; }
+    [[nodiscard]] ImageView<const std::int16_t> disparityView() const noexcept;
+
+    /// Float disparity [px] of the last match into a caller-preallocated roiSize CV_32F `out`; invalid = -1.
+    /// @return false (out untouched) when out has the wrong size or type.
+    bool toFloat(cv::Mat& out) const noexcept;
+
+    [[nodiscard]] cv::Size roiSize() const noexcept { return roiSize_; }
+    [[nodiscard]] const RoiMatcherConfig& config() const noexcept { return config_; }
+
+private:
+    RoiMatcher() = default;
+
+    RoiMatcherConfig config_;
+    cv::Size roiSize_;
+    int pad_ = 0;                  ///< [px] left padding columns
+    cv::Ptr<cv::StereoSGBM> sgbm_;
+    cv::Mat padLeft_, padRight_;   ///< CV_8U (width + pad) x height; pad columns stay 0
+    cv::Mat disp16Padded_;         ///< CV_16S (width + pad) x height, compute() output
+    cv::Mat disp16_;               ///< header view of the unpadded columns
+};
+
+} // namespace ugv::vision

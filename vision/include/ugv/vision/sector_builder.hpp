@@ -1,0 +1,113 @@
+#pragma once
+
+/// @file
+/// Obstacle sectors from the ROI disparity, an optional obstacle label image (ground-mismatch stage) and the
+/// ground plane of the frame.
+///
+/// Every analysed ROI pixel with a valid disparity becomes a vehicle-frame point (GroundPlane::pixelToVehicle)
+/// and is binned by the bearing of the point, atan2(y, x), into `sectorCount` equal bins over the horizontal
+/// field of view 2 atan(width / (2 fx)) (as the simulator's ground truth, bringup/sim/README.md):
+///  - positive vote: z > minHeightM; negative vote: z < -minDepthM. With `useDenseCue` every such pixel votes
+///    (weight 1); a pixel that the label image also marks (1 positive, 2 negative) votes with weight
+///    1 + labelWeight. Without the dense cue only labelled pixels vote (unlabelled ones still forbid Clear).
+///  - ground support: |z| <= minHeightM (and >= -minDepthM).
+/// Per sector and kind, the votes go into a range histogram (rangeBinM bins up to maxRangeM). The nearest
+/// cluster is the first window [r, r (1 + clusterFraction) + clusterWindowM] holding >= minSupport votes;
+/// its range is the rangePercentile-quantile of the votes inside the window (robust to single outliers).
+/// Sector state: Obstacle (nearer kind wins) when a cluster exists; else Clear (range +inf) when the ground
+/// support is >= clearGroundFraction of the sector's analysed pixels and the stray votes are < minSupport;
+/// else Unknown (no texture, invalid disparity, too few measurements, obstacles beyond maxRangeM): never a
+/// false Clear. danger = classify(state, range, dangerDistanceM, cautionDistanceM).
+///
+/// Thread-safety: thread-bound (build() writes the internal buffers). RT-safe: build() yes (no allocation, no
+/// exception); create() no.
+
+#include <cstdint>
+#include <vector>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/obstacle_sectors.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/rectifier.hpp"
+
+namespace ugv::vision {
+
+struct SectorBuilderConfig {
+    int sectorCount = 64;
+    float minHeightM = 0.10F;         ///< [m] positive obstacle points are higher than this
+    float minDepthM = 0.10F;          ///< [m] negative obstacle points are deeper than this
+    float maxRangeM = 12.0F;          ///< [m] points farther away are ignored (disparity too coarse)
+    float rangeBinM = 0.02F;          ///< [m] histogram resolution
+    int minSupport = 40;              ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
+                                      ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float clusterWindowM = 0.15F;     ///< [m] cluster window, fixed part
+    float clusterFraction = 0.05F;    ///< cluster window, part proportional to the range
+    float rangePercentile = 0.10F;    ///< quantile of the cluster's votes reported as the range, [0, 1)
+    float clearGroundFraction = 0.25F; ///< ground support (fraction of the sector's pixels) needed for Clear
+    int labelWeight = 1;              ///< extra votes of a pixel that the label image confirms
+    bool useDenseCue = true;          ///< unlabelled pixels above/below the ground vote too
+    float confidenceSupport = 200.0F; ///< votes that give confidence 1
+    float dangerDistanceM = 1.5F;     ///< [m]
+    float cautionDistanceM = 5.0F;    ///< [m]
+};
+
+enum class BuildStatus : std::uint8_t {
+    Ok,
+    WrongDisparitySize, ///< disparity is empty or not roi size: all sectors Unknown, degraded
+    WrongLabelSize,     ///< labels are non-empty and not roi size: all sectors Unknown, degraded
+};
+
+/// Label values of the ground-mismatch stage's image.
+inline constexpr std::uint8_t kLabelPositive = 1;
+inline constexpr std::uint8_t kLabelNegative = 2;
+
+class SectorBuilder {
+public:
+    /// @param[in] projection  rectified projection (full-frame coordinates)
+    /// @param[in] roi         full-frame rectangle of the disparity/label images [px]
+    /// @param[in] firstRow    first full-frame row analysed (rows above are the matcher's margin) [px]
+    /// @return the builder, or an error for an invalid config or geometry.
+    static Result<SectorBuilder, Error> create(const SectorBuilderConfig& config, const RectifiedProjection& projection,
+                                               Rect roi, int firstRow);
+
+    /// Builds the sectors of one frame.
+    /// @param[in] disparity16  roi-size disparity, d * 16 (RoiMatcher::kScale), invalid <= 0
+    /// @param[in] labels       roi-size label image (1 positive, 2 negative, else none), or empty
+    /// @param[in] ground       ground plane of this frame
+    /// @param[in] sequence, stampNs  carried into the output
+    /// @return Ok or the input that was wrong (then all sectors Unknown and `degraded` set).
+    BuildStatus build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
+                      std::uint64_t sequence, std::int64_t stampNs) noexcept;
+
+    /// Marks all sectors Unknown and degraded (callers' failure paths).
+    void setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) noexcept;
+
+    [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return sectors_; }
+    [[nodiscard]] const SectorBuilderConfig& config() const noexcept { return config_; }
+    [[nodiscard]] float hfovDeg() const noexcept { return hfovDeg_; }
+
+private:
+    SectorBuilder() = default;
+    struct Cluster {
+        int votes = 0;
+        float rangeM = 0.0F;
+    };
+    [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram) const noexcept;
+
+    SectorBuilderConfig config_;
+    RectifiedProjection projection_;
+    Rect roi_;
+    int firstRow_ = 0;
+    int bins_ = 0;
+    float hfovDeg_ = 0.0F;
+    ObstacleSectors sectors_;
+    std::vector<std::uint32_t> histograms_;  ///< [sector][kind 0 positive, 1 negative][bin] votes
+    std::vector<float> extremes_;            ///< [sector][kind][bin] max height / depth [m]
+    std::vector<std::uint32_t> groundVotes_; ///< [sector]
+    std::vector<std::uint32_t> kindVotes_;   ///< [sector][kind] all votes
+    std::vector<std::uint32_t> pixelsPerSector_; ///< analysed pixels whose column bearing is in the sector
+};
+
+} // namespace ugv::vision

@@ -1,0 +1,112 @@
+#include "ugv/vision/obstacle_detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+namespace ugv::vision {
+
+Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& config,
+                                                         const RectifiedProjection& projection, Rect roi,
+                                                         const GroundPlane& configuredGround)
+{
+    if (roi.empty() || config.marginRows < 0 || config.marginRows >= roi.height) {
+        return Unexpected(Error{"ObstacleDetector::create",
+                                "ROI is empty or marginRows " + std::to_string(config.marginRows) +
+                                    " is not below its height",
+                                "check roi.matcher_margin_rows"});
+    }
+    if (!(configuredGround.heightM > 0.0)) {
+        return Unexpected(Error{"ObstacleDetector::create", "configured ground has no positive camera height",
+                                "set mount.height_m"});
+    }
+    auto matcherResult = RoiMatcher::create(config.matcher, cv::Size(roi.width, roi.height));
+    if (!matcherResult) {
+        return Unexpected(std::move(matcherResult).error());
+    }
+    auto builderResult = SectorBuilder::create(config.sectors, projection, roi, roi.y + config.marginRows);
+    if (!builderResult) {
+        return Unexpected(std::move(builderResult).error());
+    }
+    GroundEstimatorConfig groundConfig = config.ground;
+    groundConfig.projection = projection;
+    groundConfig.mount = Mount{configuredGround.heightM, configuredGround.pitchDeg(), configuredGround.rollDeg()};
+    groundConfig.width = roi.width;
+    groundConfig.height = roi.height;
+    groundConfig.y0 = roi.y;
+    auto estimatorResult = GroundEstimator::create(groundConfig);
+    if (!estimatorResult) {
+        return Unexpected(std::move(estimatorResult).error());
+    }
+    GroundMismatchConfig mismatchConfig = config.mismatch;
+    mismatchConfig.width = roi.width;
+    mismatchConfig.height = roi.height;
+    auto mismatchResult = GroundMismatch::create(mismatchConfig);
+    if (!mismatchResult) {
+        return Unexpected(std::move(mismatchResult).error());
+    }
+    ObstacleDetector sut(std::move(matcherResult).value(), std::move(builderResult).value(),
+                         std::move(estimatorResult).value(), std::move(mismatchResult).value(), roi);
+    sut.configuredGround_ = configuredGround;
+    sut.ground_ = configuredGround;
+    sut.roi_ = roi;
+    return sut;
+}
+
+const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, ConstImageViewU8 rectRightRoi,
+                                                 std::uint64_t sequence, std::int64_t stampNs) noexcept
+{
+    const auto sizeOk = [this](ConstImageViewU8 v) {
+        return v.data() != nullptr && v.width() == roi_.width && v.height() == roi_.height;
+    };
+    if (!sizeOk(rectLeftRoi) || !sizeOk(rectRightRoi)) {
+        status_ = DetectorStatus::WrongInputSize;
+        builder_.setAllUnknown(sequence, stampNs);
+        return builder_.sectors();
+    }
+    if (matcher_.match(rectLeftRoi, rectRightRoi) != MatchStatus::Ok) {
+        status_ = DetectorStatus::MatcherFailed;
+        builder_.setAllUnknown(sequence, stampNs);
+        return builder_.sectors();
+    }
+    const GroundEstimate& estimate = estimator_.update(matcher_.disparityView());
+    ground_ = estimate.plane;
+    ConstImageViewU8 labels;
+    if (warpGround(rectLeftRoi, estimate.disparity, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok &&
+        mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, estimate.disparity, roi_.y) ==
+            GroundMismatchStatus::Ok) {
+        labelsToLeftGrid(estimate.disparity);
+        labels = leftLabels_.view();
+    }
+    const BuildStatus built = builder_.build(matcher_.disparityView(), labels, ground_, sequence, stampNs);
+    status_ = built == BuildStatus::Ok ? DetectorStatus::Ok : DetectorStatus::BuildFailed;
+    return builder_.sectors();
+}
+
+void ObstacleDetector::labelsToLeftGrid(const DisparityPlane& plane) noexcept
+{
+    const ConstImageViewU8 rightLabels = mismatch_.labels();
+    const ImageView<const std::int8_t> residuals = mismatch_.residuals();
+    const ImageViewU8 out = leftLabels_.view();
+    for (int y = 0; y < out.height(); ++y) {
+        std::uint8_t* dst = out.row(y);
+        std::fill(dst, dst + out.width(), static_cast<std::uint8_t>(GroundLabel::NotTested));
+        const std::uint8_t* labels = rightLabels.row(y);
+        const std::int8_t* residual = residuals.row(y);
+        const WarpRowMap map = warpRowMap(plane, roi_.y + y);
+        for (int xr = 0; xr < out.width(); ++xr) {
+            const auto label = static_cast<GroundLabel>(labels[xr]);
+            if (label != GroundLabel::Positive && label != GroundLabel::Negative) {
+                continue;
+            }
+            // The right pixel sees the point the left image shows at the ground-model source plus the residual.
+            const int xl = static_cast<int>(std::lround(map.scale * static_cast<float>(xr) + map.offset)) + residual[xr];
+            if (xl >= 0 && xl < out.width()) {
+                dst[xl] = labels[xr];
+            }
+        }
+    }
+}
+
+} // namespace ugv::vision

@@ -1,0 +1,228 @@
+#include "ugv/vision/sector_builder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <string>
+
+namespace ugv::vision {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+constexpr int kKinds = 2; // 0 positive, 1 negative
+constexpr float kDisparityScale = 16.0F;
+
+Error configError(const std::string& what)
+{
+    return Error{"SectorBuilderConfig", what, "see vision/include/ugv/vision/sector_builder.hpp"};
+}
+
+} // namespace
+
+Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& config,
+                                                   const RectifiedProjection& projection, Rect roi, int firstRow)
+{
+    if (config.sectorCount < 1 || config.sectorCount > kMaxSectors) {
+        return Unexpected(configError("sectorCount " + std::to_string(config.sectorCount) + " is not in 1.." +
+                                      std::to_string(kMaxSectors)));
+    }
+    if (!(config.minHeightM > 0.0F) || !(config.minDepthM > 0.0F) || !(config.rangeBinM > 0.0F) ||
+        !(config.maxRangeM > config.rangeBinM) || config.minSupport < 1 || config.clusterWindowM < 0.0F ||
+        config.clusterFraction < 0.0F || !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
+        !(config.clearGroundFraction > 0.0F && config.clearGroundFraction <= 1.0F) || config.labelWeight < 0 ||
+        !(config.confidenceSupport > 0.0F) || !(config.dangerDistanceM <= config.cautionDistanceM)) {
+        return Unexpected(configError("a threshold is out of range (all must be positive, percentile in [0, 1))"));
+    }
+    if (!(projection.fx > 0.0) || !(projection.fy > 0.0) || !(projection.baselineM > 0.0)) {
+        return Unexpected(Error{"SectorBuilder::create", "projection has no positive focal length and baseline", ""});
+    }
+    if (roi.empty() || firstRow < roi.y || firstRow >= roi.y + roi.height) {
+        return Unexpected(Error{"SectorBuilder::create",
+                                "firstRow " + std::to_string(firstRow) + " is not inside the ROI rows", ""});
+    }
+
+    SectorBuilder sut;
+    sut.config_ = config;
+    sut.projection_ = projection;
+    sut.roi_ = roi;
+    sut.firstRow_ = firstRow;
+    sut.bins_ = static_cast<int>(std::ceil(config.maxRangeM / config.rangeBinM));
+    // The full frame's width is 2 cx + 1 (pixel centres at integers, principal point at the centre).
+    const double width = 2.0 * projection.cx + 1.0;
+    sut.hfovDeg_ = static_cast<float>(2.0 * std::atan(width / (2.0 * projection.fx)) * kRadToDeg);
+    initSectors(sut.sectors_, config.sectorCount, sut.hfovDeg_);
+
+    const auto n = static_cast<std::size_t>(config.sectorCount);
+    sut.histograms_.assign(n * kKinds * static_cast<std::size_t>(sut.bins_), 0U);
+    sut.extremes_.assign(sut.histograms_.size(), 0.0F);
+    sut.groundVotes_.assign(n, 0U);
+    sut.kindVotes_.assign(n * kKinds, 0U);
+    sut.pixelsPerSector_.assign(n, 0U);
+    const float binDeg = sut.hfovDeg_ / static_cast<float>(config.sectorCount);
+    const auto rows = static_cast<std::uint32_t>(roi.y + roi.height - firstRow);
+    for (int x = 0; x < roi.width; ++x) {
+        const double bearing = std::atan2(projection.cx - (x + roi.x), projection.fx) * kRadToDeg;
+        const int s = static_cast<int>(std::floor((static_cast<float>(bearing) + sut.hfovDeg_ / 2.0F) / binDeg));
+        if (s >= 0 && s < config.sectorCount) {
+            sut.pixelsPerSector_[static_cast<std::size_t>(s)] += rows;
+        }
+    }
+    return sut;
+}
+
+void SectorBuilder::setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) noexcept
+{
+    initSectors(sectors_, config_.sectorCount, hfovDeg_);
+    sectors_.sequence = sequence;
+    sectors_.captureStampNs = stampNs;
+    sectors_.degraded = true;
+}
+
+SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram) const noexcept
+{
+    const auto minSupport = static_cast<std::uint32_t>(config_.minSupport);
+    for (int start = 0; start < bins_; ++start) {
+        if (histogram[start] == 0U) {
+            continue;
+        }
+        const float r0 = static_cast<float>(start) * config_.rangeBinM;
+        const float r1 = r0 * (1.0F + config_.clusterFraction) + config_.clusterWindowM;
+        const int end = std::min(bins_, static_cast<int>(r1 / config_.rangeBinM) + 1);
+        std::uint32_t votes = 0;
+        for (int b = start; b < end; ++b) {
+            votes += histogram[b];
+        }
+        if (votes < minSupport) {
+            continue;
+        }
+        // Quantile of the votes inside the window; the range is the centre of that bin.
+        const auto target = static_cast<std::uint32_t>(config_.rangePercentile * static_cast<float>(votes));
+        std::uint32_t cumulative = 0;
+        int b = start;
+        for (; b < end; ++b) {
+            cumulative += histogram[b];
+            if (cumulative > target) {
+                break;
+            }
+        }
+        return Cluster{static_cast<int>(votes), (static_cast<float>(b) + 0.5F) * config_.rangeBinM};
+    }
+    return Cluster{};
+}
+
+BuildStatus SectorBuilder::build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                 const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs) noexcept
+{
+    if (disparity16.data() == nullptr || disparity16.width() != roi_.width || disparity16.height() != roi_.height) {
+        setAllUnknown(sequence, stampNs);
+        return BuildStatus::WrongDisparitySize;
+    }
+    const bool haveLabels = !labels.empty();
+    if (haveLabels && (labels.width() != roi_.width || labels.height() != roi_.height)) {
+        setAllUnknown(sequence, stampNs);
+        return BuildStatus::WrongLabelSize;
+    }
+
+    std::fill(histograms_.begin(), histograms_.end(), 0U);
+    std::fill(extremes_.begin(), extremes_.end(), 0.0F);
+    std::fill(groundVotes_.begin(), groundVotes_.end(), 0U);
+    std::fill(kindVotes_.begin(), kindVotes_.end(), 0U);
+
+    const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
+    // Disparities below minDisparity16 are farther than maxRangeM even straight ahead: skipped early.
+    const auto minDisparity16 = static_cast<int>(
+        std::floor(projection_.fx * projection_.baselineM / config_.maxRangeM * kDisparityScale));
+    const auto bins = static_cast<std::size_t>(bins_);
+    const auto labelWeight = static_cast<std::uint32_t>(config_.labelWeight);
+
+    for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
+        const std::int16_t* d16 = disparity16.row(v);
+        const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
+        const double yFull = v + roi_.y;
+        for (int u = 0; u < roi_.width; ++u) {
+            if (d16[u] <= 0 || d16[u] < minDisparity16) {
+                continue;
+            }
+            const double d = static_cast<double>(d16[u]) / kDisparityScale;
+            const VehiclePoint p = ground.pixelToVehicle(u + roi_.x, yFull, d, projection_);
+            const auto range = static_cast<float>(std::hypot(p.x, p.y));
+            if (!(p.x > 0.0) || range >= config_.maxRangeM) {
+                continue;
+            }
+            const auto bearing = static_cast<float>(std::atan2(p.y, p.x) * kRadToDeg);
+            const int s = static_cast<int>(std::floor((bearing + hfovDeg_ / 2.0F) / binDeg));
+            if (s < 0 || s >= config_.sectorCount) {
+                continue;
+            }
+            const auto z = static_cast<float>(p.z);
+            int kind = -1;
+            if (z > config_.minHeightM) {
+                kind = 0;
+            } else if (z < -config_.minDepthM) {
+                kind = 1;
+            } else {
+                ++groundVotes_[static_cast<std::size_t>(s)];
+                continue;
+            }
+            const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
+            const bool labelled = label != nullptr && label[u] == wanted;
+            const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
+            if (!labelled && !config_.useDenseCue) {
+                ++kindVotes_[slot]; // unconfirmed: not an obstacle, but it forbids Clear
+                continue;
+            }
+            const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
+            const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
+            histograms_[slot * bins + bin] += weight;
+            float& extreme = extremes_[slot * bins + bin];
+            extreme = std::max(extreme, std::fabs(z));
+            kindVotes_[slot] += weight;
+        }
+    }
+
+    initSectors(sectors_, config_.sectorCount, hfovDeg_);
+    sectors_.sequence = sequence;
+    sectors_.captureStampNs = stampNs;
+    sectors_.degraded = false;
+    const auto heightWindowBins = static_cast<int>(std::ceil(0.10F / config_.rangeBinM)); // as the GT: 0.10 m
+    for (int s = 0; s < config_.sectorCount; ++s) {
+        Sector& out = sectors_.sectors[static_cast<std::size_t>(s)];
+        const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
+        const Cluster positive = nearestCluster(&histograms_[slot0 * bins]);
+        const Cluster negative = nearestCluster(&histograms_[(slot0 + 1) * bins]);
+        const bool havePositive = positive.votes > 0;
+        const bool haveNegative = negative.votes > 0;
+        if (havePositive || haveNegative) {
+            const bool pickPositive = havePositive && (!haveNegative || positive.rangeM <= negative.rangeM);
+            const Cluster& c = pickPositive ? positive : negative;
+            const std::size_t slot = slot0 + (pickPositive ? 0U : 1U);
+            const int first = static_cast<int>(c.rangeM / config_.rangeBinM);
+            float extreme = 0.0F;
+            for (int b = std::max(0, first - 1); b < std::min(bins_, first + heightWindowBins + 1); ++b) {
+                extreme = std::max(extreme, extremes_[slot * bins + static_cast<std::size_t>(b)]);
+            }
+            out.state = SectorState::Obstacle;
+            out.kind = pickPositive ? ObstacleKind::Positive : ObstacleKind::Negative;
+            out.rangeM = c.rangeM;
+            out.heightM = extreme;
+            out.confidence = std::min(1.0F, static_cast<float>(c.votes) / config_.confidenceSupport);
+        } else {
+            const std::uint32_t stray = kindVotes_[slot0] + kindVotes_[slot0 + 1];
+            const auto pixels = static_cast<float>(pixelsPerSector_[static_cast<std::size_t>(s)]);
+            const float groundFraction =
+                pixels > 0.0F ? static_cast<float>(groundVotes_[static_cast<std::size_t>(s)]) / pixels : 0.0F;
+            if (stray < static_cast<std::uint32_t>(config_.minSupport) &&
+                groundFraction >= config_.clearGroundFraction) {
+                out.state = SectorState::Clear;
+                out.rangeM = std::numeric_limits<float>::infinity();
+                out.confidence = std::min(1.0F, groundFraction);
+            }
+        }
+        out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
+    }
+    return BuildStatus::Ok;
+}
+
+} // namespace ugv::vision
