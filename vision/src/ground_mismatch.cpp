@@ -8,6 +8,8 @@
 #include <limits>
 #include <string>
 
+#include "ground_mismatch.simd.hpp"
+
 namespace ugv::vision {
 namespace {
 
@@ -48,8 +50,7 @@ Result<GroundMismatch, Error> GroundMismatch::create(const GroundMismatchConfig&
         (2 * config.windowHalfWidth + 1) * (2 * config.windowHalfHeight + 1) > kMaxWindowPixels) {
         return fail("window must be non-negative and at most " + std::to_string(kMaxWindowPixels) + " pixels");
     }
-    if (config.residualMin >= 0 || config.residualMax <= 0 || config.residualMin < -127 ||
-        config.residualMax > 127) {
+    if (config.residualMin >= 0 || config.residualMax <= 0 || config.residualMin < -127 || config.residualMax > 127) {
         return fail("residual range must satisfy -127 <= residualMin < 0 < residualMax <= 127");
     }
     if (!(config.mismatchThreshold > 0.0F) || !(config.signRatio > 0.0F && config.signRatio <= 1.0F) ||
@@ -60,8 +61,22 @@ Result<GroundMismatch, Error> GroundMismatch::create(const GroundMismatchConfig&
 }
 
 GroundMismatchStatus GroundMismatch::run(ConstImageViewU8 left, ConstImageViewU8 right, ConstImageViewU8 warped,
-                                         std::span<const WarpSpan> spans, const DisparityPlane& plane,
-                                         int y0) noexcept
+                                         std::span<const WarpSpan> spans, const DisparityPlane& plane, int y0) noexcept
+{
+    return runImpl<true>(left, right, warped, spans, plane, y0);
+}
+
+GroundMismatchStatus GroundMismatch::runReference(ConstImageViewU8 left, ConstImageViewU8 right,
+                                                  ConstImageViewU8 warped, std::span<const WarpSpan> spans,
+                                                  const DisparityPlane& plane, int y0) noexcept
+{
+    return runImpl<false>(left, right, warped, spans, plane, y0);
+}
+
+template <bool kSimd>
+GroundMismatchStatus GroundMismatch::runImpl(ConstImageViewU8 left, ConstImageViewU8 right, ConstImageViewU8 warped,
+                                             std::span<const WarpSpan> spans, const DisparityPlane& plane,
+                                             int y0) noexcept
 {
     const int w = config_.width;
     const int h = config_.height;
@@ -107,6 +122,11 @@ GroundMismatchStatus GroundMismatch::run(ConstImageViewU8 left, ConstImageViewU8
     std::array<int, kMaxWindowPixels> x0{};
     std::array<int, kMaxWindowPixels> frac{};
     std::array<const std::uint8_t*, kMaxWindowPixels> srcRow{};
+    std::array<const std::uint8_t*, kMaxWindowPixels> base{};
+    std::array<std::uint32_t, 256> residualCost{}; // [d - lo], d in [-127, 127]
+#if CV_SIMD128
+    std::array<cv::v_int16x8, 2 * kMaxWindowPixels> scratch{};
+#endif
 
     for (int r = std::max(1, hh); r < h - std::max(1, hh); ++r) {
         const std::int16_t* g = gradient.row(r);
@@ -158,10 +178,7 @@ GroundMismatchStatus GroundMismatch::run(ConstImageViewU8 left, ConstImageViewU8
             const int hi = std::min(config_.residualMax, srcLast - 1 - maxX0);
             std::int64_t bestCost = groundCost;
             int best = 0;
-            for (int d = lo; d <= hi; ++d) {
-                if (d == 0) {
-                    continue;
-                }
+            const auto scalarCost = [&](int d) noexcept {
                 for (int q = 0; q < n; ++q) {
                     const auto u = static_cast<std::size_t>(q);
                     const std::uint8_t* src = srcRow[u] + x0[u] + d;
@@ -169,22 +186,65 @@ GroundMismatchStatus GroundMismatch::run(ConstImageViewU8 left, ConstImageViewU8
                         (src[0] * (kWarpFracOne - frac[u]) + src[1] * frac[u] + kWarpFracOne / 2) >> kWarpFracBits;
                     diff[u] = rightValue[u] - sample;
                 }
-                const std::int64_t cost = zsadScaled(diff.data(), n);
-                if (cost < bestCost) {
-                    bestCost = cost;
-                    best = d;
+                return zsadScaled(diff.data(), n);
+            };
+            bool searched = false;
+#if CV_SIMD128
+            if constexpr (kSimd) {
+                // Costs of [lo, hi] in blocks of 16 residuals; the last block is moved back to end at hi (it
+                // overlaps the previous one) so that no load passes hi + 1. The scan below then takes the first
+                // strict minimum in increasing d, as the reference does.
+                constexpr int kBlock = simd::kResidualBlock;
+                if (hi - lo + 1 >= kBlock) {
+                    for (int q = 0; q < n; ++q) {
+                        const auto u = static_cast<std::size_t>(q);
+                        base[u] = srcRow[u] + x0[u];
+                    }
+                    for (int start = lo; start <= hi; start += kBlock) {
+                        const int s = std::min(start, hi - kBlock + 1);
+                        simd::residualCosts16(base.data(), frac.data(), rightValue.data(), n, s,
+                                              &residualCost[static_cast<std::size_t>(s - lo)], scratch.data());
+                    }
+                    for (int d = lo; d <= hi; ++d) {
+                        const std::int64_t cost = residualCost[static_cast<std::size_t>(d - lo)];
+                        if (d != 0 && cost < bestCost) {
+                            bestCost = cost;
+                            best = d;
+                        }
+                    }
+                    searched = true;
+                }
+            }
+#endif
+            if (!searched) {
+                for (int d = lo; d <= hi; ++d) {
+                    if (d == 0) {
+                        continue;
+                    }
+                    const std::int64_t cost = scalarCost(d);
+                    if (cost < bestCost) {
+                        bestCost = cost;
+                        best = d;
+                    }
                 }
             }
             GroundLabel label = GroundLabel::Unsure;
-            if (static_cast<double>(bestCost) < static_cast<double>(config_.signRatio) * static_cast<double>(groundCost)) {
+            if (static_cast<double>(bestCost) <
+                static_cast<double>(config_.signRatio) * static_cast<double>(groundCost)) {
                 label = best > 0 ? GroundLabel::Positive : GroundLabel::Negative;
             }
             labels.row(r)[x] = static_cast<std::uint8_t>(label);
             residuals.row(r)[x] = static_cast<std::int8_t>(best);
             switch (label) {
-            case GroundLabel::Positive: ++counts_.positive; break;
-            case GroundLabel::Negative: ++counts_.negative; break;
-            default: ++counts_.unsure; break;
+            case GroundLabel::Positive:
+                ++counts_.positive;
+                break;
+            case GroundLabel::Negative:
+                ++counts_.negative;
+                break;
+            default:
+                ++counts_.unsure;
+                break;
             }
         }
     }

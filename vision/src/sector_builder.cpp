@@ -14,6 +14,31 @@ constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr int kKinds = 2; // 0 positive, 1 negative
 constexpr float kDisparityScale = 16.0F;
 
+/// Vehicle axes in camera coordinates, exactly as GroundPlane::toVehicle builds them: forward f and left l
+/// (both of norm 1 / invNorm) and up u (unit).
+struct GroundAxes {
+    double f[3];
+    double l[3];
+    double u[3];
+    double invNorm;
+};
+
+GroundAxes groundAxes(const GroundPlane& g) noexcept
+{
+    GroundAxes a{};
+    a.f[0] = -g.nz * g.nx;
+    a.f[1] = -g.nz * g.ny;
+    a.f[2] = 1.0 - g.nz * g.nz;
+    a.u[0] = -g.nx;
+    a.u[1] = -g.ny;
+    a.u[2] = -g.nz;
+    a.l[0] = a.u[1] * a.f[2] - a.u[2] * a.f[1];
+    a.l[1] = a.u[2] * a.f[0] - a.u[0] * a.f[2];
+    a.l[2] = a.u[0] * a.f[1] - a.u[1] * a.f[0];
+    a.invNorm = 1.0 / std::sqrt(a.f[0] * a.f[0] + a.f[1] * a.f[1] + a.f[2] * a.f[2]);
+    return a;
+}
+
 Error configError(const std::string& what)
 {
     return Error{"SectorBuilderConfig", what, "see vision/include/ugv/vision/sector_builder.hpp"};
@@ -39,8 +64,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         return Unexpected(Error{"SectorBuilder::create", "projection has no positive focal length and baseline", ""});
     }
     if (roi.empty() || firstRow < roi.y || firstRow >= roi.y + roi.height) {
-        return Unexpected(Error{"SectorBuilder::create",
-                                "firstRow " + std::to_string(firstRow) + " is not inside the ROI rows", ""});
+        return Unexpected(
+            Error{"SectorBuilder::create", "firstRow " + std::to_string(firstRow) + " is not inside the ROI rows", ""});
     }
 
     SectorBuilder sut;
@@ -61,6 +86,16 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     sut.kindVotes_.assign(n * kKinds, 0U);
     sut.pixelsPerSector_.assign(n, 0U);
     const float binDeg = sut.hfovDeg_ / static_cast<float>(config.sectorCount);
+    sut.boundaryCos_.assign(n + 1, 0.0);
+    sut.boundarySin_.assign(n + 1, 0.0);
+    sut.boundary0_.assign(n + 1, 0.0);
+    sut.boundary1_.assign(n + 1, 0.0);
+    for (std::size_t k = 0; k <= n; ++k) {
+        // The reference's sector is floor((bearing + hfov / 2) / binDeg) in float: boundary k at k binDeg - hfov / 2.
+        const double b = (static_cast<double>(k) * binDeg - sut.hfovDeg_ / 2.0) / kRadToDeg;
+        sut.boundaryCos_[k] = std::cos(b);
+        sut.boundarySin_[k] = std::sin(b);
+    }
     const auto rows = static_cast<std::uint32_t>(roi.y + roi.height - firstRow);
     for (int x = 0; x < roi.width; ++x) {
         const double bearing = std::atan2(projection.cx - (x + roi.x), projection.fx) * kRadToDeg;
@@ -115,6 +150,20 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
 BuildStatus SectorBuilder::build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
                                  const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs) noexcept
 {
+    return buildImpl(disparity16, labels, ground, sequence, stampNs, false);
+}
+
+BuildStatus SectorBuilder::buildReference(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                          const GroundPlane& ground, std::uint64_t sequence,
+                                          std::int64_t stampNs) noexcept
+{
+    return buildImpl(disparity16, labels, ground, sequence, stampNs, true);
+}
+
+BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                     const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs,
+                                     bool reference) noexcept
+{
     if (disparity16.data() == nullptr || disparity16.width() != roi_.width || disparity16.height() != roi_.height) {
         setAllUnknown(sequence, stampNs);
         return BuildStatus::WrongDisparitySize;
@@ -132,53 +181,116 @@ BuildStatus SectorBuilder::build(ImageView<const std::int16_t> disparity16, Cons
 
     const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
     // Disparities below minDisparity16 are farther than maxRangeM even straight ahead: skipped early.
-    const auto minDisparity16 = static_cast<int>(
-        std::floor(projection_.fx * projection_.baselineM / config_.maxRangeM * kDisparityScale));
+    const auto minDisparity16 =
+        static_cast<int>(std::floor(projection_.fx * projection_.baselineM / config_.maxRangeM * kDisparityScale));
     const auto bins = static_cast<std::size_t>(bins_);
     const auto labelWeight = static_cast<std::uint32_t>(config_.labelWeight);
 
-    for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
-        const std::int16_t* d16 = disparity16.row(v);
-        const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
-        const double yFull = v + roi_.y;
-        for (int u = 0; u < roi_.width; ++u) {
-            if (d16[u] <= 0 || d16[u] < minDisparity16) {
-                continue;
+    const auto vote = [&](int s, float range, float z, const std::uint8_t* label, int u) noexcept {
+        int kind = -1;
+        if (z > config_.minHeightM) {
+            kind = 0;
+        } else if (z < -config_.minDepthM) {
+            kind = 1;
+        } else {
+            ++groundVotes_[static_cast<std::size_t>(s)];
+            return;
+        }
+        const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
+        const bool labelled = label != nullptr && label[u] == wanted;
+        const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
+        if (!labelled && !config_.useDenseCue) {
+            ++kindVotes_[slot]; // unconfirmed: not an obstacle, but it forbids Clear
+            return;
+        }
+        const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
+        const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
+        histograms_[slot * bins + bin] += weight;
+        float& extreme = extremes_[slot * bins + bin];
+        extreme = std::max(extreme, std::fabs(z));
+        kindVotes_[slot] += weight;
+    };
+
+    if (reference) {
+        for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
+            const std::int16_t* d16 = disparity16.row(v);
+            const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
+            const double yFull = v + roi_.y;
+            for (int u = 0; u < roi_.width; ++u) {
+                if (d16[u] <= 0 || d16[u] < minDisparity16) {
+                    continue;
+                }
+                const double d = static_cast<double>(d16[u]) / kDisparityScale;
+                const VehiclePoint p = ground.pixelToVehicle(u + roi_.x, yFull, d, projection_);
+                const auto range = static_cast<float>(std::hypot(p.x, p.y));
+                if (!(p.x > 0.0) || range >= config_.maxRangeM) {
+                    continue;
+                }
+                const auto bearing = static_cast<float>(std::atan2(p.y, p.x) * kRadToDeg);
+                const int s = static_cast<int>(std::floor((bearing + hfovDeg_ / 2.0F) / binDeg));
+                if (s < 0 || s >= config_.sectorCount) {
+                    continue;
+                }
+                vote(s, range, static_cast<float>(p.z), label, u);
             }
-            const double d = static_cast<double>(d16[u]) / kDisparityScale;
-            const VehiclePoint p = ground.pixelToVehicle(u + roi_.x, yFull, d, projection_);
-            const auto range = static_cast<float>(std::hypot(p.x, p.y));
-            if (!(p.x > 0.0) || range >= config_.maxRangeM) {
-                continue;
+        }
+    } else {
+        // For a fixed plane the vehicle point of pixel (u, v) at disparity d is linear in 1/d:
+        // with the ray r = ((u - cx)/fx, (v - cy)/fy, 1) and depth Z = fx B / d, GroundPlane::toVehicle gives
+        // x = Z (r . F) / |F|, y = Z (r . L) / |F|, z = h + Z (r . U) (F forward, L left, U up, unnormalised as
+        // toVehicle). So the bearing atan2(y, x) = atan2(r . L, r . F) does not depend on d, the range is
+        // Z |(r.F, r.L)| / |F| and the height h + Z (r . U). Per row, r . F, r . L and r . U are linear in u; the
+        // sector of a pixel is found by walking the sector boundaries (bearing monotone along a row) instead of
+        // an atan2 per pixel, and the range and height factors are computed once per pixel of the row.
+        // Equal to the reference up to double rounding (the last bits of Z r . F vs the reference's order of
+        // operations): the sectors are equal on the simulator scenes (sector_builder_test.cpp).
+        const GroundAxes axes = groundAxes(ground);
+        const double fb = projection_.fx * projection_.baselineM * kDisparityScale; // Z = fb / d16
+        const int boundaries = config_.sectorCount + 1;
+        for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
+            const std::int16_t* d16 = disparity16.row(v);
+            const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
+            const double ry = (v + roi_.y - projection_.cy) / projection_.fy;
+            const double du = 1.0 / projection_.fx; // d r.x / d u
+            const double rx0 = (roi_.x - projection_.cx) / projection_.fx;
+            // r . A = (A.x rx0 + A.y ry + A.z) + A.x du u
+            const double f0 = axes.f[0] * rx0 + axes.f[1] * ry + axes.f[2];
+            const double f1 = axes.f[0] * du;
+            const double l0 = axes.l[0] * rx0 + axes.l[1] * ry + axes.l[2];
+            const double l1 = axes.l[0] * du;
+            const double up0 = axes.u[0] * rx0 + axes.u[1] * ry + axes.u[2];
+            const double up1 = axes.u[0] * du;
+            for (int k = 0; k < boundaries; ++k) {
+                const auto ku = static_cast<std::size_t>(k);
+                // Bearing >= boundary k  <=>  g_k(u) = (r.L) cos(b_k) - (r.F) sin(b_k) >= 0 (for r.F > 0).
+                boundary0_[ku] = l0 * boundaryCos_[ku] - f0 * boundarySin_[ku];
+                boundary1_[ku] = l1 * boundaryCos_[ku] - f1 * boundarySin_[ku];
             }
-            const auto bearing = static_cast<float>(std::atan2(p.y, p.x) * kRadToDeg);
-            const int s = static_cast<int>(std::floor((bearing + hfovDeg_ / 2.0F) / binDeg));
-            if (s < 0 || s >= config_.sectorCount) {
-                continue;
+            int s = -1; // number of boundaries at or below the bearing, minus 1
+            for (int u = 0; u < roi_.width; ++u) {
+                const double uu = u;
+                const double rf = f0 + f1 * uu;
+                // The walk runs for every pixel so that s stays near the bearing; it is only used where r.F > 0.
+                while (s + 1 < boundaries &&
+                       boundary0_[static_cast<std::size_t>(s + 1)] + boundary1_[static_cast<std::size_t>(s + 1)] * uu >=
+                           0.0) {
+                    ++s;
+                }
+                while (s >= 0 &&
+                       boundary0_[static_cast<std::size_t>(s)] + boundary1_[static_cast<std::size_t>(s)] * uu < 0.0) {
+                    --s;
+                }
+                if (d16[u] <= 0 || d16[u] < minDisparity16 || !(rf > 0.0) || s < 0 || s >= config_.sectorCount) {
+                    continue;
+                }
+                const double z = fb / static_cast<double>(d16[u]);
+                const double rl = l0 + l1 * uu;
+                const auto range = static_cast<float>(z * std::sqrt(rf * rf + rl * rl) * axes.invNorm);
+                if (range >= config_.maxRangeM) {
+                    continue;
+                }
+                vote(s, range, static_cast<float>(ground.heightM + z * (up0 + up1 * uu)), label, u);
             }
-            const auto z = static_cast<float>(p.z);
-            int kind = -1;
-            if (z > config_.minHeightM) {
-                kind = 0;
-            } else if (z < -config_.minDepthM) {
-                kind = 1;
-            } else {
-                ++groundVotes_[static_cast<std::size_t>(s)];
-                continue;
-            }
-            const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
-            const bool labelled = label != nullptr && label[u] == wanted;
-            const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
-            if (!labelled && !config_.useDenseCue) {
-                ++kindVotes_[slot]; // unconfirmed: not an obstacle, but it forbids Clear
-                continue;
-            }
-            const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
-            const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
-            histograms_[slot * bins + bin] += weight;
-            float& extreme = extremes_[slot * bins + bin];
-            extreme = std::max(extreme, std::fabs(z));
-            kindVotes_[slot] += weight;
         }
     }
 

@@ -3,6 +3,7 @@
 
 #include "ugv/vision/ground_mismatch.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -68,8 +69,8 @@ struct Outcome {
     int groundTested = 0;
 };
 
-Outcome runScene(const std::string& name, double rangeM, std::uint8_t target, GroundLabel kind,
-                 double pitchDeg = 0.0, double rollDeg = 0.0)
+Outcome runScene(const std::string& name, double rangeM, std::uint8_t target, GroundLabel kind, double pitchDeg = 0.0,
+                 double rollDeg = 0.0)
 {
     Outcome out;
     auto scene = ugv::sim::makeScene(name, rangeM, 0.0, ugv::sim::GroundTexture::Asphalt, 3);
@@ -87,8 +88,7 @@ Outcome runScene(const std::string& name, double rangeM, std::uint8_t target, Gr
     const cv::Mat gt = rightLabels(*frame).rowRange(kY0, rig.height);
     cv::Mat warped(left.size(), CV_8UC1);
     std::vector<WarpSpan> spans(static_cast<std::size_t>(left.rows));
-    EXPECT_EQ(ugv::vision::warpGround(view(left), plane, kY0, view(warped), spans),
-              ugv::vision::GroundWarpStatus::Ok);
+    EXPECT_EQ(ugv::vision::warpGround(view(left), plane, kY0, view(warped), spans), ugv::vision::GroundWarpStatus::Ok);
     auto sut = GroundMismatch::create(GroundMismatchConfig{});
     EXPECT_TRUE(sut.has_value());
 
@@ -187,6 +187,98 @@ TEST(GroundMismatch, HoleAt3mIsLabelledNegativeOnItsPixels)
     EXPECT_GT(o.onTarget, 0.6 * o.expectedKind);
 }
 
+/// run() (16 residuals per universal-intrinsics step) against runReference() (one residual at a time): labels,
+/// residuals and counts bit-identical on simulator frames, for level and rolled/pitched rigs (the warp's scale is
+/// not 1, so the interpolation weights vary inside a window), several window sizes and residual ranges (fewer
+/// than 16 residuals: the scalar path), and narrow ROIs cut at a column offset.
+TEST(GroundMismatch, FastRunIsBitExactToReferenceOnSimulatorFrames)
+{
+    struct Case {
+        const char* scene;
+        double rangeM;
+        double pitchDeg;
+        double rollDeg;
+        int halfWidth;
+        int halfHeight;
+        int residualMin;
+        int residualMax;
+        int x0;
+        int width;
+    };
+    constexpr Case kCases[] = {
+        {"box", 3.0, 0.0, 0.0, 3, 1, -16, 48, 0, 640},     {"pole", 4.0, 0.0, 0.0, 3, 1, -16, 48, 0, 640},
+        {"hole", 3.0, 3.0, 1.0, 3, 1, -16, 48, 0, 640},    {"trench", 3.0, 0.0, -1.5, 2, 2, -20, 40, 0, 640},
+        {"box", 3.0, 0.0, 0.0, 4, 4, -127, 127, 0, 640},   {"box", 3.0, 0.0, 0.0, 3, 1, -5, 7, 0, 640},
+        {"person", 2.5, 0.0, 0.0, 3, 1, -16, 48, 200, 33}, {"box", 3.0, 0.0, 0.0, 3, 1, -16, 48, 251, 17},
+        {"box", 3.0, 0.0, 0.0, 3, 1, -16, 48, 300, 16},    {"box", 3.0, 0.0, 0.0, 3, 1, -16, 48, 250, 1},
+    };
+    int notGround = 0;
+    for (const Case& c : kCases) {
+        auto scene = ugv::sim::makeScene(c.scene, c.rangeM, 0.0, ugv::sim::GroundTexture::Asphalt, 3);
+        ASSERT_TRUE(scene.has_value());
+        scene->rig.pitchDeg = c.pitchDeg;
+        scene->rig.rollDeg = c.rollDeg;
+        auto frame = ugv::sim::render(*scene, {}, ugv::sim::RenderOptions{1});
+        ASSERT_TRUE(frame.has_value());
+        const ugv::sim::Rig& rig = scene->rig;
+        const ugv::vision::RectifiedProjection proj{rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM};
+        // The model of a level mount on a tilted render, so that much of the ground is searched too.
+        const ugv::vision::DisparityPlane plane =
+            ugv::vision::GroundPlane::fromMount({rig.heightM, 0.0, c.rollDeg}).disparityPlane(proj);
+        const cv::Mat left = frame->left.rowRange(kY0, rig.height);
+        const cv::Mat right = frame->right.rowRange(kY0, rig.height).colRange(c.x0, c.x0 + c.width);
+        cv::Mat warpedFull(left.size(), CV_8UC1);
+        std::vector<WarpSpan> spans(static_cast<std::size_t>(left.rows));
+        ASSERT_EQ(ugv::vision::warpGround(view(left), plane, kY0, view(warpedFull), spans),
+                  ugv::vision::GroundWarpStatus::Ok);
+        // A column window of the ROI: the spans in window coordinates; the left source stays the full row (the
+        // window's left view starts at c.x0, so the model's source columns are shifted by c.x0 as well).
+        const cv::Mat warped = warpedFull.colRange(c.x0, c.x0 + c.width);
+        const cv::Mat leftWindow = left.colRange(c.x0, c.x0 + c.width);
+        std::vector<WarpSpan> windowSpans(spans.size());
+        for (std::size_t r = 0; r < spans.size(); ++r) {
+            windowSpans[r] = {std::clamp(spans[r].begin - c.x0, 0, c.width),
+                              std::clamp(spans[r].end - c.x0, 0, c.width)};
+        }
+        ugv::vision::DisparityPlane windowPlane = plane; // left x = scale (x + x0) + offset - x0 in window columns
+        windowPlane.c += plane.a * c.x0;
+        GroundMismatchConfig config;
+        config.width = c.width;
+        config.height = left.rows;
+        config.windowHalfWidth = c.halfWidth;
+        config.windowHalfHeight = c.halfHeight;
+        config.residualMin = c.residualMin;
+        config.residualMax = c.residualMax;
+        auto fast = GroundMismatch::create(config);
+        auto reference = GroundMismatch::create(config);
+        ASSERT_TRUE(fast.has_value());
+        ASSERT_TRUE(reference.has_value());
+
+        ASSERT_EQ(fast->run(view(leftWindow), view(right), view(warped), windowSpans, windowPlane, kY0),
+                  GroundMismatchStatus::Ok);
+        ASSERT_EQ(reference->runReference(view(leftWindow), view(right), view(warped), windowSpans, windowPlane, kY0),
+                  GroundMismatchStatus::Ok);
+
+        int differentLabels = 0;
+        int differentResiduals = 0;
+        for (int r = 0; r < left.rows; ++r) {
+            for (int x = 0; x < c.width; ++x) {
+                differentLabels += fast->labels().at(x, r) != reference->labels().at(x, r) ? 1 : 0;
+                differentResiduals += fast->residuals().at(x, r) != reference->residuals().at(x, r) ? 1 : 0;
+            }
+        }
+        EXPECT_EQ(differentLabels, 0) << c.scene << " x0 " << c.x0 << " width " << c.width;
+        EXPECT_EQ(differentResiduals, 0) << c.scene << " x0 " << c.x0 << " width " << c.width;
+        EXPECT_EQ(fast->counts().tested, reference->counts().tested);
+        EXPECT_EQ(fast->counts().ground, reference->counts().ground);
+        EXPECT_EQ(fast->counts().positive, reference->counts().positive);
+        EXPECT_EQ(fast->counts().negative, reference->counts().negative);
+        EXPECT_EQ(fast->counts().unsure, reference->counts().unsure);
+        notGround += reference->counts().positive + reference->counts().negative + reference->counts().unsure;
+    }
+    EXPECT_GT(notGround, 500); // the residual search did run
+}
+
 TEST(GroundMismatch, RejectsInvalidConfigsAndInputs)
 {
     GroundMismatchConfig bad;
@@ -230,9 +322,9 @@ TEST(GroundMismatch, RunAllocatesNothingAndCvCannyWould)
     const cv::Mat left = frame->left.rowRange(y0, frame->left.rows);
     const cv::Mat right = frame->right.rowRange(y0, frame->right.rows);
     const ugv::sim::Rig& rig = scene->rig;
-    const ugv::vision::DisparityPlane plane = ugv::vision::GroundPlane::fromMount({rig.heightM, 0.0, 0.0})
-                                                  .disparityPlane({rig.focalPx, rig.focalPx, rig.cx(), rig.cy(),
-                                                                   rig.baselineM});
+    const ugv::vision::DisparityPlane plane =
+        ugv::vision::GroundPlane::fromMount({rig.heightM, 0.0, 0.0})
+            .disparityPlane({rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM});
     cv::Mat warped(left.size(), CV_8UC1);
     std::vector<WarpSpan> spans(static_cast<std::size_t>(left.rows));
     ASSERT_EQ(ugv::vision::warpGround(view(left), plane, y0, view(warped), spans), ugv::vision::GroundWarpStatus::Ok);

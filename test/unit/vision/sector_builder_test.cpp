@@ -339,3 +339,86 @@ TEST(SectorBuilder, SteadyStateBuildDoesNotAllocate)
 
 } // namespace
 } // namespace ugv::vision
+
+namespace ugv::vision {
+namespace {
+
+/// build() (per-row linear factors, boundary walk) against buildReference() (pixelToVehicle, atan2, hypot per
+/// pixel) on simulator ground-truth disparity with noise-free and noisy (+-0.5 px) values, for level, pitched and
+/// rolled ground planes, with and without labels: the sectors must be equal field by field.
+TEST(SectorBuilder, FastBuildEqualsPerPixelReferenceOnSimulatorInputs)
+{
+    struct Case {
+        const char* name;
+        double rangeM;
+        double bearingDeg;
+        double pitchDeg;
+        double rollDeg;
+    };
+    constexpr std::array<Case, 6> kCases{{{"empty", 5.0, 0.0, 0.0, 0.0},
+                                          {"pole", 3.0, 5.0, 0.0, 0.0},
+                                          {"box", 4.0, -10.0, 2.0, 0.0},
+                                          {"person", 2.5, 15.0, 0.0, 1.5},
+                                          {"hole", 3.0, 0.0, 3.0, -1.0},
+                                          {"trench", 3.0, 0.0, 0.0, 0.0}}};
+    int compared = 0;
+    for (const Case& c : kCases) {
+        auto scene = sim::makeScene(c.name, c.rangeM, c.bearingDeg, sim::GroundTexture::Asphalt, 3);
+        ASSERT_TRUE(scene.has_value());
+        auto rendered = sim::render(scene.value(), {}, sim::RenderOptions{1});
+        ASSERT_TRUE(rendered.has_value());
+        const auto& frame = rendered.value();
+        cv::Mat d16(kRoi.height, kRoi.width, CV_16SC1);
+        cv::Mat labels(kRoi.height, kRoi.width, CV_8UC1);
+        cv::RNG rng(7);
+        for (int v = 0; v < kRoi.height; ++v) {
+            for (int u = 0; u < kRoi.width; ++u) {
+                const float d = frame.disparity.at<float>(v + kRoi.y, u) + static_cast<float>(rng.uniform(-0.5, 0.5));
+                d16.at<std::int16_t>(v, u) = d > 0.0F ? static_cast<std::int16_t>(std::lround(d * 16.0F)) : -16;
+                const std::uint8_t l = frame.labels.at<std::uint8_t>(v + kRoi.y, u);
+                labels.at<std::uint8_t>(v, u) = l == 1 || l == 2 ? l : 0;
+            }
+        }
+        // The plane of a (slightly) different mount than the render: points off the plane vote everywhere.
+        const GroundPlane ground = GroundPlane::fromMount(Mount{kHeightM, c.pitchDeg, c.rollDeg});
+        for (const bool dense : {true, false}) {
+            SectorBuilderConfig config;
+            config.useDenseCue = dense;
+            auto fast = makeBuilder(config);
+            auto reference = makeBuilder(config);
+
+            ASSERT_EQ(fast.build(view16(d16), view(labels), ground, 5U, 7), BuildStatus::Ok);
+            ASSERT_EQ(reference.buildReference(view16(d16), view(labels), ground, 5U, 7), BuildStatus::Ok);
+
+            const ObstacleSectors& got = fast.sectors();
+            const ObstacleSectors& want = reference.sectors();
+            ASSERT_EQ(got.count, want.count);
+            EXPECT_EQ(got.sequence, want.sequence);
+            EXPECT_EQ(got.degraded, want.degraded);
+            for (int i = 0; i < got.count; ++i) {
+                const Sector& g = got.sectors[static_cast<std::size_t>(i)];
+                const Sector& w = want.sectors[static_cast<std::size_t>(i)];
+                EXPECT_EQ(g.state, w.state) << c.name << " sector " << i;
+                EXPECT_EQ(g.kind, w.kind) << c.name << " sector " << i;
+                EXPECT_EQ(g.danger, w.danger) << c.name << " sector " << i;
+                EXPECT_EQ(g.rangeM, w.rangeM) << c.name << " sector " << i;
+                EXPECT_EQ(g.heightM, w.heightM) << c.name << " sector " << i;
+                EXPECT_EQ(g.confidence, w.confidence) << c.name << " sector " << i;
+                compared += w.state == SectorState::Obstacle ? 1 : 0;
+            }
+        }
+    }
+    EXPECT_GT(compared, 0);
+}
+
+TEST(SectorBuilder, ReferenceBuildAlsoRejectsWrongSizes)
+{
+    auto sut = makeBuilder();
+    const cv::Mat small16(10, 10, CV_16SC1, cv::Scalar(0));
+
+    EXPECT_EQ(sut.buildReference(view16(small16), {}, kGround, 2U, 5), BuildStatus::WrongDisparitySize);
+    EXPECT_TRUE(sut.sectors().degraded);
+}
+
+} // namespace
+} // namespace ugv::vision

@@ -85,6 +85,13 @@ public:
     GroundMismatchStatus run(ConstImageViewU8 left, ConstImageViewU8 right, ConstImageViewU8 warped,
                              std::span<const WarpSpan> spans, const DisparityPlane& plane, int y0) noexcept;
 
+    /// The scalar reference of run(): the same algorithm and arithmetic with the residual search one disparity at a
+    /// time (run() evaluates 16 residuals per universal-intrinsics step). Labels, residuals and counts are
+    /// bit-identical to run()'s (tests and benchmarks).
+    /// Thread-safety: thread-bound. RT-safe: yes.
+    GroundMismatchStatus runReference(ConstImageViewU8 left, ConstImageViewU8 right, ConstImageViewU8 warped,
+                                      std::span<const WarpSpan> spans, const DisparityPlane& plane, int y0) noexcept;
+
     /// GroundLabel per ROI pixel of the last run.
     [[nodiscard]] ConstImageViewU8 labels() const noexcept { return labels_.view(); }
     /// Best residual disparity [px] at Positive/Negative/Unsure pixels, 0 elsewhere.
@@ -94,6 +101,9 @@ public:
 
 private:
     explicit GroundMismatch(const GroundMismatchConfig& config);
+    template <bool kSimd>
+    GroundMismatchStatus runImpl(ConstImageViewU8 left, ConstImageViewU8 right, ConstImageViewU8 warped,
+                                 std::span<const WarpSpan> spans, const DisparityPlane& plane, int y0) noexcept;
 
     GroundMismatchConfig config_;
     Image<std::uint8_t> labels_;

@@ -36,21 +36,21 @@ namespace ugv::vision {
 
 struct SectorBuilderConfig {
     int sectorCount = 64;
-    float minHeightM = 0.10F;         ///< [m] positive obstacle points are higher than this
-    float minDepthM = 0.10F;          ///< [m] negative obstacle points are deeper than this
-    float maxRangeM = 12.0F;          ///< [m] points farther away are ignored (disparity too coarse)
-    float rangeBinM = 0.02F;          ///< [m] histogram resolution
-    int minSupport = 40;              ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
-                                      ///< mismatch blobs on empty ground through: 23..33 votes measured)
-    float clusterWindowM = 0.15F;     ///< [m] cluster window, fixed part
-    float clusterFraction = 0.05F;    ///< cluster window, part proportional to the range
-    float rangePercentile = 0.10F;    ///< quantile of the cluster's votes reported as the range, [0, 1)
+    float minHeightM = 0.10F;          ///< [m] positive obstacle points are higher than this
+    float minDepthM = 0.10F;           ///< [m] negative obstacle points are deeper than this
+    float maxRangeM = 12.0F;           ///< [m] points farther away are ignored (disparity too coarse)
+    float rangeBinM = 0.02F;           ///< [m] histogram resolution
+    int minSupport = 40;               ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
+                                       ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
+    float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
+    float rangePercentile = 0.10F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
     float clearGroundFraction = 0.25F; ///< ground support (fraction of the sector's pixels) needed for Clear
-    int labelWeight = 1;              ///< extra votes of a pixel that the label image confirms
-    bool useDenseCue = true;          ///< unlabelled pixels above/below the ground vote too
-    float confidenceSupport = 200.0F; ///< votes that give confidence 1
-    float dangerDistanceM = 1.5F;     ///< [m]
-    float cautionDistanceM = 5.0F;    ///< [m]
+    int labelWeight = 1;               ///< extra votes of a pixel that the label image confirms
+    bool useDenseCue = true;           ///< unlabelled pixels above/below the ground vote too
+    float confidenceSupport = 200.0F;  ///< votes that give confidence 1
+    float dangerDistanceM = 1.5F;      ///< [m]
+    float cautionDistanceM = 5.0F;     ///< [m]
 };
 
 enum class BuildStatus : std::uint8_t {
@@ -81,6 +81,13 @@ public:
     BuildStatus build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
                       std::uint64_t sequence, std::int64_t stampNs) noexcept;
 
+    /// The per-pixel reference of build() (GroundPlane::pixelToVehicle, atan2 and hypot per pixel; tests and
+    /// benchmarks). build() computes the same points from per-row linear factors (the vehicle point is linear in
+    /// 1/d for a fixed plane) and finds the sector by walking the sector boundaries; the results agree up to
+    /// double rounding at a bin or sector boundary.
+    BuildStatus buildReference(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                               const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs) noexcept;
+
     /// Marks all sectors Unknown and degraded (callers' failure paths).
     void setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) noexcept;
 
@@ -95,6 +102,8 @@ private:
         float rangeM = 0.0F;
     };
     [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram) const noexcept;
+    BuildStatus buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
+                          std::uint64_t sequence, std::int64_t stampNs, bool reference) noexcept;
 
     SectorBuilderConfig config_;
     RectifiedProjection projection_;
@@ -103,11 +112,15 @@ private:
     int bins_ = 0;
     float hfovDeg_ = 0.0F;
     ObstacleSectors sectors_;
-    std::vector<std::uint32_t> histograms_;  ///< [sector][kind 0 positive, 1 negative][bin] votes
-    std::vector<float> extremes_;            ///< [sector][kind][bin] max height / depth [m]
-    std::vector<std::uint32_t> groundVotes_; ///< [sector]
-    std::vector<std::uint32_t> kindVotes_;   ///< [sector][kind] all votes
+    std::vector<std::uint32_t> histograms_;      ///< [sector][kind 0 positive, 1 negative][bin] votes
+    std::vector<float> extremes_;                ///< [sector][kind][bin] max height / depth [m]
+    std::vector<std::uint32_t> groundVotes_;     ///< [sector]
+    std::vector<std::uint32_t> kindVotes_;       ///< [sector][kind] all votes
     std::vector<std::uint32_t> pixelsPerSector_; ///< analysed pixels whose column bearing is in the sector
+    std::vector<double> boundaryCos_;            ///< [sectorCount + 1] cos / sin of the sector boundary bearings
+    std::vector<double> boundarySin_;
+    std::vector<double> boundary0_; ///< [sectorCount + 1] per-row boundary functions g_k(u) = b0 + b1 u
+    std::vector<double> boundary1_;
 };
 
 } // namespace ugv::vision
