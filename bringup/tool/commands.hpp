@@ -10,5 +10,7 @@ int runCalibrate(int argc, char** argv);
 int runCheckConfig(int argc, char** argv);
 int runRectify(int argc, char** argv);
 int runSim(int argc, char** argv);
+int runDetect(int argc, char** argv);
+int runEval(int argc, char** argv);
 
 } // namespace ugv::tool

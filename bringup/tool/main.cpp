@@ -19,6 +19,8 @@ constexpr Subcommand kSubcommands[] = {
     {"check-config", "validate a service config file and print the effective config", ugv::tool::runCheckConfig},
     {"rectify", "rectify image pairs with a calibration and report the row alignment", ugv::tool::runRectify},
     {"sim", "generate synthetic stereo data (chessboard pairs for calibration)", ugv::tool::runSim},
+    {"detect", "detect obstacles in one stereo pair (sectors, JSON, overlay)", ugv::tool::runDetect},
+    {"eval", "evaluate detection on simulator scenes and matching on Middlebury data", ugv::tool::runEval},
 };
 
 void printHelp(std::ostream& out)

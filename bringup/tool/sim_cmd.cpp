@@ -34,7 +34,7 @@ constexpr double kMaxNoise = 50.0;
 constexpr double kDefaultRangeM = 5.0;
 constexpr double kMaxRangeM = 200.0;
 constexpr double kMaxBearingDeg = 180.0;
-constexpr double kMaxTiltDeg = 45.0;   // [deg] pitch and roll
+constexpr double kMaxTiltDeg = 45.0; // [deg] pitch and roll
 constexpr double kMaxHeightM = 10.0;
 constexpr double kDefaultFps = 10.0;
 constexpr double kMaxFps = 100.0;
@@ -108,7 +108,6 @@ bool writeTruth(const std::string& path, const SimRig& rig, const SimBoard& boar
     }
 }
 
-
 int runChessboard(const Args& args)
 {
     const auto pairs = args.number("pairs", kDefaultPairs, 1, kMaxPairs);
@@ -151,8 +150,8 @@ int runChessboard(const Args& args)
     if (!writeTruth(truthPath, rig, board, static_cast<int>(poses.size()))) {
         return reportFailure(Error{truthPath, "cannot write the file", "check the folder"});
     }
-    std::cout << "wrote " << poses.size() << " chessboard pairs and truth.yaml to " << out.string()
-              << " (fx " << rig.fx << " px, baseline " << rig.baselineM << " m)\n";
+    std::cout << "wrote " << poses.size() << " chessboard pairs and truth.yaml to " << out.string() << " (fx " << rig.fx
+              << " px, baseline " << rig.baselineM << " m)\n";
     return 0;
 }
 
@@ -176,8 +175,8 @@ int runCatalogueScene(const Args& args)
                                    "give the obstacle's distance in metres, e.g. --range 5"});
     }
     if (*height <= 0.0) {
-        return reportFailure(Error{"ugvsense sim --height", "camera height " + args.get("height") +
-                                                                " m is not positive",
+        return reportFailure(Error{"ugvsense sim --height",
+                                   "camera height " + args.get("height") + " m is not positive",
                                    "give the camera height above the ground in metres, e.g. --height 0.59"});
     }
     const std::string textureName = args.get("texture", "asphalt");
@@ -211,8 +210,8 @@ int runCatalogueScene(const Args& args)
     }
     std::cout << "wrote scene '" << name << "' (range " << *range << " m, bearing " << *bearing << " deg, "
               << textureName << ", pitch " << *pitch << " deg, roll " << *roll << " deg, height " << *height
-              << " m) to " << out.string() << ": " << name << "_{left,right,disparity,depth,labels,ids}.png, "
-              << name << "_sectors.json, calibration.yaml\n";
+              << " m) to " << out.string() << ": " << name << "_{left,right,disparity,depth,labels,ids}.png, " << name
+              << "_sectors.json, calibration.yaml\n";
     return 0;
 }
 
@@ -235,9 +234,8 @@ int runCourse(const Args& args)
         return reportFailure(Error{"ugvsense sim --course", course.error().what, course.error().fix});
     }
     const std::size_t total = course->poses.size();
-    const std::size_t count = args.has("frames") && *frames >= 1.0
-                                  ? std::min(total, static_cast<std::size_t>(*frames))
-                                  : total;
+    const std::size_t count =
+        args.has("frames") && *frames >= 1.0 ? std::min(total, static_cast<std::size_t>(*frames)) : total;
     const std::filesystem::path out = args.get("out");
     if (auto prepared = prepareOutput(out); !prepared) {
         return reportFailure(prepared.error());
@@ -312,8 +310,8 @@ int runSim(int argc, char** argv)
                                              "see 'ugvsense sim --help' and 'ugvsense sim --list'"});
     }
     if (!args.has("out")) {
-        return reportUsageError("sim", Error{"ugvsense sim", "missing required option '--out DIR'",
-                                             "see 'ugvsense sim --help'"});
+        return reportUsageError(
+            "sim", Error{"ugvsense sim", "missing required option '--out DIR'", "see 'ugvsense sim --help'"});
     }
     if (args.has("course")) {
         return runCourse(args);

@@ -85,8 +85,7 @@ inline int slideAndIntersect(std::int16_t* window, const std::int16_t* enter, co
 } // namespace
 
 Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConfig& config, cv::Size imageSize,
-                                                       const RectifiedProjection& projection,
-                                                       const GroundPlane& ground)
+                                                       const RectifiedProjection& projection, const GroundPlane& ground)
 {
     const int r = config.windowRadius;
     const int win = 2 * r + 1;
@@ -100,8 +99,7 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
                                       "give the camera's image size"));
     }
     if (!(config.roiTopFraction >= 0.0 && config.roiTopFraction < 1.0)) {
-        return Unexpected(configError("roiTopFraction " + std::to_string(config.roiTopFraction) +
-                                          " is outside [0, 1)",
+        return Unexpected(configError("roiTopFraction " + std::to_string(config.roiTopFraction) + " is outside [0, 1)",
                                       "use e.g. 0.5 (bottom half)"));
     }
     const int roiTop = static_cast<int>(std::lround(imageSize.height * config.roiTopFraction));
@@ -123,8 +121,7 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
                                       "use e.g. 0.5, 0.65 and 0.7"));
     }
     if (config.minObstacleRows < 1 || config.minObstacleRows > imageSize.height - roiTop) {
-        return Unexpected(configError("minObstacleRows " + std::to_string(config.minObstacleRows) +
-                                          " is out of range",
+        return Unexpected(configError("minObstacleRows " + std::to_string(config.minObstacleRows) + " is out of range",
                                       "use 1..ROI rows, e.g. 3"));
     }
     if (config.sectorCount < 1 || config.sectorCount > kMaxSectors) {
@@ -379,8 +376,8 @@ void ColourFreeSpace::fillSectors(ObstacleSectors& out) noexcept
     minRange.fill(std::numeric_limits<float>::infinity());
     const float binWidth = hfovDeg_ / static_cast<float>(out.count);
     for (std::size_t x = 0; x < columnRange_.size(); ++x) {
-        const int index = std::clamp(
-            static_cast<int>(std::floor((columnBearing_[x] + hfovDeg_ / 2.0F) / binWidth)), 0, out.count - 1);
+        const int index = std::clamp(static_cast<int>(std::floor((columnBearing_[x] + hfovDeg_ / 2.0F) / binWidth)), 0,
+                                     out.count - 1);
         const auto i = static_cast<std::size_t>(index);
         seen[i] = 1;
         if (columnRange_[x] < minRange[i] || (columnRange_[x] == minRange[i] && columnHit_[x] != 0)) {

@@ -99,8 +99,8 @@ GroundWarpStatus warpGround(ConstImageViewU8 left, const DisparityPlane& plane, 
     return warpImpl<true>(left, plane, y0, warped, spans);
 }
 
-GroundWarpStatus warpGroundReference(ConstImageViewU8 left, const DisparityPlane& plane, int y0,
-                                     ImageViewU8 warped, std::span<WarpSpan> spans) noexcept
+GroundWarpStatus warpGroundReference(ConstImageViewU8 left, const DisparityPlane& plane, int y0, ImageViewU8 warped,
+                                     std::span<WarpSpan> spans) noexcept
 {
     return warpImpl<false>(left, plane, y0, warped, spans);
 }

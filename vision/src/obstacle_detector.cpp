@@ -12,14 +12,14 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
                                                          const GroundPlane& configuredGround)
 {
     if (roi.empty() || config.marginRows < 0 || config.marginRows >= roi.height) {
-        return Unexpected(Error{"ObstacleDetector::create",
-                                "ROI is empty or marginRows " + std::to_string(config.marginRows) +
-                                    " is not below its height",
-                                "check roi.matcher_margin_rows"});
+        return Unexpected(
+            Error{"ObstacleDetector::create",
+                  "ROI is empty or marginRows " + std::to_string(config.marginRows) + " is not below its height",
+                  "check roi.matcher_margin_rows"});
     }
     if (!(configuredGround.heightM > 0.0)) {
-        return Unexpected(Error{"ObstacleDetector::create", "configured ground has no positive camera height",
-                                "set mount.height_m"});
+        return Unexpected(
+            Error{"ObstacleDetector::create", "configured ground has no positive camera height", "set mount.height_m"});
     }
     auto matcherResult = RoiMatcher::create(config.matcher, cv::Size(roi.width, roi.height));
     if (!matcherResult) {
@@ -101,7 +101,8 @@ void ObstacleDetector::labelsToLeftGrid(const DisparityPlane& plane) noexcept
                 continue;
             }
             // The right pixel sees the point the left image shows at the ground-model source plus the residual.
-            const int xl = static_cast<int>(std::lround(map.scale * static_cast<float>(xr) + map.offset)) + residual[xr];
+            const int xl =
+                static_cast<int>(std::lround(map.scale * static_cast<float>(xr) + map.offset)) + residual[xr];
             if (xl >= 0 && xl < out.width()) {
                 dst[xl] = labels[xr];
             }

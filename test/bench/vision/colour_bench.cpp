@@ -34,10 +34,10 @@ cv::Mat makeImage(int width, int height)
         for (int x = 0; x < width; ++x) {
             const int v = value.at<std::uint8_t>(y, x);
             const bool block = x > width / 3 && x < width / 2 && y > height * 6 / 10 && y < height * 7 / 10;
-            hsv.at<cv::Vec3b>(y, x) = block ? cv::Vec3b(12, 120, static_cast<std::uint8_t>(v))
-                                            : cv::Vec3b(static_cast<std::uint8_t>(50 + (v - 128) / 16),
-                                                        static_cast<std::uint8_t>(140 + (v - 128) / 4),
-                                                        static_cast<std::uint8_t>(v));
+            hsv.at<cv::Vec3b>(y, x) =
+                block ? cv::Vec3b(12, 120, static_cast<std::uint8_t>(v))
+                      : cv::Vec3b(static_cast<std::uint8_t>(50 + (v - 128) / 16),
+                                  static_cast<std::uint8_t>(140 + (v - 128) / 4), static_cast<std::uint8_t>(v));
         }
     }
     cv::Mat bgr;
@@ -64,8 +64,8 @@ ColourFreeSpaceConfig configFor(int width)
 ColourFreeSpace makeSut(int width, int height)
 {
     const double scale = width / 640.0;
-    const ugv::vision::RectifiedProjection projection{546 * scale, 546 * scale, (width - 1) / 2.0,
-                                                      (height - 1) / 2.0, 0.3};
+    const ugv::vision::RectifiedProjection projection{546 * scale, 546 * scale, (width - 1) / 2.0, (height - 1) / 2.0,
+                                                      0.3};
     auto sut = ColourFreeSpace::create(configFor(width), {width, height}, projection,
                                        ugv::vision::GroundPlane::fromMount({0.59, 0.0, 0.0}));
     return std::move(sut).value();

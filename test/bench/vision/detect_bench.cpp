@@ -44,9 +44,9 @@ void BM_FullFrameSgbmBaseline(benchmark::State& state)
     cv::setNumThreads(1);
     const RoiMatcherConfig c;
     constexpr int kArea = 25;
-    auto sgbm = cv::StereoSGBM::create(0, c.numDisparities, c.blockSize, 8 * kArea, 32 * kArea, c.disp12MaxDiff,
-                                       c.preFilterCap, c.uniquenessRatio, c.speckleWindowSize, c.speckleRange,
-                                       cv::StereoSGBM::MODE_SGBM_3WAY);
+    auto sgbm =
+        cv::StereoSGBM::create(0, c.numDisparities, c.blockSize, 8 * kArea, 32 * kArea, c.disp12MaxDiff, c.preFilterCap,
+                               c.uniquenessRatio, c.speckleWindowSize, c.speckleRange, cv::StereoSGBM::MODE_SGBM_3WAY);
     cv::Mat disparity(480, 640, CV_16SC1);
     for (auto _ : state) {
         sgbm->compute(frame().left, frame().right, disparity);
@@ -57,9 +57,9 @@ void BM_FullFrameSgbmBaseline(benchmark::State& state)
 
 void BM_DetectorPipeline(benchmark::State& state)
 {
-    auto sut = ObstacleDetector::create(DetectorConfig{}, kProjection, kRoi,
-                                        GroundPlane::fromMount(Mount{0.59, 0.0, 0.0}))
-                   .value();
+    auto sut =
+        ObstacleDetector::create(DetectorConfig{}, kProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0}))
+            .value();
     std::uint64_t sequence = 0;
     for (auto _ : state) {
         const auto& out = sut.process(roiView(frame().left), roiView(frame().right), ++sequence, 0);
@@ -88,10 +88,14 @@ void BM_SectorBuilder(benchmark::State& state)
     }
 }
 
-BENCHMARK(BM_FullFrameSgbmBaseline)->Unit(benchmark::kMillisecond)->Repetitions(3)->ComputeStatistics(
-    "max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
-BENCHMARK(BM_DetectorPipeline)->Unit(benchmark::kMillisecond)->Repetitions(3)->ComputeStatistics(
-    "max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
+BENCHMARK(BM_FullFrameSgbmBaseline)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(3)
+    ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
+BENCHMARK(BM_DetectorPipeline)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(3)
+    ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
 BENCHMARK(BM_RoiMatcher)->Unit(benchmark::kMillisecond)->Repetitions(3);
 BENCHMARK(BM_SectorBuilder)->Unit(benchmark::kMillisecond)->Repetitions(3);
 

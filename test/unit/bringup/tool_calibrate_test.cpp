@@ -1,5 +1,7 @@
 // Runs the built `ugvsense` binary: sim -> calibrate -> rectify on rendered pairs, and the error paths.
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -37,7 +39,9 @@ ToolRun run(const std::string& args)
 
 std::filesystem::path tempDir(const std::string& name)
 {
-    const auto dir = std::filesystem::temp_directory_path() / "ugv-tool-calibrate-test" / name;
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("ugv-tool-calibrate-test-" + std::to_string(::getpid())) /
+                     name; // per process: parallel ctest runs
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;

@@ -1,6 +1,8 @@
 // Runs the built `ugvsense sim` binary: every simulator scene renders and writes its files, courses write numbered
 // samples and poses, --list/--help, the chessboard scene still works, and bad input fails with what/where/fix.
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -37,7 +39,8 @@ ToolRun run(const std::string& args)
 
 std::filesystem::path tempDir(const std::string& name)
 {
-    const auto dir = std::filesystem::temp_directory_path() / "ugv-tool-sim-test" / name;
+    const auto dir = std::filesystem::temp_directory_path() / ("ugv-tool-sim-test-" + std::to_string(::getpid())) /
+                     name; // per process: parallel ctest runs
     std::filesystem::remove_all(dir);
     return dir;
 }
@@ -52,11 +55,12 @@ TEST(ToolSim, EverySimulatorSceneRendersAndWritesItsFiles)
     for (const std::string& name : ugv::sim::sceneNames()) {
         const auto dir = tempDir("scene-" + name);
 
-        const ToolRun sim = run("sim --scene " + name + " --range 4 --bearing 3 --texture gravel --out " + dir.string());
+        const ToolRun sim =
+            run("sim --scene " + name + " --range 4 --bearing 3 --texture gravel --out " + dir.string());
 
         ASSERT_EQ(sim.exitCode, 0) << name << ": " << sim.output;
-        for (const char* suffix : {"_left.png", "_right.png", "_disparity.png", "_depth.png", "_labels.png",
-                                   "_ids.png", "_sectors.json"}) {
+        for (const char* suffix :
+             {"_left.png", "_right.png", "_disparity.png", "_depth.png", "_labels.png", "_ids.png", "_sectors.json"}) {
             const auto path = dir / (name + suffix);
             EXPECT_TRUE(std::filesystem::is_regular_file(path)) << path;
             EXPECT_GT(std::filesystem::file_size(path), 0U) << path;
@@ -86,8 +90,8 @@ TEST(ToolSim, CourseWritesNumberedFramesCalibrationAndPoses)
     const ToolRun sim = run("sim --course default --frames 3 --fps 5 --out " + dir.string());
 
     ASSERT_EQ(sim.exitCode, 0) << sim.output;
-    for (const char* file : {"frame_0000_left.png", "frame_0001_right.png", "frame_0002_sectors.json",
-                             "calibration.yaml", "poses.csv"}) {
+    for (const char* file :
+         {"frame_0000_left.png", "frame_0001_right.png", "frame_0002_sectors.json", "calibration.yaml", "poses.csv"}) {
         EXPECT_TRUE(std::filesystem::is_regular_file(dir / file)) << file;
     }
     EXPECT_FALSE(std::filesystem::exists(dir / "frame_0003_left.png"));

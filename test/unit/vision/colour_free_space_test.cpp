@@ -27,7 +27,7 @@ using ugv::vision::ColourFreeSpaceConfig;
 using ugv::vision::ColourFreeSpaceStatus;
 
 struct Tint {
-    int obstacleHue = 12;        // brown (OpenCV hue 0..179)
+    int obstacleHue = 12; // brown (OpenCV hue 0..179)
     int obstacleSat = 120;
     bool greyEverything = false; // the hard case: no colour at all
 };

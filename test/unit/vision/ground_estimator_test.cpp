@@ -64,7 +64,8 @@ cv::Mat syntheticDisparity(const Mount& mount, double noisePx, double outlierFra
             if (rng.uniform(0.0, 1.0) < outlierFraction) {
                 d = rng.uniform(-1.0, 120.0);
             }
-            disparity.at<std::int16_t>(r, x) = d < 0.0 ? std::int16_t{-16} : static_cast<std::int16_t>(cvRound(d * 16.0));
+            disparity.at<std::int16_t>(r, x) =
+                d < 0.0 ? std::int16_t{-16} : static_cast<std::int16_t>(cvRound(d * 16.0));
         }
     }
     return disparity;

@@ -55,9 +55,9 @@ struct WarpCase {
 
 TEST(GroundWarp, SimdMatchesScalarReferenceForAllWidthsAndOffsets)
 {
-    const std::vector<WarpCase> cases = {{1, 0, 0},       {kLanes - 1, 3, 232}, {kLanes, 1, 100},
-                                         {kLanes + 1, 5, 232}, {2 * kLanes + 3, 7, 240}, {640, 0, 232},
-                                         {637, 3, 300}};
+    const std::vector<WarpCase> cases = {
+        {1, 0, 0},     {kLanes - 1, 3, 232}, {kLanes, 1, 100}, {kLanes + 1, 5, 232}, {2 * kLanes + 3, 7, 240},
+        {640, 0, 232}, {637, 3, 300}};
     constexpr int kRows = 12;
     for (const WarpCase& c : cases) {
         for (const DisparityPlane& plane :
@@ -128,7 +128,8 @@ TEST(GroundWarp, MatchesCvRemapInsideTheValidSpanAndIsZeroOutside)
                 EXPECT_FALSE(inside) << r << "," << x;
             }
             if (inside) {
-                EXPECT_LE(std::abs(warped.at<std::uint8_t>(r, x) - expected.at<std::uint8_t>(r, x)), 1) << r << "," << x;
+                EXPECT_LE(std::abs(warped.at<std::uint8_t>(r, x) - expected.at<std::uint8_t>(r, x)), 1)
+                    << r << "," << x;
                 ++compared;
             } else {
                 EXPECT_EQ(warped.at<std::uint8_t>(r, x), 0) << r << "," << x;

@@ -88,8 +88,8 @@ TEST(ObstacleDetector, DetectsPolesInTheRightSectorWithinRangeTolerance)
             }
             ASSERT_GT(gtObstacles, 0);
             const double tolerance = std::max(0.10, 0.03 * rangeM);
-            std::printf("[ MEASURED ] pole %.0f m at %+.0f deg: range %.3f m, error %+.3f m (tolerance %.2f)\n",
-                        rangeM, bearingDeg, nearest, nearest - rangeM, tolerance);
+            std::printf("[ MEASURED ] pole %.0f m at %+.0f deg: range %.3f m, error %+.3f m (tolerance %.2f)\n", rangeM,
+                        bearingDeg, nearest, nearest - rangeM, tolerance);
             EXPECT_NEAR(nearest, rangeM, tolerance) << rangeM << " m, " << bearingDeg << " deg";
         }
     }

@@ -8,15 +8,15 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "alloc_counter.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
-#include "alloc_counter.hpp"
 
 namespace ugv::vision {
 namespace {
 
-constexpr int kRoiY = 232;      // Rectifier default: round(480 * 0.5) - 8
-constexpr int kFirstRow = 240;  // analysed rows (the simulator's ground-truth ROI)
+constexpr int kRoiY = 232;     // Rectifier default: round(480 * 0.5) - 8
+constexpr int kFirstRow = 240; // analysed rows (the simulator's ground-truth ROI)
 // Ground rows within ~16 m (d >= 10 px). Above them, near the horizon, the foreshortened, low-contrast ground
 // texture defeats SGBM (measured: 60 % bad-1px in rows 240..259); those points lie beyond the sector builder's
 // maxRangeM (12 m) and are ignored there. The full-ROI figure is printed too.
@@ -66,8 +66,7 @@ struct Agreement {
     double meanAbs = 0.0;
 };
 
-Agreement agreement(const cv::Mat& disp16, const cv::Mat& gt, const cv::Mat& labels, int label,
-                    int firstRow = kEvalRow)
+Agreement agreement(const cv::Mat& disp16, const cv::Mat& gt, const cv::Mat& labels, int label, int firstRow = kEvalRow)
 {
     int valid = 0;
     int matched = 0;
@@ -133,9 +132,9 @@ TEST(RoiMatcher, PoleAtFiveMetresWithinHalfPixel)
     ASSERT_GT(errors.size(), 100U);
     std::sort(errors.begin(), errors.end());
     const double median = errors[errors.size() / 2];
-    const double within = static_cast<double>(std::count_if(errors.begin(), errors.end(),
-                                                            [](double e) { return e <= 0.5; })) /
-                          static_cast<double>(errors.size());
+    const double within =
+        static_cast<double>(std::count_if(errors.begin(), errors.end(), [](double e) { return e <= 0.5; })) /
+        static_cast<double>(errors.size());
     std::printf("[ MEASURED ] pole 5 m: %zu pixels matched, median |err| %.3f px, %.1f %% within 0.5 px\n",
                 errors.size(), median, 100.0 * within);
     EXPECT_LT(median, 0.5);

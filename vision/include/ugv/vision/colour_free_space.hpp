@@ -46,25 +46,25 @@ static_assert(sizeof(BgrPixel) == 3, "BgrPixel must match CV_8UC3");
 /// A view of a BGR image; width in pixels, stride in bytes (as cv::Mat::step).
 using ConstBgrView = ImageView<const BgrPixel>;
 
-inline constexpr int kHueBins = 16;                    ///< over OpenCV hue 0..179
-inline constexpr int kSatBins = 8;                     ///< over saturation 0..255
+inline constexpr int kHueBins = 16;                     ///< over OpenCV hue 0..179
+inline constexpr int kSatBins = 8;                      ///< over saturation 0..255
 inline constexpr int kColourBins = kHueBins * kSatBins; ///< bin index = hueBin * kSatBins + satBin
 
 struct ColourFreeSpaceConfig {
-    double roiTopFraction = 0.5;     ///< first analysed row = round(height * roiTopFraction)
-    int patchWidth = 160;            ///< [px] reference patch, centred horizontally
-    int patchHeight = 120;           ///< [px] reference patch, ending at the bottom row
-    int windowRadius = 7;            ///< [px] comparison window (2 r + 1)^2, r in [1, 15]
-    double matchThreshold = 0.5;     ///< intersection >= this => free, in (0, 1]
-    int minObstacleRows = 3;         ///< [px] consecutive non-free rows that end a column's free run
+    double roiTopFraction = 0.5;      ///< first analysed row = round(height * roiTopFraction)
+    int patchWidth = 160;             ///< [px] reference patch, centred horizontally
+    int patchHeight = 120;            ///< [px] reference patch, ending at the bottom row
+    int windowRadius = 7;             ///< [px] comparison window (2 r + 1)^2, r in [1, 15]
+    double matchThreshold = 0.5;      ///< intersection >= this => free, in (0, 1]
+    int minObstacleRows = 3;          ///< [px] consecutive non-free rows that end a column's free run
     double minPatchSaturation = 40.0; ///< mean saturation (0..255) of the patch below which it is not ground-like
-    double minPatchValue = 30.0;     ///< mean brightness (0..255) below which hue is noise
-    double patchSelfMatch = 0.65;    ///< a window of the patch matches the patch when its intersection >= this
+    double minPatchValue = 30.0;      ///< mean brightness (0..255) below which hue is noise
+    double patchSelfMatch = 0.65;     ///< a window of the patch matches the patch when its intersection >= this
     double minPatchConsistency = 0.7; ///< fraction of the patch's own windows that must match the patch
-    double maxRangeM = 50.0;         ///< [m] rows farther than this count as the horizon (end of the scan)
-    int sectorCount = 64;            ///< sectors over the horizontal field of view, 1..kMaxSectors
-    float dangerDistanceM = 1.5F;    ///< [m] classify(): Red below
-    float cautionDistanceM = 5.0F;   ///< [m] classify(): Blue below; a free run must reach this to be Clear
+    double maxRangeM = 50.0;          ///< [m] rows farther than this count as the horizon (end of the scan)
+    int sectorCount = 64;             ///< sectors over the horizontal field of view, 1..kMaxSectors
+    float dangerDistanceM = 1.5F;     ///< [m] classify(): Red below
+    float cautionDistanceM = 5.0F;    ///< [m] classify(): Blue below; a free run must reach this to be Clear
 };
 
 /// Outcome of ColourFreeSpace::process; no strings on the frame path.
@@ -141,8 +141,8 @@ private:
     Image<std::uint8_t> scores_;
     std::vector<std::int16_t> colHist_; ///< width x kColourBins, vertical window histograms of the current row
     std::array<std::int16_t, kColourBins> ref_{};
-    std::vector<float> columnRange_;   ///< [m]
-    std::vector<float> columnBearing_; ///< [deg]
+    std::vector<float> columnRange_;      ///< [m]
+    std::vector<float> columnBearing_;    ///< [deg]
     std::vector<std::uint8_t> columnHit_; ///< 1: run ended at an obstacle; 0: reached the top
     std::vector<int> topRow_;             ///< per column: first ROI row whose ground point is within maxRangeM
     std::vector<std::uint16_t> rowSum_;   ///< 3 x width vertical 3-row sums of B, G, R (blur)

@@ -30,12 +30,12 @@
 namespace ugv::vision {
 
 struct GroundEstimatorConfig {
-    RectifiedProjection projection; ///< full-frame rectified projection
-    Mount mount;                    ///< configured mount: the prior, the band centre and the fallback
-    int width = 640;                ///< ROI width [px]
-    int height = 248;               ///< ROI height [px]
-    int y0 = 232;                   ///< full-frame row of ROI row 0 [px]
-    int sampleStep = 4;             ///< candidate grid step [px]
+    RectifiedProjection projection;     ///< full-frame rectified projection
+    Mount mount;                        ///< configured mount: the prior, the band centre and the fallback
+    int width = 640;                    ///< ROI width [px]
+    int height = 248;                   ///< ROI height [px]
+    int y0 = 232;                       ///< full-frame row of ROI row 0 [px]
+    int sampleStep = 4;                 ///< candidate grid step [px]
     double candidateTolerancePx = 20.0; ///< |d - d_g(config)| below this makes a candidate [px]
     double inlierTolerancePx = 1.0;     ///< RANSAC / refinement inlier distance [px]
     int ransacIterations = 64;
@@ -45,7 +45,7 @@ struct GroundEstimatorConfig {
     double heightBandM = 0.15;                  ///< [m] allowed |height - configured|
     double pitchBandDeg = 5.0;                  ///< [deg] allowed |pitch - configured|
     double rollBandDeg = 5.0;                   ///< [deg] allowed |roll - configured|
-    double smoothing = 0.5; ///< weight of the new measurement, (0, 1]; 1 = no smoothing
+    double smoothing = 0.5;                     ///< weight of the new measurement, (0, 1]; 1 = no smoothing
 };
 
 enum class GroundFallbackReason : std::uint8_t {
@@ -58,13 +58,13 @@ enum class GroundFallbackReason : std::uint8_t {
 };
 
 struct GroundEstimate {
-    GroundPlane plane;           ///< the plane to use (smoothed estimate, or the configured one on fallback)
-    DisparityPlane disparity;    ///< plane.disparityPlane(projection), full-frame [px]
-    bool reliable = false;       ///< false: configured fallback
+    GroundPlane plane;        ///< the plane to use (smoothed estimate, or the configured one on fallback)
+    DisparityPlane disparity; ///< plane.disparityPlane(projection), full-frame [px]
+    bool reliable = false;    ///< false: configured fallback
     GroundFallbackReason reason = GroundFallbackReason::None;
-    int candidates = 0;          ///< candidates this frame
-    int inliers = 0;             ///< inliers of the refined fit this frame
-    DisparityPlane measured;     ///< this frame's refined fit (valid when reason is None or OutOfBand)
+    int candidates = 0;      ///< candidates this frame
+    int inliers = 0;         ///< inliers of the refined fit this frame
+    DisparityPlane measured; ///< this frame's refined fit (valid when reason is None or OutOfBand)
 };
 
 /// Thread-safety: thread-bound (update() mutates state). RT-safe: update() yes (no allocation); create() no.

@@ -36,8 +36,8 @@ struct WarpSpan {
 
 enum class GroundWarpStatus : std::uint8_t {
     Ok,
-    SizeMismatch,       ///< left and warped differ in size, or spans.size() < warped.height()
-    InvalidPlane,       ///< a, b or c not finite, or |a| > kMaxWarpSlope (outputs untouched)
+    SizeMismatch, ///< left and warped differ in size, or spans.size() < warped.height()
+    InvalidPlane, ///< a, b or c not finite, or |a| > kMaxWarpSlope (outputs untouched)
 };
 
 /// Largest |a| accepted [px/px]; real mounts give |a| < 0.05 (B/h * sin(roll)).

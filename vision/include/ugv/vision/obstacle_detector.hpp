@@ -44,7 +44,7 @@ struct DetectorConfig {
         c.smoothing = 1.0;
         return c;
     }();
-    GroundMismatchConfig mismatch;  ///< width and height are filled in by create()
+    GroundMismatchConfig mismatch; ///< width and height are filled in by create()
     /// Rows at the top of the ROI that only give the matcher's block context and are not analysed [px]
     /// (RectifierConfig::roiMarginRows).
     int marginRows = 8;

@@ -31,13 +31,13 @@ enum class MatcherMode : std::uint8_t {
 
 struct RoiMatcherConfig {
     MatcherMode mode = MatcherMode::Sgbm3Way;
-    int numDisparities = 128; ///< [px] search range, multiple of 16
-    int blockSize = 5;        ///< [px] odd, 1..11; P1 = 8 bs^2, P2 = 32 bs^2 (OpenCV's recommendation, 1 channel)
-    int uniquenessRatio = 10; ///< [%] best cost must beat the second best by this margin, else invalid
+    int numDisparities = 128;    ///< [px] search range, multiple of 16
+    int blockSize = 5;           ///< [px] odd, 1..11; P1 = 8 bs^2, P2 = 32 bs^2 (OpenCV's recommendation, 1 channel)
+    int uniquenessRatio = 10;    ///< [%] best cost must beat the second best by this margin, else invalid
     int speckleWindowSize = 100; ///< [px] connected regions smaller than this are invalidated; 0 disables
-    int speckleRange = 2;     ///< [px] maximum disparity step within a speckle region
-    int disp12MaxDiff = 1;    ///< [px] left-right consistency tolerance; < 0 disables the check
-    int preFilterCap = 63;    ///< clip of the x-derivative prefilter
+    int speckleRange = 2;        ///< [px] maximum disparity step within a speckle region
+    int disp12MaxDiff = 1;       ///< [px] left-right consistency tolerance; < 0 disables the check
+    int preFilterCap = 63;       ///< clip of the x-derivative prefilter
     /// Pad both images on the left by numDisparities columns (zeros) so that the leftmost columns get a
     /// disparity wherever their match lies inside the right image (OpenCV leaves columns < numDisparities
     /// invalid, i.e. bearings above ~19 deg for the default rig). Off by default: measured on simulator ground,
@@ -87,11 +87,11 @@ private:
 
     RoiMatcherConfig config_;
     cv::Size roiSize_;
-    int pad_ = 0;                  ///< [px] left padding columns
+    int pad_ = 0; ///< [px] left padding columns
     cv::Ptr<cv::StereoSGBM> sgbm_;
-    cv::Mat padLeft_, padRight_;   ///< CV_8U (width + pad) x height; pad columns stay 0
-    cv::Mat disp16Padded_;         ///< CV_16S (width + pad) x height, compute() output
-    cv::Mat disp16_;               ///< header view of the unpadded columns
+    cv::Mat padLeft_, padRight_; ///< CV_8U (width + pad) x height; pad columns stay 0
+    cv::Mat disp16Padded_;       ///< CV_16S (width + pad) x height, compute() output
+    cv::Mat disp16_;             ///< header view of the unpadded columns
 };
 
 } // namespace ugv::vision

@@ -1,0 +1,342 @@
+// ugvsense detect: one-shot obstacle detection on one stereo pair with a calibration file; prints the sectors and
+// optionally writes them (with the ground estimate) as JSON and an overlay PNG.
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "detection.hpp"
+#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/obstacle_detector.hpp"
+#include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/roi_matcher.hpp"
+
+namespace ugv::tool {
+namespace {
+
+constexpr int kBarHeightPx = 24;        ///< [px] sector bar below the overlay image
+constexpr double kTintAlpha = 0.55;     ///< weight of the tint colour on obstacle pixels
+constexpr double kMaxDistanceM = 100.0; ///< [m] upper bound of --danger / --caution
+
+int fail(const Error& error)
+{
+    std::cerr << "ugvsense detect: error: " << error.message() << '\n';
+    return 1;
+}
+
+/// Reads an image; empty with `why` set when the file is missing or not a readable image.
+cv::Mat readImage(const std::string& path, int flags, std::string& why)
+{
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        why = "file not found";
+        return {};
+    }
+    cv::Mat image;
+    try {
+        image = cv::imread(path, flags);
+    } catch (const std::exception& e) {
+        image.release();
+    }
+    if (image.empty()) {
+        why = "not a readable image";
+    }
+    return image;
+}
+
+cv::Scalar dangerColour(DangerClass danger)
+{
+    switch (danger) {
+    case DangerClass::Red:
+        return {0, 0, 255};
+    case DangerClass::Blue:
+        return {255, 0, 0};
+    case DangerClass::Green:
+        return {0, 190, 0};
+    case DangerClass::Unknown:
+        break;
+    }
+    return {128, 128, 128};
+}
+
+/// The rectified left image in colour (identity for the rectified form; each channel remapped otherwise) with
+/// the obstacle pixels of the dense cue tinted (above the ground: red, below: blue) and a bar of the sectors'
+/// danger classes below it, each sector over the columns of its bearings.
+cv::Mat makeOverlay(const cv::Mat& colourLeft, vision::Rectifier& fullRectifier, const vision::ObstacleDetector& det,
+                    const vision::DetectorConfig& config, const vision::RectifiedProjection& p)
+{
+    cv::Mat rectified;
+    if (fullRectifier.identity()) {
+        rectified = colourLeft.clone();
+    } else {
+        std::vector<cv::Mat> channels;
+        cv::split(colourLeft, channels);
+        for (cv::Mat& channel : channels) {
+            cv::Mat out(channel.size(), CV_8UC1);
+            (void)fullRectifier.rectify(viewOf(channel), viewOf(channel), ImageViewU8(out.data, out.cols, out.rows),
+                                        ImageViewU8(out.data, out.cols, out.rows));
+            channel = out;
+        }
+        cv::merge(channels, rectified);
+    }
+    const Rect roi = det.roi();
+    const cv::Mat& disparity = det.disparity16();
+    const vision::GroundPlane& ground = det.ground();
+    for (int y = config.marginRows; y < roi.height; ++y) {
+        const auto* d = disparity.ptr<std::int16_t>(y);
+        auto* pixel = rectified.ptr<cv::Vec3b>(roi.y + y);
+        for (int x = 0; x < roi.width; ++x) {
+            if (d[x] <= 0) {
+                continue;
+            }
+            const vision::VehiclePoint point =
+                ground.pixelToVehicle(roi.x + x, roi.y + y, d[x] / static_cast<double>(vision::RoiMatcher::kScale), p);
+            if (std::hypot(point.x, point.y) > config.sectors.maxRangeM) {
+                continue;
+            }
+            cv::Vec3b tint;
+            if (point.z > config.sectors.minHeightM) {
+                tint = {0, 0, 255};
+            } else if (point.z < -config.sectors.minDepthM) {
+                tint = {255, 0, 0};
+            } else {
+                continue;
+            }
+            cv::Vec3b& px = pixel[roi.x + x];
+            for (int c = 0; c < 3; ++c) {
+                px[c] = cv::saturate_cast<std::uint8_t>((1.0 - kTintAlpha) * px[c] + kTintAlpha * tint[c]);
+            }
+        }
+    }
+    cv::Mat canvas(rectified.rows + kBarHeightPx, rectified.cols, CV_8UC3, cv::Scalar(0, 0, 0));
+    rectified.copyTo(canvas(cv::Rect(0, 0, rectified.cols, rectified.rows)));
+    const ObstacleSectors& sectors = det.sectors();
+    constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+    for (int i = 0; i < sectors.count; ++i) {
+        const Sector& s = sectors.sectors[static_cast<std::size_t>(i)];
+        // Positive bearings are to the left: the larger bearing gives the smaller column.
+        const int x0 = static_cast<int>(std::lround(p.cx - p.fx * std::tan(s.bearingMaxDeg * kDegToRad)));
+        const int x1 = static_cast<int>(std::lround(p.cx - p.fx * std::tan(s.bearingMinDeg * kDegToRad)));
+        cv::rectangle(canvas, cv::Point(std::max(0, x0), rectified.rows + 2),
+                      cv::Point(std::min(canvas.cols - 1, x1 - 1), canvas.rows - 3), dangerColour(s.danger),
+                      cv::FILLED);
+    }
+    return canvas;
+}
+
+bool writeJson(const std::string& path, const vision::ObstacleDetector& det, bool estimated)
+{
+    const vision::GroundPlane& g = det.ground();
+    std::ofstream out(path);
+    if (!out) {
+        return false;
+    }
+    out << "{\n  \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
+        << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
+        << ", \"reliable\": " << (det.groundEstimate().reliable ? "true" : "false") << ", \"source\": \""
+        << (estimated ? "estimated" : "configured mount")
+        << "\"},\n  \"degraded\": " << (det.sectors().degraded ? "true" : "false")
+        << ",\n  \"count\": " << det.sectors().count << ",\n  \"sectors\": " << sectorsJsonArray(det.sectors(), 4)
+        << "\n}\n";
+    out.flush();
+    return static_cast<bool>(out);
+}
+
+void printSectors(const ObstacleSectors& sectors)
+{
+    int counts[4] = {0, 0, 0, 0}; // by DangerClass
+    int obstacles = 0;
+    int clear = 0;
+    const Sector* nearest = nullptr;
+    for (int i = 0; i < sectors.count; ++i) {
+        const Sector& s = sectors.sectors[static_cast<std::size_t>(i)];
+        ++counts[static_cast<int>(s.danger)];
+        if (s.state == SectorState::Clear) {
+            ++clear;
+            continue;
+        }
+        if (s.state == SectorState::Obstacle) {
+            ++obstacles;
+            if (nearest == nullptr || s.rangeM < nearest->rangeM) {
+                nearest = &s;
+            }
+        }
+        std::printf("sector %3d [%6.1f, %6.1f] deg  %-8s %-8s %-7s", i, s.bearingMinDeg, s.bearingMaxDeg,
+                    stateName(s.state), kindName(s.kind), className(s.danger));
+        if (s.state == SectorState::Obstacle) {
+            std::printf("  range %6.2f m  height %5.2f m  confidence %.2f", s.rangeM, s.heightM, s.confidence);
+        }
+        std::printf("\n");
+    }
+    std::printf("summary: %d sectors: %d obstacle (red %d, blue %d), %d clear, %d unknown (green %d)%s\n",
+                sectors.count, obstacles, counts[static_cast<int>(DangerClass::Red)],
+                counts[static_cast<int>(DangerClass::Blue)], clear, sectors.count - obstacles - clear,
+                counts[static_cast<int>(DangerClass::Green)], sectors.degraded ? ", DEGRADED" : "");
+    if (nearest != nullptr) {
+        std::printf("nearest obstacle: %.2f m at bearing %.1f deg (%s, %s)\n", nearest->rangeM,
+                    0.5 * (nearest->bearingMinDeg + nearest->bearingMaxDeg), kindName(nearest->kind),
+                    className(nearest->danger));
+    }
+}
+
+} // namespace
+
+int runDetect(int argc, char** argv)
+{
+    Args args("detect", "--calib FILE --left L.png --right R.png [--json OUT] [--overlay OUT.png] [options]",
+              {{"calib", "FILE", "calibration file (full or already-rectified form; mount optional)", true},
+               {"left", "L.png", "left image", true},
+               {"right", "R.png", "right image", true},
+               {"json", "OUT", "write the ground estimate and the sectors as JSON", false},
+               {"overlay", "OUT.png", "write the rectified left image with obstacles and the sector bar", false},
+               {"sectors", "N", "number of sectors, 1..180, default 64", false},
+               {"danger", "M", "red below this range, default 1.5 m", false},
+               {"caution", "M", "blue below this range, default 5 m (>= --danger)", false}});
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError("detect", parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    if (!args.positional().empty()) {
+        return reportUsageError("detect", Error{"ugvsense detect", "unexpected argument '" + args.positional()[0] + "'",
+                                                "see 'ugvsense detect --help'"});
+    }
+    const auto sectorCount = args.number("sectors", 64, 1, kMaxSectors);
+    const auto danger = args.number("danger", 1.5, 0.01, kMaxDistanceM);
+    const auto caution = args.number("caution", 5.0, 0.01, kMaxDistanceM);
+    for (const auto* value : {&sectorCount, &danger, &caution}) {
+        if (!*value) {
+            return reportUsageError("detect", value->error());
+        }
+    }
+    if (*sectorCount != std::floor(*sectorCount) || *caution < *danger) {
+        return reportUsageError("detect", Error{"ugvsense detect", "--sectors must be whole and --caution >= --danger",
+                                                "see 'ugvsense detect --help'"});
+    }
+    const DetectionOptions options{static_cast<int>(*sectorCount), static_cast<float>(*danger),
+                                   static_cast<float>(*caution)};
+
+    auto calib = bringup::loadCalibration(args.get("calib"));
+    if (!calib) {
+        return fail(calib.error());
+    }
+    std::string why;
+    const cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, why);
+    if (left.empty()) {
+        return fail(Error{args.get("left"), why, "give an existing 8-bit image file"});
+    }
+    const cv::Mat right = readImage(args.get("right"), cv::IMREAD_GRAYSCALE, why);
+    if (right.empty()) {
+        return fail(Error{args.get("right"), why, "give an existing 8-bit image file"});
+    }
+    const auto sizeText = [](cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); };
+    if (left.size() != right.size()) {
+        return fail(Error{args.get("right"),
+                          "size " + sizeText(right.size()) + " differs from the left image's " + sizeText(left.size()),
+                          "give the two images of one stereo pair"});
+    }
+    if (left.size() != calib->imageSize) {
+        return fail(
+            Error{args.get("left"),
+                  "image size " + sizeText(left.size()) + " but the calibration is for " + sizeText(calib->imageSize),
+                  "use the calibration of this camera at this resolution"});
+    }
+
+    const vision::DetectorConfig config = detectorConfig(options);
+    vision::RectifierConfig roiConfig;
+    roiConfig.roiMarginRows = config.marginRows;
+    auto roiRectifier = vision::Rectifier::create(*calib, roiConfig);
+    vision::RectifierConfig fullConfig = roiConfig;
+    fullConfig.fullFrame = true;
+    auto fullRectifier = vision::Rectifier::create(*calib, fullConfig);
+    if (!roiRectifier || !fullRectifier) {
+        return fail(!roiRectifier ? roiRectifier.error() : fullRectifier.error());
+    }
+    if (roiRectifier->rectify(viewOf(left), viewOf(right)) != vision::RectifyStatus::Ok) {
+        return fail(Error{args.get("left"), "rectification rejected the images", "check the image sizes"});
+    }
+    const Rect roi = roiRectifier->roi();
+    const vision::RectifiedProjection& projection = roiRectifier->projection();
+
+    bool estimated = false;
+    vision::GroundPlane ground;
+    if (calib->mount) {
+        ground = vision::GroundPlane::fromMount(*calib->mount);
+    } else {
+        auto matcher = vision::RoiMatcher::create(config.matcher, cv::Size(roi.width, roi.height));
+        if (!matcher) {
+            return fail(matcher.error());
+        }
+        if (matcher->match(roiRectifier->rectifiedLeft(), roiRectifier->rectifiedRight()) != vision::MatchStatus::Ok) {
+            return fail(Error{"ground estimate", "the stereo matcher failed on the ROI", ""});
+        }
+        auto fit = fitGround(matcher->disparity16(), roi, projection);
+        if (!fit) {
+            return fail(Error{args.get("calib") + ": no mount, and the " + fit.error().where + " failed",
+                              fit.error().what, fit.error().fix});
+        }
+        ground = fit->ground;
+        estimated = true;
+        std::printf("ground: estimated from the bottom rows (no mount in the calibration): height %.3f m, pitch "
+                    "%.2f deg, roll %.2f deg (%d of %d disparities fit)\n",
+                    ground.heightM, ground.pitchDeg(), ground.rollDeg(), fit->inliers, fit->samples);
+    }
+
+    auto detector = vision::ObstacleDetector::create(config, projection, roi, ground);
+    if (!detector) {
+        return fail(detector.error());
+    }
+    const ObstacleSectors& sectors =
+        detector->process(roiRectifier->rectifiedLeft(), roiRectifier->rectifiedRight(), 0, 0);
+    if (detector->status() != vision::DetectorStatus::Ok) {
+        return fail(Error{"detector",
+                          "the pipeline failed (status " + std::to_string(static_cast<int>(detector->status())) +
+                              "), all sectors unknown",
+                          ""});
+    }
+    const vision::GroundPlane& used = detector->ground();
+    std::printf("ground used: height %.3f m, pitch %.2f deg, roll %.2f deg (%s; per-frame estimate %s)\n", used.heightM,
+                used.pitchDeg(), used.rollDeg(), estimated ? "estimated" : "configured mount",
+                detector->groundEstimate().reliable ? "reliable" : "not reliable, prior used");
+    printSectors(sectors);
+
+    if (args.has("json")) {
+        if (!writeJson(args.get("json"), *detector, estimated)) {
+            return fail(Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
+        }
+        std::printf("wrote %s\n", args.get("json").c_str());
+    }
+    if (args.has("overlay")) {
+        const cv::Mat colour = readImage(args.get("left"), cv::IMREAD_COLOR, why);
+        bool written = false;
+        if (!colour.empty()) {
+            const cv::Mat overlay = makeOverlay(colour, *fullRectifier, *detector, config, projection);
+            try {
+                written = cv::imwrite(args.get("overlay"), overlay);
+            } catch (const std::exception&) {
+                written = false;
+            }
+        }
+        if (!written) {
+            return fail(Error{args.get("overlay"), "cannot write the overlay image",
+                              "check that the folder exists and the name ends in .png"});
+        }
+        std::printf("wrote %s\n", args.get("overlay").c_str());
+    }
+    return 0;
+}
+
+} // namespace ugv::tool

@@ -1,0 +1,61 @@
+#pragma once
+
+/// @file
+/// Shared pieces of the `ugvsense detect` and `ugvsense eval` commands: the detector configuration of the tool,
+/// cv::Mat <-> ImageView glue, a ground-plane fit for calibrations without a mount, and sector naming / JSON.
+/// Host tool only: everything here may allocate. Thread-safety: reentrant.
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/obstacle_sectors.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/obstacle_detector.hpp"
+#include "ugv/vision/rectifier.hpp"
+
+namespace ugv::tool {
+
+struct DetectionOptions {
+    int sectorCount = 64;
+    float dangerM = 1.5F;  ///< [m]
+    float cautionM = 5.0F; ///< [m]
+};
+
+/// The vision library's detector defaults with the sector count and danger distances of `options`.
+vision::DetectorConfig detectorConfig(const DetectionOptions& options);
+
+/// Read-only view of a continuous or strided CV_8UC1 matrix (the matrix must outlive the view).
+ConstImageViewU8 viewOf(const cv::Mat& grey);
+
+/// A ground plane fitted to a disparity map without a prior (calibration without a mount).
+struct GroundFit {
+    vision::DisparityPlane plane; ///< full-frame d = a x + b y + c [px]
+    vision::GroundPlane ground;
+    int samples = 0; ///< valid disparity samples in the fitted rows
+    int inliers = 0;
+};
+
+/// RANSAC fit of d = a x + b y + c to the valid disparities of the bottom third of the image (sampled every
+/// 4 px), refined by least squares on the inliers (|residual| <= 1 px). Fails with an explanation when there
+/// are too few samples or inliers (< 300 or < 30 %), or when the plane is not a plausible ground (camera
+/// height outside (0.05, 10] m, pitch beyond +-45 deg, roll beyond +-30 deg).
+/// @param[in] disparity16  CV_16S disparity of the ROI rows (x16, invalid < 0), as RoiMatcher gives it
+/// @param[in] roi          full-frame rectangle of those rows
+Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const vision::RectifiedProjection& projection);
+
+const char* stateName(SectorState state);
+const char* kindName(ObstacleKind kind);
+const char* className(DangerClass danger);
+
+/// The sectors as a JSON array (one object per line, `indent` spaces): bearing_min_deg, bearing_max_deg,
+/// range_m (null when +inf), kind, state, class, height_m, confidence.
+std::string sectorsJsonArray(const ObstacleSectors& sectors, int indent);
+
+/// "%.6g" of a finite number, "null" otherwise.
+std::string jsonNumber(double value);
+
+} // namespace ugv::tool

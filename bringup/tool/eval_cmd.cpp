@@ -1,0 +1,524 @@
+// ugvsense eval: (a) --sim: obstacle detection on simulator scenes against the exact ground-truth sectors
+// (bringup/sim/README.md); (b) --middlebury: our matcher and OpenCV's default StereoSGBM against Middlebury ground
+// truth (../shared/data, or $UGV_SHARED_DATA, or --data DIR).
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "detection.hpp"
+#include "eval_suite.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+#include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/obstacle_detector.hpp"
+#include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/roi_matcher.hpp"
+
+namespace ugv::tool {
+namespace {
+
+constexpr int kExitSkipped = 77; ///< ctest SKIP_RETURN_CODE
+constexpr double kTargetDetection = 0.95;
+constexpr double kTargetFalseRate = 0.01;
+constexpr double kTargetWithinTolerance = 0.95; ///< p95 of the range error within the tolerance
+constexpr double kVerdictMaxRangeM = 10.0;      ///< [m] targets apply to 1-10 m
+
+struct Band {
+    double lo; ///< [m]
+    double hi; ///< [m]
+};
+constexpr Band kBands[] = {{1.0, 3.0}, {3.0, 6.0}, {6.0, 10.0}, {10.0, 15.0}};
+constexpr int kBandCount = 4;
+
+struct BandStats {
+    int frames = 0;
+    int gtFrames = 0; ///< frames whose GT has an obstacle sector
+    int detected = 0;
+    std::vector<double> errors; ///< [m] range errors of detected frames
+    int withinTolerance = 0;
+    [[nodiscard]] double rate() const { return gtFrames > 0 ? double(detected) / gtFrames : 0.0; }
+    [[nodiscard]] double withinRate() const { return detected > 0 ? double(withinTolerance) / detected : 0.0; }
+};
+
+struct SimOptions {
+    std::vector<sim::GroundTexture> textures;
+    std::vector<double> rangesPerBand; ///< fractions of each band's width
+    std::vector<double> bearings;      ///< [deg]
+    int seeds = 1;
+    int emptySeeds = 10;
+    std::vector<double> doorwayRanges;  ///< [m]
+    std::vector<double> overhangRanges; ///< [m]
+};
+
+const char* textureName(sim::GroundTexture t)
+{
+    switch (t) {
+    case sim::GroundTexture::Grass:
+        return "grass";
+    case sim::GroundTexture::Gravel:
+        return "gravel";
+    case sim::GroundTexture::PaintedFloor:
+        return "floor";
+    case sim::GroundTexture::Asphalt:
+        break;
+    }
+    return "asphalt";
+}
+
+/// One detector for the default rig (level, 0.59 m), fed with rendered frames; the ground prior is the rig mount.
+class SimDetector {
+public:
+    static Result<SimDetector, Error> create()
+    {
+        const sim::Rig rig;
+        vision::StereoCalibration calib = vision::makeRectifiedCalibration(
+            cv::Size(rig.width, rig.height), rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM);
+        calib.mount = vision::Mount{rig.heightM, rig.pitchDeg, rig.rollDeg};
+        const vision::DetectorConfig config = detectorConfig(DetectionOptions{});
+        vision::RectifierConfig rectConfig;
+        rectConfig.roiMarginRows = config.marginRows;
+        auto rectifier = vision::Rectifier::create(calib, rectConfig);
+        if (!rectifier) {
+            return Unexpected(rectifier.error());
+        }
+        auto detector = vision::ObstacleDetector::create(config, rectifier->projection(), rectifier->roi(),
+                                                         vision::GroundPlane::fromMount(*calib.mount));
+        if (!detector) {
+            return Unexpected(detector.error());
+        }
+        return SimDetector(std::move(rectifier).value(), std::move(detector).value());
+    }
+
+    /// Renders `scene` and runs the detector on it; false when rendering or detection failed.
+    bool run(const sim::Scene& scene, sim::RenderResult& rendered)
+    {
+        auto result = sim::render(scene);
+        if (!result) {
+            std::cerr << "ugvsense eval: error: " << result.error().message() << '\n';
+            return false;
+        }
+        rendered = std::move(result).value();
+        if (rectifier_.rectify(viewOf(rendered.left), viewOf(rendered.right)) != vision::RectifyStatus::Ok) {
+            return false;
+        }
+        (void)detector_.process(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), frames_++, 0);
+        return detector_.status() == vision::DetectorStatus::Ok;
+    }
+    [[nodiscard]] const ObstacleSectors& sectors() const { return detector_.sectors(); }
+
+private:
+    SimDetector(vision::Rectifier rectifier, vision::ObstacleDetector detector)
+        : rectifier_(std::move(rectifier)), detector_(std::move(detector))
+    {
+    }
+    vision::Rectifier rectifier_;
+    vision::ObstacleDetector detector_;
+    std::uint64_t frames_ = 0;
+};
+
+bool honoursBearing(const std::string& type)
+{
+    return type != "curb" && type != "trench"; // they run across the whole view
+}
+
+/// Runs the simulator suite; prints the table and verdicts and appends the JSON object to `json`.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runSimSuite(const SimOptions& o, std::ostringstream& json)
+{
+    auto detectorResult = SimDetector::create();
+    if (!detectorResult) {
+        std::cerr << "ugvsense eval: error: " << detectorResult.error().message() << '\n';
+        return 1;
+    }
+    SimDetector& det = *detectorResult;
+    sim::RenderResult frame;
+    const auto start = std::chrono::steady_clock::now();
+    int framesRun = 0;
+
+    std::vector<std::string> types;
+    for (const std::string& name : sim::sceneNames()) {
+        if (name != "empty" && name != "overhang") {
+            types.push_back(name);
+        }
+    }
+    std::map<std::string, std::vector<BandStats>> stats;
+    for (const std::string& type : types) {
+        stats[type].resize(kBandCount);
+        std::size_t cases = 0;
+        for (int b = 0; b < kBandCount; ++b) {
+            for (const double fraction : o.rangesPerBand) {
+                const double range = kBands[b].lo + fraction * (kBands[b].hi - kBands[b].lo);
+                for (const sim::GroundTexture texture : o.textures) {
+                    // The bearings take turns over the cases (not a full product, to keep the run short): each
+                    // type and band sees every bearing when cases per band >= bearings.
+                    const double bearing = o.bearings[cases++ % o.bearings.size()];
+                    {
+                        for (int seed = 1; seed <= o.seeds; ++seed) {
+                            auto scene = sim::makeScene(type, range, honoursBearing(type) ? bearing : 0.0, texture,
+                                                        static_cast<std::uint64_t>(seed));
+                            if (!scene || !det.run(*scene, frame)) {
+                                std::cerr << "ugvsense eval: error: scene " << type << " failed\n";
+                                return 1;
+                            }
+                            ++framesRun;
+                            const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
+                            BandStats& s = stats[type][static_cast<std::size_t>(b)];
+                            ++s.frames;
+                            s.gtFrames += score.gtHasObstacle ? 1 : 0;
+                            if (score.gtHasObstacle && score.detected) {
+                                ++s.detected;
+                                s.errors.push_back(score.rangeErrorM);
+                                s.withinTolerance += score.rangeErrorM <= rangeTolerance(score.gtRangeM) ? 1 : 0;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    // Empty ground: any Red/Blue sector is false.
+    int emptyFrames = 0;
+    int emptyFalseFrames = 0;
+    int emptyFalseSectors = 0;
+    for (const sim::GroundTexture texture : o.textures) {
+        for (int seed = 1; seed <= o.emptySeeds; ++seed) {
+            auto scene = sim::makeScene("empty", 5.0, 0.0, texture, static_cast<std::uint64_t>(seed));
+            if (!scene || !det.run(*scene, frame)) {
+                return 1;
+            }
+            ++framesRun;
+            ++emptyFrames;
+            const int n = countRedBlue(det.sectors());
+            emptyFalseSectors += n;
+            emptyFalseFrames += n > 0 ? 1 : 0;
+        }
+    }
+    // Overhang (underside 1.5 m): never red or blue.
+    int overhangFrames = 0;
+    int overhangFalseFrames = 0;
+    for (const sim::GroundTexture texture : o.textures) {
+        for (const double range : o.overhangRanges) {
+            auto scene = sim::makeScene("overhang", range, 0.0, texture, 1);
+            if (!scene || !det.run(*scene, frame)) {
+                return 1;
+            }
+            ++framesRun;
+            ++overhangFrames;
+            overhangFalseFrames += countRedBlue(det.sectors()) > 0 ? 1 : 0;
+        }
+    }
+    // Doorway: the GT-clear sectors of the gap must not be reported Obstacle.
+    struct DoorwayRow {
+        double range;
+        const char* texture;
+        GapScore gap;
+    };
+    std::vector<DoorwayRow> doorway;
+    for (const sim::GroundTexture texture : o.textures) {
+        for (const double range : o.doorwayRanges) {
+            auto scene = sim::makeScene("wall_doorway", range, 0.0, texture, 1);
+            if (!scene || !det.run(*scene, frame)) {
+                return 1;
+            }
+            ++framesRun;
+            doorway.push_back({range, textureName(texture), scoreGap(det.sectors(), frame.sectors)});
+        }
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    // Table and verdicts.
+    std::printf("\nsimulator suite: %d frames in %.1f s (default rig 640x480, level, 0.59 m; %zu texture(s), %zu "
+                "range(s) per band, %zu bearing(s) taking turns, %d seed(s))\n",
+                framesRun, seconds, o.textures.size(), o.rangesPerBand.size(), o.bearings.size(), o.seeds);
+    std::printf("%-12s %-8s %6s %6s %8s %10s %9s\n", "type", "band", "frames", "gt", "det%", "p95err_m", "in_tol%");
+    bool detectionOk = true;
+    bool rangeOk = true;
+    json << "  \"sim\": {\n    \"frames\": " << framesRun << ",\n    \"seconds\": " << jsonNumber(seconds)
+         << ",\n    \"obstacles\": [";
+    bool firstRow = true;
+    for (const std::string& type : types) {
+        BandStats within10;
+        for (int b = 0; b < kBandCount; ++b) {
+            const BandStats& s = stats[type][static_cast<std::size_t>(b)];
+            char band[40];
+            std::snprintf(band, sizeof(band), "%g-%g m", kBands[b].lo, kBands[b].hi);
+            const double p95 = quantile(s.errors, 0.95);
+            char p95Text[24] = "-";
+            if (!s.errors.empty()) {
+                std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
+            }
+            std::printf("%-12s %-8s %6d %6d %8.1f %10s %9.1f\n", type.c_str(), band, s.frames, s.gtFrames,
+                        100.0 * s.rate(), p95Text, 100.0 * s.withinRate());
+            json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << type << "\", \"band\": \"" << band
+                 << "\", \"frames\": " << s.frames << ", \"gt_frames\": " << s.gtFrames
+                 << ", \"detected\": " << s.detected << ", \"detection_rate\": " << jsonNumber(s.rate())
+                 << ", \"range_error_p95_m\": " << jsonNumber(s.errors.empty() ? NAN : p95)
+                 << ", \"within_tolerance_rate\": " << jsonNumber(s.withinRate()) << "}";
+            firstRow = false;
+            if (kBands[b].hi <= kVerdictMaxRangeM) {
+                within10.gtFrames += s.gtFrames;
+                within10.detected += s.detected;
+                within10.withinTolerance += s.withinTolerance;
+            }
+        }
+        const bool typeDetects = within10.gtFrames > 0 && within10.rate() >= kTargetDetection;
+        const bool typeRange = within10.detected > 0 && within10.withinRate() >= kTargetWithinTolerance;
+        std::printf("%-12s 1-10 m   detection %5.1f%% %-4s range within tolerance %5.1f%% %s\n", type.c_str(),
+                    100.0 * within10.rate(), typeDetects ? "PASS" : "FAIL", 100.0 * within10.withinRate(),
+                    typeRange ? "PASS" : "FAIL");
+        detectionOk = detectionOk && typeDetects;
+        rangeOk = rangeOk && typeRange;
+    }
+    const double falseRate = emptyFrames > 0 ? double(emptyFalseFrames) / emptyFrames : 0.0;
+    const bool emptyOk = falseRate < kTargetFalseRate;
+    std::printf("empty ground: %d frames, %d with a false red/blue sector (%.2f%%), %.3f false sectors per frame\n",
+                emptyFrames, emptyFalseFrames, 100.0 * falseRate,
+                emptyFrames > 0 ? double(emptyFalseSectors) / emptyFrames : 0.0);
+    std::printf("overhang (underside 1.5 m): %d frames, %d with a red/blue sector -> %s\n", overhangFrames,
+                overhangFalseFrames, overhangFalseFrames == 0 ? "PASS" : "FAIL");
+    bool doorwayOk = true;
+    json << "\n    ],\n    \"doorway\": [";
+    for (std::size_t i = 0; i < doorway.size(); ++i) {
+        const DoorwayRow& d = doorway[i];
+        std::printf("doorway 0.9 m at %.0f m (%s): %d GT-clear gap sectors, %d reported obstacle -> %s\n", d.range,
+                    d.texture, d.gap.gapSectors, d.gap.reportedObstacle,
+                    d.gap.visible() ? "gap visible" : "GAP NOT VISIBLE");
+        doorwayOk = doorwayOk && d.gap.visible();
+        json << (i == 0 ? "\n" : ",\n") << "      {\"range_m\": " << d.range << ", \"texture\": \"" << d.texture
+             << "\", \"gap_sectors\": " << d.gap.gapSectors << ", \"reported_obstacle\": " << d.gap.reportedObstacle
+             << ", \"gap_visible\": " << (d.gap.visible() ? "true" : "false") << "}";
+    }
+    std::printf("verdicts: detection >= 95%% 1-10 m per type: %s; false red/blue on empty ground < 1%%: %s; range "
+                "error within max(0.10 m, 3%%) at p95 within 10 m: %s; overhang: %s; doorway gap: %s\n",
+                detectionOk ? "PASS" : "FAIL", emptyOk ? "PASS" : "FAIL", rangeOk ? "PASS" : "FAIL",
+                overhangFalseFrames == 0 ? "PASS" : "FAIL", doorwayOk ? "PASS" : "FAIL");
+    json << "\n    ],\n    \"empty\": {\"frames\": " << emptyFrames << ", \"false_frames\": " << emptyFalseFrames
+         << ", \"false_sectors\": " << emptyFalseSectors << ", \"false_frame_rate\": " << jsonNumber(falseRate)
+         << "},\n    \"overhang\": {\"frames\": " << overhangFrames << ", \"false_frames\": " << overhangFalseFrames
+         << "},\n    \"verdicts\": {\"detection\": " << (detectionOk ? "true" : "false")
+         << ", \"empty_false_rate\": " << (emptyOk ? "true" : "false")
+         << ", \"range_error\": " << (rangeOk ? "true" : "false")
+         << ", \"overhang\": " << (overhangFalseFrames == 0 ? "true" : "false")
+         << ", \"doorway\": " << (doorwayOk ? "true" : "false") << "}\n  }";
+    return 0;
+}
+
+struct StereoSet {
+    const char* name;
+    const char* folder; ///< relative to the data root
+    const char* left;
+    const char* right;
+    const char* gt;
+    double gtScale;
+};
+constexpr StereoSet kMiddlebury[] = {
+    {"tsukuba", "middlebury/tsukuba", "im3.png", "im4.png", "disp3.pgm", 16.0},
+    {"venus", "middlebury/venus", "im2.png", "im6.png", "disp2.pgm", 8.0},
+    {"teddy", "middlebury/teddy", "im2.png", "im6.png", "disp2.png", 4.0},
+    {"cones", "middlebury/cones", "im2.png", "im6.png", "disp2.png", 4.0},
+};
+constexpr StereoSet kAloe = {"aloe", "aloe", "aloeL.jpg", "aloeR.jpg", "aloeGT.png", 1.0};
+constexpr int kDisparityMultiple = 16;
+
+/// Scores both matchers on one pair; false (with a message) when files are missing or unreadable.
+bool evalPair(const std::filesystem::path& root, const StereoSet& set, DisparityScore& ours, DisparityScore& opencv,
+              int& numDisparities)
+{
+    const std::filesystem::path dir = root / set.folder;
+    cv::Mat left, right, gt8;
+    try {
+        left = cv::imread((dir / set.left).string(), cv::IMREAD_GRAYSCALE);
+        right = cv::imread((dir / set.right).string(), cv::IMREAD_GRAYSCALE);
+        gt8 = cv::imread((dir / set.gt).string(), cv::IMREAD_GRAYSCALE);
+    } catch (const std::exception&) {
+        left.release();
+    }
+    if (left.empty() || right.empty() || gt8.empty() || left.size() != right.size() || left.size() != gt8.size()) {
+        std::cerr << "ugvsense eval: error: " << dir.string() << ": cannot read " << set.left << ", " << set.right
+                  << " and " << set.gt << " of one size\n";
+        return false;
+    }
+    cv::Mat gt;
+    gt8.convertTo(gt, CV_32F, 1.0 / set.gtScale);
+    double gtMax = 0.0;
+    cv::minMaxLoc(gt, nullptr, &gtMax);
+    numDisparities = (static_cast<int>(std::floor(gtMax)) / kDisparityMultiple + 1) * kDisparityMultiple;
+
+    vision::RoiMatcherConfig config; // our tuned defaults, only the search range adapted to the data set
+    config.numDisparities = numDisparities;
+    auto matcher = vision::RoiMatcher::create(config, left.size());
+    if (!matcher || matcher->match(viewOf(left), viewOf(right)) != vision::MatchStatus::Ok) {
+        std::cerr << "ugvsense eval: error: our matcher failed on " << set.name << '\n';
+        return false;
+    }
+    cv::Mat oursF(left.size(), CV_32F);
+    (void)matcher->toFloat(oursF);
+    ours = scoreDisparity(oursF, gt);
+
+    cv::Mat sgbm16;
+    cv::Mat sgbmF;
+    try {
+        cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(0, numDisparities); // every other setting default
+        sgbm->compute(left, right, sgbm16);
+    } catch (const std::exception& e) {
+        std::cerr << "ugvsense eval: error: OpenCV StereoSGBM failed on " << set.name << ": " << e.what() << '\n';
+        return false;
+    }
+    sgbm16.convertTo(sgbmF, CV_32F, 1.0 / vision::RoiMatcher::kScale); // invalid (-16) becomes -1
+    opencv = scoreDisparity(sgbmF, gt);
+    return true;
+}
+
+int runMiddlebury(const std::filesystem::path& root, std::ostringstream& json)
+{
+    std::vector<StereoSet> sets(std::begin(kMiddlebury), std::end(kMiddlebury));
+    std::error_code ec;
+    if (std::filesystem::is_directory(root / kAloe.folder, ec)) {
+        sets.push_back(kAloe);
+    }
+    std::printf("\nMiddlebury (%s): bad-Npx = |d - gt| > N px over valid-GT pixels; 'all' counts missing predictions "
+                "as bad, 'valid' uses predicted pixels only\n",
+                root.string().c_str());
+    std::printf("%-8s %4s | %-30s | %-30s\n", "set", "nd", "ours: bad1 bad2 (all) bad1 bad2 (valid) dens",
+                "opencv default: same");
+    bool noWorse = true;
+    json << "  \"middlebury\": [";
+    for (std::size_t i = 0; i < sets.size(); ++i) {
+        DisparityScore ours;
+        DisparityScore opencv;
+        int nd = 0;
+        if (!evalPair(root, sets[i], ours, opencv, nd)) {
+            return 1;
+        }
+        const bool ok = ours.bad2All <= opencv.bad2All;
+        noWorse = noWorse && ok;
+        std::printf("%-8s %4d | %5.1f %5.1f  %5.1f %5.1f  %5.1f%% | %5.1f %5.1f  %5.1f %5.1f  %5.1f%% | bad-2px %s\n",
+                    sets[i].name, nd, 100 * ours.bad1All, 100 * ours.bad2All, 100 * ours.bad1Valid,
+                    100 * ours.bad2Valid, 100 * ours.density(), 100 * opencv.bad1All, 100 * opencv.bad2All,
+                    100 * opencv.bad1Valid, 100 * opencv.bad2Valid, 100 * opencv.density(), ok ? "no worse" : "WORSE");
+        const auto scoreJson = [](const DisparityScore& s) {
+            return "{\"bad1_all\": " + jsonNumber(s.bad1All) + ", \"bad2_all\": " + jsonNumber(s.bad2All) +
+                   ", \"bad1_valid\": " + jsonNumber(s.bad1Valid) + ", \"bad2_valid\": " + jsonNumber(s.bad2Valid) +
+                   ", \"density\": " + jsonNumber(s.density()) + "}";
+        };
+        json << (i == 0 ? "\n" : ",\n") << "    {\"set\": \"" << sets[i].name << "\", \"num_disparities\": " << nd
+             << ", \"ours\": " << scoreJson(ours) << ", \"opencv_default\": " << scoreJson(opencv) << "}";
+    }
+    json << "\n  ],\n  \"middlebury_bad2_no_worse_than_opencv_default\": " << (noWorse ? "true" : "false");
+    std::printf("verdict: bad-2px (all valid-GT pixels) no worse than OpenCV default on every pair: %s\n",
+                noWorse ? "PASS" : "FAIL");
+    return 0;
+}
+
+} // namespace
+
+int runEval(int argc, char** argv)
+{
+    Args args(
+        "eval",
+        "[--sim] [--middlebury] [--quick] [--frames-per-case N] [--json OUT] [--data DIR] "
+        "[--skip-missing]",
+        {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
+         {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
+         {"quick", "", "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0)", false},
+         {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
+         {"json", "OUT", "write all figures as JSON", false},
+         {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
+         {"skip-missing", "", "exit 77 (skipped) when the Middlebury data are missing", false}});
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError("eval", parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    if (!args.has("sim") && !args.has("middlebury")) {
+        return reportUsageError("eval",
+                                Error{"ugvsense eval", "nothing to evaluate", "give --sim and/or --middlebury"});
+    }
+    if (!args.positional().empty()) {
+        return reportUsageError("eval", Error{"ugvsense eval", "unexpected argument '" + args.positional()[0] + "'",
+                                              "see 'ugvsense eval --help'"});
+    }
+    const auto seeds = args.number("frames-per-case", 1, 1, 20);
+    if (!seeds || *seeds != std::floor(*seeds)) {
+        return reportUsageError("eval", seeds ? Error{"ugvsense eval --frames-per-case", "not a whole number", ""}
+                                              : seeds.error());
+    }
+    std::filesystem::path root = "../shared/data";
+    if (args.has("data")) {
+        root = args.get("data");
+    } else if (const char* env = std::getenv("UGV_SHARED_DATA"); env != nullptr && *env != '\0') {
+        root = env;
+    }
+    if (args.has("middlebury")) {
+        std::error_code ec;
+        if (!std::filesystem::is_directory(root / "middlebury", ec)) {
+            std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error") << ": Middlebury data "
+                      << "not found at " << (root / "middlebury").string()
+                      << " (fix: set UGV_SHARED_DATA or --data DIR to the shared data root)\n";
+            return args.has("skip-missing") ? kExitSkipped : 1;
+        }
+    }
+
+    std::ostringstream json;
+    json << "{\n";
+    if (args.has("sim")) {
+        SimOptions o;
+        if (args.has("quick")) {
+            o.textures = {sim::GroundTexture::Asphalt};
+            o.rangesPerBand = {0.5};
+            o.bearings = {0.0};
+            o.emptySeeds = 3;
+            o.doorwayRanges = {3.0};
+            o.overhangRanges = {3.0};
+        } else {
+            o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::Gravel};
+            o.rangesPerBand = {0.25, 0.75};
+            o.bearings = {0.0, -15.0, 15.0};
+            o.emptySeeds = 10;
+            o.doorwayRanges = {2.0, 3.0, 4.0, 5.0};
+            o.overhangRanges = {2.0, 3.0, 4.0};
+        }
+        o.seeds = static_cast<int>(*seeds);
+        if (const int rc = runSimSuite(o, json); rc != 0) {
+            return rc;
+        }
+    }
+    if (args.has("middlebury")) {
+        json << (args.has("sim") ? ",\n" : "");
+        if (const int rc = runMiddlebury(root, json); rc != 0) {
+            return rc;
+        }
+    }
+    json << "\n}\n";
+    if (args.has("json")) {
+        std::ofstream out(args.get("json"));
+        out << json.str();
+        out.flush();
+        if (!out) {
+            std::cerr << "ugvsense eval: error: " << args.get("json") << ": cannot write the JSON file\n";
+            return 1;
+        }
+        std::printf("wrote %s\n", args.get("json").c_str());
+    }
+    return 0;
+}
+
+} // namespace ugv::tool

@@ -1,0 +1,61 @@
+#pragma once
+
+/// @file
+/// Scoring used by `ugvsense eval`: detected sectors against the simulator's ground-truth sectors
+/// (bringup/sim/README.md), and a disparity map against Middlebury ground truth. Pure functions, host tool only.
+/// Thread-safety: reentrant.
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "ugv/platform/obstacle_sectors.hpp"
+
+namespace ugv::tool {
+
+/// One frame of an obstacle scene.
+struct ObstacleFrameScore {
+    bool gtHasObstacle = false; ///< the ground truth has at least one Obstacle sector
+    int gtSector = -1;          ///< the GT sector holding the nearest GT obstacle
+    double gtRangeM = 0.0;      ///< [m] its range
+    bool detected = false;      ///< that sector or an adjacent one is reported Obstacle
+    double rangeErrorM = 0.0;   ///< [m] |detected - GT| (the matching sector with the smallest error), when detected
+};
+
+/// Scores `detected` against `gt` (same sector layout).
+ObstacleFrameScore scoreObstacleFrame(const ObstacleSectors& detected, const ObstacleSectors& gt);
+
+/// Sectors reported Red or Blue.
+int countRedBlue(const ObstacleSectors& sectors);
+
+/// Range tolerance of the evaluation: max(0.10 m, 3 % of the range) [m].
+double rangeTolerance(double rangeM);
+
+/// The doorway check: the GT-clear sectors lying between the first and the last GT-obstacle sector (the gap).
+struct GapScore {
+    int gapSectors = 0;       ///< GT-clear sectors inside the wall's extent
+    int reportedObstacle = 0; ///< of those, reported Obstacle
+    /// The gap exists in the GT and none of its sectors is reported Obstacle.
+    [[nodiscard]] bool visible() const { return gapSectors > 0 && reportedObstacle == 0; }
+};
+GapScore scoreGap(const ObstacleSectors& detected, const ObstacleSectors& gt);
+
+/// Disparity errors against ground truth over the pixels with valid GT (GT > 0).
+struct DisparityScore {
+    int gtPixels = 0;       ///< pixels with valid GT
+    int predictedValid = 0; ///< of those, with a valid prediction (>= 0)
+    double bad1All = 0.0;   ///< fraction with |d - gt| > 1 or no prediction
+    double bad2All = 0.0;   ///< fraction with |d - gt| > 2 or no prediction
+    double bad1Valid = 0.0; ///< fraction with |d - gt| > 1 among predicted-valid pixels
+    double bad2Valid = 0.0; ///< fraction with |d - gt| > 2 among predicted-valid pixels
+    [[nodiscard]] double density() const { return gtPixels > 0 ? double(predictedValid) / gtPixels : 0.0; }
+};
+
+/// @param[in] predicted  CV_32F disparity [px], invalid < 0
+/// @param[in] gt         CV_32F disparity [px], 0 = unknown (masked out); same size
+DisparityScore scoreDisparity(const cv::Mat& predicted, const cv::Mat& gt);
+
+/// The p-quantile (nearest rank) of `values` (copied and sorted); 0 when empty.
+double quantile(std::vector<double> values, double p);
+
+} // namespace ugv::tool
