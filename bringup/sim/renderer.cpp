@@ -806,8 +806,15 @@ RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderO
             const bool positive = l == Label::Positive && p.z() > options.minHeightM;
             const bool negative = l == Label::Negative && -p.z() > options.minDepthM;
             if (positive || negative) {
-                sectorHits.push_back(SectorHit{sector, static_cast<float>(std::hypot(vx, vy)),
-                                               static_cast<float>(std::abs(p.z())),
+                // A drop's range is where the ground ends along this bearing: the point where the ray that sees
+                // the drop crosses the ground plane (the near rim), not the far wall or floor it hits behind it.
+                double range = std::hypot(vx, vy);
+                if (negative && d.z() < 0.0) {
+                    const Vector3d rim = p - (p.z() / d.z()) * d - tracer.vehicleOrigin();
+                    range = std::hypot(tracer.cosYaw() * rim.x() + tracer.sinYaw() * rim.y(),
+                                       -tracer.sinYaw() * rim.x() + tracer.cosYaw() * rim.y());
+                }
+                sectorHits.push_back(SectorHit{sector, static_cast<float>(range), static_cast<float>(std::abs(p.z())),
                                                positive ? ObstacleKind::Positive : ObstacleKind::Negative});
             } else {
                 seesGround[static_cast<std::size_t>(sector)] = true;

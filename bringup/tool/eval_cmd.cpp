@@ -51,6 +51,7 @@ struct BandStats {
     int detected = 0;
     std::vector<double> errors; ///< [m] range errors of detected frames
     int withinTolerance = 0;
+    int spill = 0; ///< sectors reported Obstacle whose GT is not Obstacle (fattening, artefacts)
     [[nodiscard]] double rate() const { return gtFrames > 0 ? double(detected) / gtFrames : 0.0; }
     [[nodiscard]] double withinRate() const { return detected > 0 ? double(withinTolerance) / detected : 0.0; }
 };
@@ -179,6 +180,7 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
                             const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
                             BandStats& s = stats[type][static_cast<std::size_t>(b)];
                             ++s.frames;
+                            s.spill += score.spillSectors;
                             s.gtFrames += score.gtHasObstacle ? 1 : 0;
                             if (score.gtHasObstacle && score.detected) {
                                 ++s.detected;
@@ -246,7 +248,8 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     std::printf("\nsimulator suite: %d frames in %.1f s (default rig 640x480, level, 0.59 m; %zu texture(s), %zu "
                 "range(s) per band, %zu bearing(s) taking turns, %d seed(s))\n",
                 framesRun, seconds, o.textures.size(), o.rangesPerBand.size(), o.bearings.size(), o.seeds);
-    std::printf("%-12s %-8s %6s %6s %8s %10s %9s\n", "type", "band", "frames", "gt", "det%", "p95err_m", "in_tol%");
+    std::printf("%-12s %-8s %6s %6s %8s %10s %9s %11s\n", "type", "band", "frames", "gt", "det%", "p95err_m", "in_tol%",
+                "spill/frame");
     bool detectionOk = true;
     bool rangeOk = true;
     json << "  \"sim\": {\n    \"frames\": " << framesRun << ",\n    \"seconds\": " << jsonNumber(seconds)
@@ -263,13 +266,15 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             if (!s.errors.empty()) {
                 std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
             }
-            std::printf("%-12s %-8s %6d %6d %8.1f %10s %9.1f\n", type.c_str(), band, s.frames, s.gtFrames,
-                        100.0 * s.rate(), p95Text, 100.0 * s.withinRate());
+            std::printf("%-12s %-8s %6d %6d %8.1f %10s %9.1f %11.2f\n", type.c_str(), band, s.frames, s.gtFrames,
+                        100.0 * s.rate(), p95Text, 100.0 * s.withinRate(),
+                        s.frames > 0 ? double(s.spill) / s.frames : 0.0);
             json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << type << "\", \"band\": \"" << band
                  << "\", \"frames\": " << s.frames << ", \"gt_frames\": " << s.gtFrames
                  << ", \"detected\": " << s.detected << ", \"detection_rate\": " << jsonNumber(s.rate())
                  << ", \"range_error_p95_m\": " << jsonNumber(s.errors.empty() ? NAN : p95)
-                 << ", \"within_tolerance_rate\": " << jsonNumber(s.withinRate()) << "}";
+                 << ", \"within_tolerance_rate\": " << jsonNumber(s.withinRate()) << ", \"spill_sectors\": " << s.spill
+                 << "}";
             firstRow = false;
             if (kBands[b].hi <= kVerdictMaxRangeM) {
                 within10.gtFrames += s.gtFrames;
@@ -296,12 +301,14 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     json << "\n    ],\n    \"doorway\": [";
     for (std::size_t i = 0; i < doorway.size(); ++i) {
         const DoorwayRow& d = doorway[i];
-        std::printf("doorway 0.9 m at %.0f m (%s): %d GT-clear gap sectors, %d reported obstacle -> %s\n", d.range,
-                    d.texture, d.gap.gapSectors, d.gap.reportedObstacle,
-                    d.gap.visible() ? "gap visible" : "GAP NOT VISIBLE");
+        std::printf("doorway 0.9 m at %.0f m (%s): %d GT-clear gap sectors: %d reported obstacle (%d inside the "
+                    "edge sectors), %d clear -> %s\n",
+                    d.range, d.texture, d.gap.gapSectors, d.gap.reportedObstacle, d.gap.innerObstacle,
+                    d.gap.reportedClear, d.gap.visible() ? "gap visible" : "GAP NOT VISIBLE");
         doorwayOk = doorwayOk && d.gap.visible();
         json << (i == 0 ? "\n" : ",\n") << "      {\"range_m\": " << d.range << ", \"texture\": \"" << d.texture
              << "\", \"gap_sectors\": " << d.gap.gapSectors << ", \"reported_obstacle\": " << d.gap.reportedObstacle
+             << ", \"inner_obstacle\": " << d.gap.innerObstacle << ", \"reported_clear\": " << d.gap.reportedClear
              << ", \"gap_visible\": " << (d.gap.visible() ? "true" : "false") << "}";
     }
     std::printf("verdicts: detection >= 95%% 1-10 m per type: %s; false red/blue on empty ground < 1%%: %s; range "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 namespace ugv::tool {
 namespace {
@@ -36,16 +37,35 @@ ObstacleFrameScore scoreObstacleFrame(const ObstacleSectors& detected, const Obs
     }
     score.gtHasObstacle = true;
     score.gtRangeM = at(gt, score.gtSector).rangeM;
+    // Detected: a GT obstacle sector, or one next to it (bearings on a boundary), is reported Obstacle. The range
+    // error: the nearest range reported in the GT obstacle sectors against the nearest true one (the neighbours
+    // only when none of those is reported). Scoring only the single nearest GT sector would miss a wide obstacle
+    // whose nearest GT sector is a sliver at its lateral edge (a hole's rim seen at a grazing angle). Obstacle
+    // reports in GT-clear sectors are counted apart (spill: the matcher's foreground fattening).
     const int count = std::min(detected.count, gt.count);
-    for (int i = std::max(0, score.gtSector - 1); i <= std::min(count - 1, score.gtSector + 1); ++i) {
+    const auto isGtObstacle = [&gt](int i) {
+        return i >= 0 && i < gt.count && at(gt, i).state == SectorState::Obstacle;
+    };
+    double nearestInside = std::numeric_limits<double>::infinity();
+    double nearestNext = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < count; ++i) {
         if (at(detected, i).state != SectorState::Obstacle) {
             continue;
         }
-        const double error = std::abs(static_cast<double>(at(detected, i).rangeM) - score.gtRangeM);
-        if (!score.detected || error < score.rangeErrorM) {
-            score.rangeErrorM = error;
+        const double range = at(detected, i).rangeM;
+        if (isGtObstacle(i)) {
+            nearestInside = std::min(nearestInside, range);
+        } else if (isGtObstacle(i - 1) || isGtObstacle(i + 1)) {
+            nearestNext = std::min(nearestNext, range);
+            ++score.spillSectors;
+        } else {
+            ++score.spillSectors;
         }
-        score.detected = true;
+    }
+    score.detected = std::isfinite(nearestInside) || std::isfinite(nearestNext);
+    if (score.detected) {
+        score.detectedRangeM = std::isfinite(nearestInside) ? nearestInside : nearestNext;
+        score.rangeErrorM = std::abs(score.detectedRangeM - score.gtRangeM);
     }
     return score;
 }
@@ -70,11 +90,20 @@ GapScore scoreGap(const ObstacleSectors& detected, const ObstacleSectors& gt)
         }
     }
     GapScore score;
+    int gapFirst = -1;
+    int gapLast = -1;
     for (int i = first + 1; first >= 0 && i < last && i < detected.count; ++i) {
         if (at(gt, i).state == SectorState::Clear) {
+            gapFirst = gapFirst < 0 ? i : gapFirst;
+            gapLast = i;
             ++score.gapSectors;
             score.reportedObstacle += at(detected, i).state == SectorState::Obstacle ? 1 : 0;
+            score.reportedClear += at(detected, i).state == SectorState::Clear ? 1 : 0;
         }
+    }
+    for (int i = gapFirst + 1; gapFirst >= 0 && i < gapLast; ++i) {
+        score.innerObstacle +=
+            at(gt, i).state == SectorState::Clear && at(detected, i).state == SectorState::Obstacle ? 1 : 0;
     }
     return score;
 }

@@ -15,11 +15,13 @@ namespace ugv::tool {
 
 /// One frame of an obstacle scene.
 struct ObstacleFrameScore {
-    bool gtHasObstacle = false; ///< the ground truth has at least one Obstacle sector
-    int gtSector = -1;          ///< the GT sector holding the nearest GT obstacle
-    double gtRangeM = 0.0;      ///< [m] its range
-    bool detected = false;      ///< that sector or an adjacent one is reported Obstacle
-    double rangeErrorM = 0.0;   ///< [m] |detected - GT| (the matching sector with the smallest error), when detected
+    bool gtHasObstacle = false;  ///< the ground truth has at least one Obstacle sector
+    int gtSector = -1;           ///< the GT sector holding the nearest GT obstacle
+    double gtRangeM = 0.0;       ///< [m] its range
+    bool detected = false;       ///< a GT obstacle sector, or a sector next to one, is reported Obstacle
+    double detectedRangeM = 0.0; ///< [m] nearest range reported in the GT obstacle sectors (else next to them)
+    double rangeErrorM = 0.0;    ///< [m] |detectedRangeM - gtRangeM|, when detected
+    int spillSectors = 0;        ///< sectors reported Obstacle whose GT is not Obstacle
 };
 
 /// Scores `detected` against `gt` (same sector layout).
@@ -35,8 +37,12 @@ double rangeTolerance(double rangeM);
 struct GapScore {
     int gapSectors = 0;       ///< GT-clear sectors inside the wall's extent
     int reportedObstacle = 0; ///< of those, reported Obstacle
-    /// The gap exists in the GT and none of its sectors is reported Obstacle.
-    [[nodiscard]] bool visible() const { return gapSectors > 0 && reportedObstacle == 0; }
+    int innerObstacle = 0;    ///< of those, reported Obstacle, not counting the gap's first and last sector
+    int reportedClear = 0;    ///< of those, reported Clear
+    /// The gap exists in the GT and none of its sectors is reported Obstacle except, at most, the one sector at
+    /// each edge of the gap (the same one-sector bearing tolerance as the detection score: the matcher's
+    /// foreground fattening of 1 to 3 px can spill the wall's range into the next sector).
+    [[nodiscard]] bool visible() const { return gapSectors > 2 && innerObstacle == 0; }
 };
 GapScore scoreGap(const ObstacleSectors& detected, const ObstacleSectors& gt);
 

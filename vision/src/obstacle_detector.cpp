@@ -46,8 +46,16 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
     if (!mismatchResult) {
         return Unexpected(std::move(mismatchResult).error());
     }
+    ObstacleVerifierConfig verifierConfig = config.verifier;
+    verifierConfig.width = roi.width;
+    verifierConfig.height = roi.height;
+    auto verifierResult = ObstacleVerifier::create(verifierConfig);
+    if (!verifierResult) {
+        return Unexpected(std::move(verifierResult).error());
+    }
     ObstacleDetector sut(std::move(matcherResult).value(), std::move(builderResult).value(),
-                         std::move(estimatorResult).value(), std::move(mismatchResult).value(), roi);
+                         std::move(estimatorResult).value(), std::move(mismatchResult).value(),
+                         std::move(verifierResult).value(), roi);
     sut.configuredGround_ = configuredGround;
     sut.ground_ = configuredGround;
     sut.roi_ = roi;
@@ -79,7 +87,11 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
         labelsToLeftGrid(estimate.disparity);
         labels = leftLabels_.view();
     }
-    const BuildStatus built = builder_.build(matcher_.disparityView(), labels, ground_, sequence, stampNs);
+    ImageView<const std::int16_t> disparity = matcher_.disparityView();
+    if (verifier_.run(rectLeftRoi, rectRightRoi, disparity, estimate.disparity, roi_.y) == VerifyStatus::Ok) {
+        disparity = verifier_.disparity();
+    }
+    const BuildStatus built = builder_.build(disparity, labels, ground_, sequence, stampNs);
     status_ = built == BuildStatus::Ok ? DetectorStatus::Ok : DetectorStatus::BuildFailed;
     return builder_.sectors();
 }

@@ -57,7 +57,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.maxRangeM > config.rangeBinM) || config.minSupport < 1 || config.clusterWindowM < 0.0F ||
         config.clusterFraction < 0.0F || !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
         !(config.clearGroundFraction > 0.0F && config.clearGroundFraction <= 1.0F) || config.labelWeight < 0 ||
-        !(config.confidenceSupport > 0.0F) || !(config.dangerDistanceM <= config.cautionDistanceM)) {
+        !(config.confidenceSupport > 0.0F) || !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
+        !(config.dangerDistanceM <= config.cautionDistanceM)) {
         return Unexpected(configError("a threshold is out of range (all must be positive, percentile in [0, 1))"));
     }
     if (!(projection.fx > 0.0) || !(projection.fy > 0.0) || !(projection.baselineM > 0.0)) {
@@ -83,6 +84,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     sut.histograms_.assign(n * kKinds * static_cast<std::size_t>(sut.bins_), 0U);
     sut.extremes_.assign(sut.histograms_.size(), 0.0F);
     sut.groundVotes_.assign(n, 0U);
+    sut.farGroundVotes_.assign(n, 0U);
     sut.kindVotes_.assign(n * kKinds, 0U);
     sut.pixelsPerSector_.assign(n, 0U);
     const float binDeg = sut.hfovDeg_ / static_cast<float>(config.sectorCount);
@@ -177,6 +179,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     std::fill(histograms_.begin(), histograms_.end(), 0U);
     std::fill(extremes_.begin(), extremes_.end(), 0.0F);
     std::fill(groundVotes_.begin(), groundVotes_.end(), 0U);
+    std::fill(farGroundVotes_.begin(), farGroundVotes_.end(), 0U);
     std::fill(kindVotes_.begin(), kindVotes_.end(), 0U);
 
     const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
@@ -194,6 +197,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
             kind = 1;
         } else {
             ++groundVotes_[static_cast<std::size_t>(s)];
+            farGroundVotes_[static_cast<std::size_t>(s)] += range >= config_.clearRangeM ? 1U : 0U;
             return;
         }
         const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
@@ -204,6 +208,11 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
             return;
         }
         const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
+        // A drop's range is where the ground ends: the ray from the camera (height h) to the point below the
+        // ground crosses the ground plane at h / (h - z) of the point's horizontal range (the near rim).
+        if (kind == 1) {
+            range *= static_cast<float>(ground.heightM / (ground.heightM - static_cast<double>(z)));
+        }
         const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
         histograms_[slot * bins + bin] += weight;
         float& extreme = extremes_[slot * bins + bin];
@@ -326,7 +335,8 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
             const float groundFraction =
                 pixels > 0.0F ? static_cast<float>(groundVotes_[static_cast<std::size_t>(s)]) / pixels : 0.0F;
             if (stray < static_cast<std::uint32_t>(config_.minSupport) &&
-                groundFraction >= config_.clearGroundFraction) {
+                groundFraction >= config_.clearGroundFraction &&
+                farGroundVotes_[static_cast<std::size_t>(s)] >= static_cast<std::uint32_t>(config_.minClearFarVotes)) {
                 out.state = SectorState::Clear;
                 out.rangeM = std::numeric_limits<float>::infinity();
                 out.confidence = std::min(1.0F, groundFraction);

@@ -207,11 +207,11 @@ using ugv::SectorState;
 TEST(EvalScoring, AdjacentSectorCountsAsDetectedWithItsRangeError)
 {
     const auto gt = sectorsOf({{SectorState::Clear, kInf},
-                               {SectorState::Obstacle, 3.0F},
+                               {SectorState::Clear, kInf},
                                {SectorState::Clear, kInf},
                                {SectorState::Obstacle, 2.0F}});
     const auto detected = sectorsOf({{SectorState::Clear, kInf},
-                                     {SectorState::Obstacle, 3.0F},
+                                     {SectorState::Clear, kInf},
                                      {SectorState::Obstacle, 2.05F},
                                      {SectorState::Clear, kInf}});
 
@@ -221,6 +221,28 @@ TEST(EvalScoring, AdjacentSectorCountsAsDetectedWithItsRangeError)
     EXPECT_EQ(sut.gtSector, 3);
     EXPECT_TRUE(sut.detected);
     EXPECT_NEAR(sut.rangeErrorM, 0.05, 1e-6);
+    EXPECT_EQ(sut.spillSectors, 1);
+}
+
+TEST(EvalScoring, RangeErrorIsTheNearestReportedInTheObstacleSectorsAndSpillIsCounted)
+{
+    const auto gt = sectorsOf({{SectorState::Clear, kInf},
+                               {SectorState::Obstacle, 3.0F},
+                               {SectorState::Obstacle, 3.1F},
+                               {SectorState::Clear, kInf},
+                               {SectorState::Clear, kInf}});
+    const auto detected = sectorsOf({{SectorState::Obstacle, 2.5F}, // fattening next to the obstacle
+                                     {SectorState::Obstacle, 3.5F},
+                                     {SectorState::Obstacle, 3.02F},
+                                     {SectorState::Clear, kInf},
+                                     {SectorState::Obstacle, 1.0F}}); // an artefact elsewhere
+
+    const ugv::tool::ObstacleFrameScore sut = ugv::tool::scoreObstacleFrame(detected, gt);
+
+    EXPECT_TRUE(sut.detected);
+    EXPECT_NEAR(sut.detectedRangeM, 3.02, 1e-6);
+    EXPECT_NEAR(sut.rangeErrorM, 0.02, 1e-6);
+    EXPECT_EQ(sut.spillSectors, 2);
 }
 
 TEST(EvalScoring, MissedWhenNeitherTheSectorNorItsNeighboursAreObstacle)
@@ -240,23 +262,33 @@ TEST(EvalScoring, GapAndRedBlueCounts)
     const auto gt = sectorsOf({{SectorState::Obstacle, 3.0F},
                                {SectorState::Clear, kInf},
                                {SectorState::Clear, kInf},
+                               {SectorState::Clear, kInf},
+                               {SectorState::Clear, kInf},
                                {SectorState::Obstacle, 3.0F},
                                {SectorState::Clear, kInf}});
     const auto open = sectorsOf({{SectorState::Obstacle, 3.0F},
-                                 {SectorState::Clear, kInf},
+                                 {SectorState::Obstacle, 3.0F}, // spill into the gap's edge sector: tolerated
                                  {SectorState::Unknown, kInf},
+                                 {SectorState::Clear, kInf},
+                                 {SectorState::Clear, kInf},
                                  {SectorState::Obstacle, 3.0F},
                                  {SectorState::Obstacle, 1.0F}});
     const auto closed = sectorsOf({{SectorState::Obstacle, 3.0F},
+                                   {SectorState::Clear, kInf},
                                    {SectorState::Obstacle, 3.0F},
+                                   {SectorState::Clear, kInf},
                                    {SectorState::Clear, kInf},
                                    {SectorState::Obstacle, 6.0F},
                                    {SectorState::Clear, kInf}});
 
-    EXPECT_EQ(ugv::tool::scoreGap(open, gt).gapSectors, 2);
+    EXPECT_EQ(ugv::tool::scoreGap(open, gt).gapSectors, 4);
+    EXPECT_EQ(ugv::tool::scoreGap(open, gt).reportedObstacle, 1);
+    EXPECT_EQ(ugv::tool::scoreGap(open, gt).innerObstacle, 0);
+    EXPECT_EQ(ugv::tool::scoreGap(open, gt).reportedClear, 2);
     EXPECT_TRUE(ugv::tool::scoreGap(open, gt).visible());
+    EXPECT_EQ(ugv::tool::scoreGap(closed, gt).innerObstacle, 1);
     EXPECT_FALSE(ugv::tool::scoreGap(closed, gt).visible());
-    EXPECT_EQ(ugv::tool::countRedBlue(open), 3);   // two blue at 3 m, one red at 1 m
+    EXPECT_EQ(ugv::tool::countRedBlue(open), 4);   // three blue at 3 m, one red at 1 m
     EXPECT_EQ(ugv::tool::countRedBlue(closed), 2); // 6 m is green
     EXPECT_DOUBLE_EQ(ugv::tool::rangeTolerance(2.0), 0.10);
     EXPECT_DOUBLE_EQ(ugv::tool::rangeTolerance(10.0), 0.30);

@@ -119,6 +119,35 @@ TEST(ObstacleDetector, EmptyGroundHasNoRedOrBlueSectors)
     }
 }
 
+TEST(ObstacleDetector, MatcherFillInAtTheHorizonIsNotAnObstacle)
+{
+    // Before the obstacle verifier these empty scenes gave red/blue sectors at 1.4 to 1.8 m: StereoSGBM filled the
+    // weakly textured rows at the horizon with a near disparity (a "0.59 m tall object").
+    struct Case {
+        sim::GroundTexture texture;
+        std::uint64_t seed;
+    };
+    constexpr Case kCases[] = {{sim::GroundTexture::Asphalt, 8},
+                               {sim::GroundTexture::Grass, 7},
+                               {sim::GroundTexture::Gravel, 3},
+                               {sim::GroundTexture::Gravel, 9}};
+    auto sut = makeDetector();
+    for (const Case& c : kCases) {
+        auto scene = sim::makeScene("empty", 5.0, 0.0, c.texture, c.seed);
+        ASSERT_TRUE(scene.has_value());
+        const auto frame = sim::render(scene.value()).value();
+
+        const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+
+        for (int i = 0; i < out.count; ++i) {
+            const Sector& s = out.sectors[static_cast<std::size_t>(i)];
+            EXPECT_NE(s.state, SectorState::Obstacle) << "texture " << static_cast<int>(c.texture) << " seed " << c.seed
+                                                      << " sector " << i << " range " << s.rangeM;
+        }
+        EXPECT_GT(sut.verifier().counts().rejected, 0);
+    }
+}
+
 TEST(ObstacleDetector, SpeedBumpPitchIsTrackedFromTheFirstFrame)
 {
     // The vehicle pitches 3 degrees down (front wheels over a bump) while the config says level: the ground

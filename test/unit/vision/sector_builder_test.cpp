@@ -164,8 +164,31 @@ TEST(SectorBuilder, NegativeFloorGivesNegativeKind)
     const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
     EXPECT_EQ(ahead.state, SectorState::Obstacle);
     EXPECT_EQ(ahead.kind, ObstacleKind::Negative);
-    EXPECT_NEAR(ahead.rangeM, 4.0, 0.12);
+    // The range of a drop is its near rim: the ray that sees the floor at 4 m crosses the ground at 4 h / (h + depth).
+    EXPECT_NEAR(ahead.rangeM, 4.0 * kHeightM / (kHeightM + kDepthM), 0.12);
     EXPECT_NEAR(ahead.heightM, kDepthM, 0.03);
+}
+
+TEST(SectorBuilder, GroundSeenOnlyNearIsUnknownNotClear)
+{
+    // A textureless wall at 3 m straight ahead: the matcher leaves it invalid, so the sector sees plenty of ground
+    // in front of the wall but none beyond clearRangeM (5 m). That is not "clear": the sector must be Unknown.
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    const int wallFoot = roiRow(0.0, 3.0);
+    for (int v = 0; v <= wallFoot; ++v) {
+        for (int u = column(-0.5, 3.0); u <= column(0.5, 3.0); ++u) {
+            d16.at<std::int16_t>(v, u) = -16;
+        }
+    }
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Unknown);
+    EXPECT_EQ(ahead.danger, DangerClass::Unknown);
+    const Sector& side = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 20.0))];
+    EXPECT_EQ(side.state, SectorState::Clear);
 }
 
 TEST(SectorBuilder, IsolatedOutliersNeitherCreateNorMoveObstacles)

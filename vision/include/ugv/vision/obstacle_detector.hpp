@@ -4,8 +4,9 @@
 /// The per-frame stereo obstacle pipeline on the rectified ROI:
 /// RoiMatcher (StereoSGBM on the ROI) -> GroundEstimator (per-frame ground from that disparity, falling back to
 /// the configured plane) -> warpGround + GroundMismatch (edge pixels where the left image warped through the
-/// ground plane disagrees with the right one, with the sign of the residual disparity) -> SectorBuilder (dense
-/// disparity cue, confirmed and weighted by the mismatch labels) -> sectors.
+/// ground plane disagrees with the right one, with the sign of the residual disparity) -> ObstacleVerifier (every
+/// off-ground disparity must explain the images better than the ground does, else it is invalidated) ->
+/// SectorBuilder (dense disparity cue, confirmed and weighted by the mismatch labels) -> sectors.
 ///
 /// The mismatch stage labels pixels of the right image; they are moved to the left image's grid (where the
 /// disparity lives) through the warp's row map plus the residual disparity.
@@ -28,6 +29,7 @@
 #include "ugv/vision/ground_mismatch.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/ground_warp.hpp"
+#include "ugv/vision/obstacle_verifier.hpp"
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 #include "ugv/vision/sector_builder.hpp"
@@ -44,7 +46,8 @@ struct DetectorConfig {
         c.smoothing = 1.0;
         return c;
     }();
-    GroundMismatchConfig mismatch; ///< width and height are filled in by create()
+    GroundMismatchConfig mismatch;   ///< width and height are filled in by create()
+    ObstacleVerifierConfig verifier; ///< width and height are filled in by create()
     /// Rows at the top of the ROI that only give the matcher's block context and are not analysed [px]
     /// (RectifierConfig::roiMarginRows).
     int marginRows = 8;
@@ -80,6 +83,8 @@ public:
     [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return builder_.sectors(); }
     /// Intermediate buffers of the last frame, read-only (tools, overlays).
     [[nodiscard]] const cv::Mat& disparity16() const noexcept { return matcher_.disparity16(); }
+    /// The disparity the sectors were built from: the matcher's, less the pixels the verifier rejected.
+    [[nodiscard]] const ObstacleVerifier& verifier() const noexcept { return verifier_; }
     /// Obstacle labels (GroundLabel values) of the ground-mismatch stage on the left image's ROI grid.
     [[nodiscard]] ConstImageViewU8 labels() const noexcept { return leftLabels_.view(); }
     /// The ground-mismatch stage's own labels, on the right image's grid.
@@ -92,10 +97,10 @@ public:
 
 private:
     ObstacleDetector(RoiMatcher matcher, SectorBuilder builder, GroundEstimator estimator, GroundMismatch mismatch,
-                     Rect roi) noexcept
+                     ObstacleVerifier verifier, Rect roi) noexcept
         : matcher_(std::move(matcher)), builder_(std::move(builder)), estimator_(std::move(estimator)),
-          mismatch_(std::move(mismatch)), warped_(roi.width, roi.height), spans_(static_cast<std::size_t>(roi.height)),
-          leftLabels_(roi.width, roi.height)
+          mismatch_(std::move(mismatch)), verifier_(std::move(verifier)), warped_(roi.width, roi.height),
+          spans_(static_cast<std::size_t>(roi.height)), leftLabels_(roi.width, roi.height)
     {
     }
     /// Moves the mismatch labels from the right grid to the left grid (leftLabels_).
@@ -105,6 +110,7 @@ private:
     SectorBuilder builder_;
     GroundEstimator estimator_;
     GroundMismatch mismatch_;
+    ObstacleVerifier verifier_;
     Image<std::uint8_t> warped_;
     std::vector<WarpSpan> spans_;
     Image<std::uint8_t> leftLabels_;

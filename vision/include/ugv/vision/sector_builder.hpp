@@ -11,11 +11,14 @@
 ///    (weight 1); a pixel that the label image also marks (1 positive, 2 negative) votes with weight
 ///    1 + labelWeight. Without the dense cue only labelled pixels vote (unlabelled ones still forbid Clear).
 ///  - ground support: |z| <= minHeightM (and >= -minDepthM).
+/// The range of a positive vote is the point's horizontal range; that of a negative vote is where the ray to it
+/// crosses the ground plane (the near rim of the drop, where the vehicle must stop), as the simulator's truth.
 /// Per sector and kind, the votes go into a range histogram (rangeBinM bins up to maxRangeM). The nearest
 /// cluster is the first window [r, r (1 + clusterFraction) + clusterWindowM] holding >= minSupport votes;
 /// its range is the rangePercentile-quantile of the votes inside the window (robust to single outliers).
 /// Sector state: Obstacle (nearer kind wins) when a cluster exists; else Clear (range +inf) when the ground
-/// support is >= clearGroundFraction of the sector's analysed pixels and the stray votes are < minSupport;
+/// support is >= clearGroundFraction of the sector's analysed pixels, at least minClearFarVotes of those ground
+/// pixels lie at or beyond clearRangeM (the ground is seen to be free that far) and the stray votes are < minSupport;
 /// else Unknown (no texture, invalid disparity, too few measurements, obstacles beyond maxRangeM): never a
 /// false Clear. danger = classify(state, range, dangerDistanceM, cautionDistanceM).
 ///
@@ -44,8 +47,11 @@ struct SectorBuilderConfig {
                                        ///< mismatch blobs on empty ground through: 23..33 votes measured)
     float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
     float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
-    float rangePercentile = 0.10F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
+    float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
     float clearGroundFraction = 0.25F; ///< ground support (fraction of the sector's pixels) needed for Clear
+    float clearRangeM = 5.0F;          ///< [m] Clear means free ground seen out to at least this range ...
+    int minClearFarVotes = 20;         ///< ... by this many ground pixels at or beyond it (a textureless wall at
+                                       ///< 3 m hides the ground behind it: Unknown, not Clear)
     int labelWeight = 1;               ///< extra votes of a pixel that the label image confirms
     bool useDenseCue = true;           ///< unlabelled pixels above/below the ground vote too
     float confidenceSupport = 200.0F;  ///< votes that give confidence 1
@@ -115,6 +121,7 @@ private:
     std::vector<std::uint32_t> histograms_;      ///< [sector][kind 0 positive, 1 negative][bin] votes
     std::vector<float> extremes_;                ///< [sector][kind][bin] max height / depth [m]
     std::vector<std::uint32_t> groundVotes_;     ///< [sector]
+    std::vector<std::uint32_t> farGroundVotes_;  ///< [sector] ground votes at or beyond clearRangeM
     std::vector<std::uint32_t> kindVotes_;       ///< [sector][kind] all votes
     std::vector<std::uint32_t> pixelsPerSector_; ///< analysed pixels whose column bearing is in the sector
     std::vector<double> boundaryCos_;            ///< [sectorCount + 1] cos / sin of the sector boundary bearings

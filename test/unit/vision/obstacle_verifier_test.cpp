@@ -1,0 +1,191 @@
+#include "ugv/vision/obstacle_verifier.hpp"
+
+#include <cstdint>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+
+namespace ugv::vision {
+namespace {
+
+constexpr int kWidth = 160;
+constexpr int kHeight = 40;
+constexpr int kY0 = 300;                          ///< full-frame row of the ROI's first row
+constexpr int kGroundD = 10;                      ///< [px] the ground plane's disparity everywhere
+constexpr DisparityPlane kGround{0.0, 0.0, 10.0}; ///< d_g = 10
+constexpr int kObstacleD = 30;                    ///< [px]
+constexpr int kBoxX0 = 70;                        ///< columns [70, 100) of the left image hold the "obstacle"
+constexpr int kBoxX1 = 100;
+constexpr std::int16_t kInvalid = -16;
+
+ObstacleVerifierConfig config()
+{
+    ObstacleVerifierConfig c;
+    c.width = kWidth;
+    c.height = kHeight;
+    return c;
+}
+
+/// A textured scene: the left image is random texture; the right image shows it at the ground disparity except
+/// the box columns, which it shows at kObstacleD when `withObstacle` (a real near surface).
+struct Pair {
+    Image<std::uint8_t> left{kWidth, kHeight};
+    Image<std::uint8_t> right{kWidth, kHeight};
+    Image<std::int16_t> disparity{kWidth, kHeight};
+};
+
+Pair makePair(bool withObstacle, bool textured = true)
+{
+    Pair p;
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> grey(20, 235);
+    // Per image row one texture for the ground and one for the box's own surface; the left image shows the box
+    // over its columns when `withObstacle`, the right image shows each surface at its own disparity.
+    constexpr int kTexture = kWidth + 64;
+    std::vector<std::uint8_t> ground(kTexture);
+    std::vector<std::uint8_t> box(kTexture);
+    for (int y = 0; y < kHeight; ++y) {
+        for (std::size_t i = 0; i < ground.size(); ++i) {
+            ground[i] = textured ? static_cast<std::uint8_t>(grey(rng)) : std::uint8_t{128};
+            box[i] = textured ? static_cast<std::uint8_t>(grey(rng)) : std::uint8_t{128};
+        }
+        std::uint8_t* l = p.left.view().row(y);
+        std::uint8_t* r = p.right.view().row(y);
+        const auto inBox = [withObstacle](int xl) { return withObstacle && xl >= kBoxX0 && xl < kBoxX1; };
+        for (int x = 0; x < kWidth; ++x) {
+            l[x] = inBox(x) ? box[static_cast<std::size_t>(x)] : ground[static_cast<std::size_t>(x + 40)];
+        }
+        for (int xr = 0; xr < kWidth; ++xr) {
+            // Right pixel xr sees the left pixel xr + d of the surface in front there (the box occludes).
+            const int near = xr + kObstacleD;
+            r[xr] = inBox(near) ? box[static_cast<std::size_t>(near)]
+                                : ground[static_cast<std::size_t>(xr + kGroundD + 40)];
+        }
+        std::int16_t* d = p.disparity.view().row(y);
+        for (int x = 0; x < kWidth; ++x) {
+            d[x] = static_cast<std::int16_t>(16 * ((x >= kBoxX0 && x < kBoxX1) ? kObstacleD : kGroundD));
+        }
+    }
+    return p;
+}
+
+int countInvalidInBox(ImageView<const std::int16_t> d)
+{
+    int n = 0;
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = kBoxX0; x < kBoxX1; ++x) {
+            n += d.row(y)[x] < 0 ? 1 : 0;
+        }
+    }
+    return n;
+}
+
+TEST(ObstacleVerifier, CreateRejectsInvalidConfig)
+{
+    ObstacleVerifierConfig empty = config();
+    empty.width = 0;
+    ObstacleVerifierConfig window = config();
+    window.windowHalfWidth = 8;
+    ObstacleVerifierConfig ratio = config();
+    ratio.acceptRatio = 1.5F;
+
+    EXPECT_FALSE(ObstacleVerifier::create(empty).has_value());
+    EXPECT_FALSE(ObstacleVerifier::create(window).has_value());
+    EXPECT_FALSE(ObstacleVerifier::create(ratio).has_value());
+    EXPECT_TRUE(ObstacleVerifier::create(config()).has_value());
+}
+
+TEST(ObstacleVerifier, KeepsAnObstacleTheImagesShow)
+{
+    const Pair p = makePair(true);
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+
+    // The window straddles the box edge for hw = 3 columns on each side; the interior must all stand.
+    int interiorRejected = 0;
+    for (int y = 2; y < kHeight - 2; ++y) {
+        for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
+            interiorRejected += sut.disparity().row(y)[x] < 0 ? 1 : 0;
+        }
+    }
+    EXPECT_EQ(interiorRejected, 0);
+    EXPECT_GT(sut.counts().tested, 0);
+}
+
+TEST(ObstacleVerifier, RejectsAnObstacleDisparityTheGroundExplains)
+{
+    // The images show flat ground everywhere, but the disparity claims a near box (a matcher's fill-in).
+    const Pair p = makePair(false);
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+
+    const int analysable = (kHeight - 4) * (kBoxX1 - kBoxX0); // rows whose window fits
+    EXPECT_GE(countInvalidInBox(sut.disparity()), analysable * 95 / 100);
+    EXPECT_GE(sut.counts().rejected, analysable * 95 / 100);
+}
+
+TEST(ObstacleVerifier, LeavesGroundPixelsAlone)
+{
+    const Pair p = makePair(false);
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = 0; x < kWidth; ++x) {
+            if (x < kBoxX0 || x >= kBoxX1) {
+                ASSERT_EQ(sut.disparity().row(y)[x], 16 * kGroundD) << x << "," << y;
+            }
+        }
+    }
+}
+
+TEST(ObstacleVerifier, TexturelessOffGroundPixelsBecomeInvalidNeverGround)
+{
+    const Pair p = makePair(false, false);
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+
+    EXPECT_GT(sut.counts().undecided, 0);
+    for (int y = 2; y < kHeight - 2; ++y) {
+        for (int x = kBoxX0; x < kBoxX1; ++x) {
+            ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y; // unknown, not ground support
+        }
+    }
+}
+
+TEST(ObstacleVerifier, WrongInputSizeGivesAllInvalid)
+{
+    const Pair p = makePair(true);
+    Image<std::uint8_t> small(kWidth - 1, kHeight);
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    EXPECT_EQ(sut.run(small.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::WrongInputSize);
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = 0; x < kWidth; ++x) {
+            ASSERT_EQ(sut.disparity().row(y)[x], kInvalid);
+        }
+    }
+    EXPECT_EQ(sut.run({}, p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::WrongInputSize);
+}
+
+TEST(ObstacleVerifier, RunAllocatesNothingOverHundredsOfFrames)
+{
+    const Pair p = makePair(true);
+    auto sut = ObstacleVerifier::create(config()).value();
+    (void)sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0);
+
+    const ugv::test::ThreadAllocationScope scope;
+    for (int i = 0; i < 300; ++i) {
+        (void)sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0);
+    }
+    EXPECT_EQ(scope.count(), 0U);
+}
+
+} // namespace
+} // namespace ugv::vision

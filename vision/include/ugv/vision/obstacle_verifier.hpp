@@ -1,0 +1,83 @@
+#pragma once
+
+/// @file
+/// Obstacle hypothesis test: does the matcher's disparity explain the images better than the ground does?
+///
+/// Semi-global matching fills weakly textured or aliased regions (far ground near the horizon, the ground seen
+/// through a doorway next to a wall) with the disparity of a neighbouring strong surface. Those pixels look like
+/// a nearby obstacle to the sector builder (a blob at the horizon rows with a wall's disparity is a "0.6 m tall
+/// object at 1.4 m"). The test re-matches each pixel whose disparity is off the ground model by more than
+/// `minResidualPx`, with a zero-mean SAD window (immune to the cameras' gain and offset difference), once at the
+/// matcher's disparity and once at the ground disparity d_g(x, y), both sub-pixel (1/16 px, linear along x).
+/// The obstacle hypothesis stands when cost(d) < acceptRatio * cost(d_g); otherwise the ground explains the
+/// window at least as well and the pixel is marked invalid (neither obstacle nor ground support, so it can never
+/// make a sector Clear). Windows with too little contrast to decide, and windows that leave the image, keep the
+/// matcher's disparity (a textureless obstacle stays an obstacle).
+///
+/// Input and output disparity: CV_16S fixed point as cv::StereoSGBM (value / 16 = disparity [px]), invalid < 0.
+/// ROI convention: the images hold full-frame rows [y0, y0 + height) and the ground plane is in full-frame
+/// coordinates (see ground_warp.hpp).
+
+#include <cstdint>
+
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/vision/ground_plane.hpp"
+
+namespace ugv::vision {
+
+struct ObstacleVerifierConfig {
+    int width = 640;            ///< ROI width [px]
+    int height = 248;           ///< ROI height [px]
+    int windowHalfWidth = 3;    ///< window (2 hw + 1) x (2 hh + 1) [px]; 7 x 5 by default
+    int windowHalfHeight = 2;   ///< [px]
+    float minResidualPx = 1.0F; ///< pixels with |d - d_g| at or below this are not tested [px]
+    float acceptRatio = 0.85F;  ///< the obstacle stands when cost(d) < acceptRatio * cost(d_g)
+    float minContrast = 3.0F;   ///< mean |L - mean(L)| of the window below which the test cannot decide [grey]
+};
+
+enum class VerifyStatus : std::uint8_t {
+    Ok,
+    WrongInputSize, ///< an image or the disparity is not width x height: output all invalid
+};
+
+/// Pixel counts of the last run().
+struct VerifyCounts {
+    int tested = 0;    ///< off-ground pixels re-matched
+    int rejected = 0;  ///< the ground explained them at least as well: invalidated
+    int undecided = 0; ///< too little contrast or the window leaves the image: kept
+};
+
+/// Thread-safety: thread-bound (run() writes the internal buffer). RT-safe: run() yes (no allocation, no
+/// exception); create() no.
+class ObstacleVerifier {
+public:
+    /// @return the verifier with its output buffer allocated, or an error naming the invalid field.
+    static Result<ObstacleVerifier, Error> create(const ObstacleVerifierConfig& config);
+
+    /// Tests every off-ground pixel of `disparity16`.
+    /// @param[in] left, right   rectified ROI images, width x height each
+    /// @param[in] disparity16   the matcher's ROI disparity (x16, invalid < 0), width x height
+    /// @param[in] ground        ground disparity plane of this frame, full-frame coordinates
+    /// @param[in] y0            full-frame row of the ROI's first row [px]
+    /// @return Ok, or WrongInputSize (output all invalid).
+    VerifyStatus run(ConstImageViewU8 left, ConstImageViewU8 right, ImageView<const std::int16_t> disparity16,
+                     const DisparityPlane& ground, int y0) noexcept;
+
+    /// The verified disparity of the last run (x16, invalid < 0), width x height.
+    [[nodiscard]] ImageView<const std::int16_t> disparity() const noexcept { return out_.view(); }
+    [[nodiscard]] const VerifyCounts& counts() const noexcept { return counts_; }
+    [[nodiscard]] const ObstacleVerifierConfig& config() const noexcept { return config_; }
+
+private:
+    explicit ObstacleVerifier(const ObstacleVerifierConfig& config) : config_(config), out_(config.width, config.height)
+    {
+    }
+
+    ObstacleVerifierConfig config_;
+    Image<std::int16_t> out_;
+    VerifyCounts counts_;
+};
+
+} // namespace ugv::vision

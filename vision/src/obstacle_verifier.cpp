@@ -1,0 +1,149 @@
+#include "ugv/vision/obstacle_verifier.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+namespace ugv::vision {
+namespace {
+
+constexpr int kSub = 16;         ///< disparity fixed-point scale (StereoSGBM)
+constexpr int kMaxHalfWidth = 7; ///< window up to 15 x 9
+constexpr int kMaxHalfHeight = 4;
+constexpr std::int16_t kInvalid = -kSub;
+
+Error configError(const std::string& what)
+{
+    return Error{"ObstacleVerifierConfig", what, "see vision/include/ugv/vision/obstacle_verifier.hpp"};
+}
+
+/// Zero-mean SAD of the left window at (x, v) against the right image shifted by d16 / 16 px (linear
+/// interpolation along x), in 1/16 grey levels summed over the window. The caller checks the bounds.
+struct WindowCost {
+    int cost = 0;
+    int contrast = 0; ///< sum |L - mean L|, 1/16 grey
+};
+
+WindowCost zsad(ConstImageViewU8 left, ConstImageViewU8 right, int x, int v, int d16, int hw, int hh) noexcept
+{
+    int l16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
+    int r16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
+    int n = 0;
+    int sumL = 0;
+    int sumR = 0;
+    for (int j = -hh; j <= hh; ++j) {
+        const std::uint8_t* l = left.row(v + j);
+        const std::uint8_t* r = right.row(v + j);
+        for (int i = -hw; i <= hw; ++i) {
+            const int xr16 = (x + i) * kSub - d16;
+            const int xi = xr16 >> 4;
+            const int f = xr16 & (kSub - 1);
+            l16[n] = kSub * l[x + i];
+            r16[n] = (kSub - f) * r[xi] + f * r[xi + 1];
+            sumL += l16[n];
+            sumR += r16[n];
+            ++n;
+        }
+    }
+    const int meanL = sumL / n;
+    const int meanR = sumR / n;
+    WindowCost out;
+    for (int k = 0; k < n; ++k) {
+        out.cost += std::abs((l16[k] - meanL) - (r16[k] - meanR));
+        out.contrast += std::abs(l16[k] - meanL);
+    }
+    return out;
+}
+
+} // namespace
+
+Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierConfig& config)
+{
+    if (config.width < 1 || config.height < 1) {
+        return Unexpected(
+            configError("ROI " + std::to_string(config.width) + "x" + std::to_string(config.height) + " is empty"));
+    }
+    if (config.windowHalfWidth < 1 || config.windowHalfWidth > kMaxHalfWidth || config.windowHalfHeight < 0 ||
+        config.windowHalfHeight > kMaxHalfHeight) {
+        return Unexpected(configError("window half sizes " + std::to_string(config.windowHalfWidth) + " x " +
+                                      std::to_string(config.windowHalfHeight) + " are not in 1..7 x 0..4"));
+    }
+    if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
+        !(config.minContrast >= 0.0F)) {
+        return Unexpected(configError("minResidualPx and minContrast must be >= 0 and acceptRatio in (0, 1]"));
+    }
+    return ObstacleVerifier(config);
+}
+
+VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right,
+                                   ImageView<const std::int16_t> disparity16, const DisparityPlane& ground,
+                                   int y0) noexcept
+{
+    const int w = config_.width;
+    const int h = config_.height;
+    const ImageView<std::int16_t> out = out_.view();
+    counts_ = VerifyCounts{};
+    const auto sizeOk = [w, h](auto view) { return view.data() != nullptr && view.width() == w && view.height() == h; };
+    if (!sizeOk(left) || !sizeOk(right) || !sizeOk(disparity16)) {
+        for (int v = 0; v < h; ++v) {
+            std::fill(out.row(v), out.row(v) + w, kInvalid);
+        }
+        return VerifyStatus::WrongInputSize;
+    }
+    const int hw = config_.windowHalfWidth;
+    const int hh = config_.windowHalfHeight;
+    const int n = (2 * hw + 1) * (2 * hh + 1);
+    const auto minResidual16 = static_cast<int>(std::lround(config_.minResidualPx * kSub));
+    const auto minContrast16 = static_cast<int>(std::lround(config_.minContrast * kSub * static_cast<float>(n)));
+    // cost(d) < ratio * cost(d_g), in integers: cost(d) * 1024 < ratio1024 * cost(d_g).
+    const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
+    // A window at disparity d16 reads right columns floor(((x - hw) 16 - d16) / 16) .. that of (x + hw) + 1.
+    const auto inside = [w, hw](int x, int d16) {
+        const int lo = (x - hw) * kSub - d16;
+        const int hi = (x + hw) * kSub - d16;
+        return lo >= 0 && (hi >> 4) + 1 < w;
+    };
+    for (int v = 0; v < h; ++v) {
+        const std::int16_t* in = disparity16.row(v);
+        std::int16_t* dst = out.row(v);
+        std::copy(in, in + w, dst);
+        if (v < hh || v >= h - hh) {
+            continue; // the window leaves the ROI: kept as matched
+        }
+        const double rowGround = ground.b * (y0 + v) + ground.c;
+        for (int x = hw; x < w - hw; ++x) {
+            const int d16 = in[x];
+            if (d16 < 0) {
+                continue;
+            }
+            const double dg = ground.a * x + rowGround;
+            if (!(dg >= 0.0)) {
+                continue; // above the ground's horizon: no ground hypothesis
+            }
+            const auto dg16 = static_cast<int>(std::lround(dg * kSub));
+            if (std::abs(d16 - dg16) <= minResidual16) {
+                continue;
+            }
+            ++counts_.tested;
+            if (!inside(x, d16) || !inside(x, dg16)) {
+                ++counts_.undecided;
+                continue;
+            }
+            const WindowCost atD = zsad(left, right, x, v, d16, hw, hh);
+            if (atD.contrast < minContrast16) {
+                dst[x] = kInvalid; // no texture to tell: the disparity is the matcher's guess
+                ++counts_.undecided;
+                continue;
+            }
+            const WindowCost atGround = zsad(left, right, x, v, dg16, hw, hh);
+            if (static_cast<long>(atD.cost) * 1024 >= ratio1024 * atGround.cost) {
+                dst[x] = kInvalid;
+                ++counts_.rejected;
+            }
+        }
+    }
+    return VerifyStatus::Ok;
+}
+
+} // namespace ugv::vision
