@@ -11,8 +11,10 @@
 /// matcher's disparity and once at the ground disparity d_g(x, y), both sub-pixel (1/16 px, linear along x).
 /// The obstacle hypothesis stands when cost(d) < acceptRatio * cost(d_g); otherwise the ground explains the
 /// window at least as well and the pixel is marked invalid (neither obstacle nor ground support, so it can never
-/// make a sector Clear). Windows with too little contrast to decide, and windows that leave the image, keep the
-/// matcher's disparity (a textureless obstacle stays an obstacle).
+/// make a sector Clear). A window with too little contrast to decide is invalidated too: its disparity is the
+/// matcher's guess (a textureless obstacle is then seen through its textured edges, and its sectors cannot turn
+/// Clear because the ground behind it is not seen; see SectorBuilderConfig::clearRangeM). Windows that leave the
+/// image keep the matcher's disparity.
 ///
 /// Input and output disparity: CV_16S fixed point as cv::StereoSGBM (value / 16 = disparity [px]), invalid < 0.
 /// ROI convention: the images hold full-frame rows [y0, y0 + height) and the ground plane is in full-frame
@@ -46,7 +48,7 @@ enum class VerifyStatus : std::uint8_t {
 struct VerifyCounts {
     int tested = 0;    ///< off-ground pixels re-matched
     int rejected = 0;  ///< the ground explained them at least as well: invalidated
-    int undecided = 0; ///< too little contrast or the window leaves the image: kept
+    int undecided = 0; ///< too little contrast (invalidated) or the window leaves the image (kept)
 };
 
 /// Thread-safety: thread-bound (run() writes the internal buffer). RT-safe: run() yes (no allocation, no
