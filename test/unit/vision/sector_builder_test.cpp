@@ -102,6 +102,17 @@ TEST(SectorBuilder, CreateRejectsInvalidConfigAndGeometry)
     EXPECT_FALSE(SectorBuilder::create({}, RectifiedProjection{}, kRoi, kFirstRow).has_value());
 }
 
+TEST(SectorBuilder, CreateRejectsInvalidClearRule)
+{
+    SectorBuilderConfig noClearRange;
+    noClearRange.clearRangeM = 0.0F;
+    SectorBuilderConfig negativeVotes;
+    negativeVotes.minClearFarVotes = -1;
+
+    EXPECT_FALSE(SectorBuilder::create(noClearRange, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(negativeVotes, kProjection, kRoi, kFirstRow).has_value());
+}
+
 TEST(SectorBuilder, FlatGroundIsClearEverywhere)
 {
     auto sut = makeBuilder();
