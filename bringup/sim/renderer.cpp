@@ -65,6 +65,7 @@ struct ObjectInfo {
     Label label = Label::Positive;
     double albedo = 0.5;
     bool striped = false;
+    double depthM = 0.0; ///< [m] a negative obstacle's depth below the ground
 };
 
 struct Hit {
@@ -322,6 +323,7 @@ private:
             case ObstacleType::Trench:
             case ObstacleType::Hole: {
                 info.label = Label::Negative;
+                info.depthM = o.depthM;
                 Neg n;
                 n.obstacle = id;
                 n.round = o.type == ObstacleType::Hole && o.round;
@@ -693,9 +695,9 @@ struct SectorHit {
 Result<void, Error> validateOptions(const RenderOptions& o)
 {
     const bool ok = o.samplesPerAxis >= 1 && o.samplesPerAxis <= 4 && o.roiTopFraction >= 0.0 &&
-                    o.roiTopFraction < 1.0 && o.minHeightM >= 0.0 && o.minDepthM >= 0.0 && o.clearanceM > 0.0 &&
-                    o.sectorCount >= 1 && o.sectorCount <= kMaxSectors && o.dangerDistanceM >= 0.0F &&
-                    o.cautionDistanceM >= o.dangerDistanceM;
+                    o.roiTopFraction < 1.0 && o.minHeightM >= 0.0 && o.minDepthM >= 0.0 && o.minVisibleDropM >= 0.0 &&
+                    o.clearanceM > 0.0 && o.sectorCount >= 1 && o.sectorCount <= kMaxSectors &&
+                    o.dangerDistanceM >= 0.0F && o.cautionDistanceM >= o.dangerDistanceM;
     if (!ok) {
         return Unexpected(Error{"sim render options", "out of range",
                                 "samplesPerAxis 1..4, roiTopFraction [0,1), sectorCount 1.." +
@@ -804,7 +806,10 @@ RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderO
                 continue;
             }
             const bool positive = l == Label::Positive && p.z() > options.minHeightM;
-            const bool negative = l == Label::Negative && -p.z() > options.minDepthM;
+            // A drop qualifies by its own depth, wherever it is seen: beyond a few metres only the top of its far
+            // wall is in view, a few centimetres below the ground, yet the vehicle must not drive into it.
+            const bool negative = l == Label::Negative && tracer.info(hit.obstacle).depthM > options.minDepthM &&
+                                  -p.z() > options.minVisibleDropM;
             if (positive || negative) {
                 // A drop's range is where the ground ends along this bearing: the point where the ray that sees
                 // the drop crosses the ground plane (the near rim), not the far wall or floor it hits behind it.

@@ -32,7 +32,8 @@ struct RenderOptions {
     int samplesPerAxis = 2;        ///< jittered supersampling: samplesPerAxis^2 rays per pixel, 1..4
     double roiTopFraction = 0.5;   ///< ROI rows: [roiTopFraction * height, height)
     double minHeightM = 0.10;      ///< [m] positive-obstacle hit points must be higher than this
-    double minDepthM = 0.10;       ///< [m] negative-obstacle hit points must be deeper than this
+    double minDepthM = 0.10;       ///< [m] negative obstacles (holes, trenches) deeper than this count ...
+    double minVisibleDropM = 0.02; ///< [m] ... where their hit points are this far below the ground
     double clearanceM = 1.0;       ///< [m] objects whose underside is above this are overhangs
     int sectorCount = 64;          ///< sectors across the horizontal field of view
     float dangerDistanceM = 1.5F;  ///< [m] classify(): Red below this range

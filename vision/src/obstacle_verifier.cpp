@@ -70,8 +70,9 @@ Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierC
                                       std::to_string(config.windowHalfHeight) + " are not in 1..7 x 0..4"));
     }
     if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
-        !(config.minContrast >= 0.0F)) {
-        return Unexpected(configError("minResidualPx and minContrast must be >= 0 and acceptRatio in (0, 1]"));
+        !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F)) {
+        return Unexpected(
+            configError("minResidualPx, minContrast and minContrastBelow must be >= 0 and acceptRatio in (0, 1]"));
     }
     return ObstacleVerifier(config);
 }
@@ -96,6 +97,8 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
     const int n = (2 * hw + 1) * (2 * hh + 1);
     const auto minResidual16 = static_cast<int>(std::lround(config_.minResidualPx * kSub));
     const auto minContrast16 = static_cast<int>(std::lround(config_.minContrast * kSub * static_cast<float>(n)));
+    const auto minContrastBelow16 =
+        static_cast<int>(std::lround(config_.minContrastBelow * kSub * static_cast<float>(n)));
     // cost(d) < ratio * cost(d_g), in integers: cost(d) * 1024 < ratio1024 * cost(d_g).
     const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
     // A window at disparity d16 reads right columns floor(((x - hw) 16 - d16) / 16) .. that of (x + hw) + 1.
@@ -131,7 +134,7 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
                 continue;
             }
             const WindowCost atD = zsad(left, right, x, v, d16, hw, hh);
-            if (atD.contrast < minContrast16) {
+            if (atD.contrast < (d16 < dg16 ? minContrastBelow16 : minContrast16)) {
                 dst[x] = kInvalid; // no texture to tell: the disparity is the matcher's guess
                 ++counts_.undecided;
                 continue;

@@ -54,10 +54,13 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
                                       std::to_string(kMaxSectors)));
     }
     if (!(config.minHeightM > 0.0F) || !(config.minDepthM > 0.0F) || !(config.rangeBinM > 0.0F) ||
-        !(config.maxRangeM > config.rangeBinM) || config.minSupport < 1 || config.clusterWindowM < 0.0F ||
-        config.clusterFraction < 0.0F || !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
+        !(config.maxRangeM > config.rangeBinM) || config.minSupport < 1 || config.minDropSupport < 1 ||
+        !(config.dropSupportRangeM > 0.0F) || config.clusterWindowM < 0.0F || config.clusterFraction < 0.0F ||
+        !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
+        !(config.dropRangePercentile >= 0.0F && config.dropRangePercentile < 1.0F) ||
         !(config.clearGroundFraction > 0.0F && config.clearGroundFraction <= 1.0F) || config.labelWeight < 0 ||
-        !(config.confidenceSupport > 0.0F) || !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
+        !(config.confidenceSupport > 0.0F) || !(config.minDropDepthM > 0.0F) || !(config.minDropGapM >= 0.0F) ||
+        !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
         !(config.dangerDistanceM <= config.cautionDistanceM)) {
         return Unexpected(configError("a threshold is out of range (all must be positive, percentile in [0, 1))"));
     }
@@ -117,9 +120,9 @@ void SectorBuilder::setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) 
     sectors_.degraded = true;
 }
 
-SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram) const noexcept
+SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram, float percentile,
+                                                     bool drop) const noexcept
 {
-    const auto minSupport = static_cast<std::uint32_t>(config_.minSupport);
     for (int start = 0; start < bins_; ++start) {
         if (histogram[start] == 0U) {
             continue;
@@ -131,11 +134,19 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
         for (int b = start; b < end; ++b) {
             votes += histogram[b];
         }
+        // A drop's visible part shrinks with the square of its range (a strip of wall, not a face): beyond
+        // dropSupportRangeM it needs proportionally fewer votes, never fewer than minDropSupport.
+        std::uint32_t minSupport = static_cast<std::uint32_t>(config_.minSupport);
+        if (drop && r0 > config_.dropSupportRangeM) {
+            const float scale = config_.dropSupportRangeM / r0;
+            minSupport = static_cast<std::uint32_t>(std::max(static_cast<float>(config_.minDropSupport),
+                                                             static_cast<float>(config_.minSupport) * scale * scale));
+        }
         if (votes < minSupport) {
             continue;
         }
         // Quantile of the votes inside the window; the range is the centre of that bin.
-        const auto target = static_cast<std::uint32_t>(config_.rangePercentile * static_cast<float>(votes));
+        const auto target = static_cast<std::uint32_t>(percentile * static_cast<float>(votes));
         std::uint32_t cumulative = 0;
         int b = start;
         for (; b < end; ++b) {
@@ -189,11 +200,13 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     const auto bins = static_cast<std::size_t>(bins_);
     const auto labelWeight = static_cast<std::uint32_t>(config_.labelWeight);
 
+    const auto groundHeight = static_cast<float>(ground.heightM);
     const auto vote = [&](int s, float range, float z, const std::uint8_t* label, int u) noexcept {
         int kind = -1;
         if (z > config_.minHeightM) {
             kind = 0;
-        } else if (z < -config_.minDepthM) {
+        } else if (z < -config_.minDepthM ||
+                   (z < -config_.minDropDepthM && range * -z >= config_.minDropGapM * (groundHeight - z))) {
             kind = 1;
         } else {
             ++groundVotes_[static_cast<std::size_t>(s)];
@@ -311,8 +324,8 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     for (int s = 0; s < config_.sectorCount; ++s) {
         Sector& out = sectors_.sectors[static_cast<std::size_t>(s)];
         const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
-        const Cluster positive = nearestCluster(&histograms_[slot0 * bins]);
-        const Cluster negative = nearestCluster(&histograms_[(slot0 + 1) * bins]);
+        const Cluster positive = nearestCluster(&histograms_[slot0 * bins], config_.rangePercentile, false);
+        const Cluster negative = nearestCluster(&histograms_[(slot0 + 1) * bins], config_.dropRangePercentile, true);
         const bool havePositive = positive.votes > 0;
         const bool haveNegative = negative.votes > 0;
         if (havePositive || haveNegative) {
@@ -330,12 +343,14 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
             out.heightM = extreme;
             out.confidence = std::min(1.0F, static_cast<float>(c.votes) / config_.confidenceSupport);
         } else {
-            const std::uint32_t stray = kindVotes_[slot0] + kindVotes_[slot0 + 1];
+            // Stray votes that make no cluster still forbid Clear: a far drop seen over too few pixels is
+            // Unknown, never Clear.
+            const bool stray = kindVotes_[slot0] >= static_cast<std::uint32_t>(config_.minSupport) ||
+                               kindVotes_[slot0 + 1] >= static_cast<std::uint32_t>(config_.minDropSupport);
             const auto pixels = static_cast<float>(pixelsPerSector_[static_cast<std::size_t>(s)]);
             const float groundFraction =
                 pixels > 0.0F ? static_cast<float>(groundVotes_[static_cast<std::size_t>(s)]) / pixels : 0.0F;
-            if (stray < static_cast<std::uint32_t>(config_.minSupport) &&
-                groundFraction >= config_.clearGroundFraction &&
+            if (!stray && groundFraction >= config_.clearGroundFraction &&
                 farGroundVotes_[static_cast<std::size_t>(s)] >= static_cast<std::uint32_t>(config_.minClearFarVotes)) {
                 out.state = SectorState::Clear;
                 out.rangeM = std::numeric_limits<float>::infinity();

@@ -159,6 +159,63 @@ TEST(ObstacleVerifier, TexturelessOffGroundPixelsBecomeInvalidNeverGround)
     }
 }
 
+/// A surface over the box columns at `surfaceD` with faint texture (uniform +-amplitude grey around 60, like a
+/// trench wall in shadow) in front of textured ground at disparity `groundD`; disparity map = the truth.
+Pair makeFaintSurface(int groundD, int surfaceD, int amplitude)
+{
+    Pair p;
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> grey(20, 235);
+    std::uniform_int_distribution<int> faint(60 - amplitude, 60 + amplitude);
+    constexpr int kTexture = kWidth + 128;
+    std::vector<std::uint8_t> ground(kTexture);
+    std::vector<std::uint8_t> surface(kTexture);
+    const auto inBox = [](int xl) { return xl >= kBoxX0 && xl < kBoxX1; };
+    for (int y = 0; y < kHeight; ++y) {
+        for (std::size_t i = 0; i < ground.size(); ++i) {
+            ground[i] = static_cast<std::uint8_t>(grey(rng));
+            surface[i] = static_cast<std::uint8_t>(faint(rng));
+        }
+        std::uint8_t* l = p.left.view().row(y);
+        std::uint8_t* r = p.right.view().row(y);
+        for (int x = 0; x < kWidth; ++x) {
+            l[x] = inBox(x) ? surface[static_cast<std::size_t>(x)] : ground[static_cast<std::size_t>(x + 60)];
+        }
+        for (int xr = 0; xr < kWidth; ++xr) {
+            const int onSurface = xr + surfaceD;
+            r[xr] = inBox(onSurface) ? surface[static_cast<std::size_t>(onSurface)]
+                                     : ground[static_cast<std::size_t>(xr + groundD + 60)];
+        }
+        std::int16_t* d = p.disparity.view().row(y);
+        for (int x = 0; x < kWidth; ++x) {
+            d[x] = static_cast<std::int16_t>(16 * (inBox(x) ? surfaceD : groundD));
+        }
+    }
+    return p;
+}
+
+TEST(ObstacleVerifier, FaintSurfaceBelowTheGroundIsKeptAboveItIsUndecided)
+{
+    // Contrast about 2 grey levels: below minContrast (3) but above minContrastBelow (1). A drop's far wall with
+    // that texture keeps its disparity (the ratio test decides); the same texture on a near surface (above the
+    // ground, where semi-global fill-in happens) is undecided and invalidated.
+    auto sut = ObstacleVerifier::create(config()).value();
+    const DisparityPlane ground{0.0, 0.0, 30.0};
+
+    const Pair drop = makeFaintSurface(30, 10, 4);
+    ASSERT_EQ(sut.run(drop.left.view(), drop.right.view(), drop.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    EXPECT_LT(countInvalidInBox(sut.disparity()), (kBoxX1 - kBoxX0) * kHeight / 10);
+
+    const Pair near = makeFaintSurface(30, 50, 4);
+    ASSERT_EQ(sut.run(near.left.view(), near.right.view(), near.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    // Inside the box, where the window holds only the faint surface (the edges see the textured ground too).
+    for (int y = 2; y < kHeight - 2; ++y) {
+        for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
+            ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
+        }
+    }
+}
+
 TEST(ObstacleVerifier, WrongInputSizeGivesAllInvalid)
 {
     const Pair p = makePair(true);

@@ -69,6 +69,21 @@ void paintFace(cv::Mat& d16, double zM, double x0, double x1, double top)
     }
 }
 
+/// Ground `depthM` below the plane, seen at depths [z0, z1] over camera X in [-halfWidth, halfWidth] [m].
+void paintSunkenGround(cv::Mat& d16, double depthM, double z0, double z1, double halfWidth)
+{
+    for (int v = 0; v < d16.rows; ++v) {
+        const double dy = v + kRoi.y - kProjection.cy;
+        const double z = dy > 0.0 ? kProjection.fy * (kHeightM + depthM) / dy : 1e9;
+        if (z < z0 || z > z1) {
+            continue;
+        }
+        for (int u = column(-halfWidth, z); u <= column(halfWidth, z); ++u) {
+            d16.at<std::int16_t>(v, u) = static_cast<std::int16_t>(std::lround(kFb / z * 16.0));
+        }
+    }
+}
+
 int sectorOf(const ObstacleSectors& s, double bearingDeg)
 {
     for (int i = 0; i < s.count; ++i) {
@@ -111,6 +126,20 @@ TEST(SectorBuilder, CreateRejectsInvalidClearRule)
 
     EXPECT_FALSE(SectorBuilder::create(noClearRange, kProjection, kRoi, kFirstRow).has_value());
     EXPECT_FALSE(SectorBuilder::create(negativeVotes, kProjection, kRoi, kFirstRow).has_value());
+}
+
+TEST(SectorBuilder, CreateRejectsInvalidDropRule)
+{
+    const auto rejected = [](void (*set)(SectorBuilderConfig&)) {
+        SectorBuilderConfig c;
+        set(c);
+        return !SectorBuilder::create(c, kProjection, kRoi, kFirstRow).has_value();
+    };
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropDepthM = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropGapM = -0.1F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropRangePercentile = 1.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropSupport = 0; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropSupportRangeM = 0.0F; }));
 }
 
 TEST(SectorBuilder, FlatGroundIsClearEverywhere)
@@ -159,16 +188,7 @@ TEST(SectorBuilder, NegativeFloorGivesNegativeKind)
     constexpr double kDepthM = 0.3;
     auto sut = makeBuilder();
     cv::Mat d16 = groundDisparity();
-    for (int v = 0; v < d16.rows; ++v) {
-        const double dy = v + kRoi.y - kProjection.cy;
-        const double z = dy > 0.0 ? kProjection.fy * (kHeightM + kDepthM) / dy : 1e9;
-        if (z < 4.0 || z > 5.0) {
-            continue;
-        }
-        for (int u = column(-0.5, z); u <= column(0.5, z); ++u) {
-            d16.at<std::int16_t>(v, u) = static_cast<std::int16_t>(std::lround(kFb / z * 16.0));
-        }
-    }
+    paintSunkenGround(d16, kDepthM, 4.0, 5.0, 0.5);
 
     ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
 
@@ -178,6 +198,51 @@ TEST(SectorBuilder, NegativeFloorGivesNegativeKind)
     // The range of a drop is its near rim: the ray that sees the floor at 4 m crosses the ground at 4 h / (h + depth).
     EXPECT_NEAR(ahead.rangeM, 4.0 * kHeightM / (kHeightM + kDepthM), 0.12);
     EXPECT_NEAR(ahead.heightM, kDepthM, 0.03);
+}
+
+/// Rows where a trench whose near rim is at `rimM` shows its far wall at `wallM`: from the ground (z = 0) down to
+/// where the rim ray meets the wall; painted over [-2, 2] m laterally (camera X).
+void paintFarWall(cv::Mat& d16, double rimM, double wallM)
+{
+    const double bottom = kHeightM - wallM * kHeightM / rimM; // z where the rim ray meets the wall (< 0)
+    const auto value = static_cast<std::int16_t>(std::lround(kFb / wallM * 16.0));
+    for (int v = roiRow(0.0, wallM); v <= roiRow(bottom, wallM); ++v) {
+        for (int u = column(-2.0, wallM); u <= column(2.0, wallM); ++u) {
+            d16.at<std::int16_t>(v, u) = value;
+        }
+    }
+    // The ground between the rim and the wall is hidden: rows of ranges in (rim, wall) carry the wall (above).
+}
+
+TEST(SectorBuilder, FarWallOfADropSeenOverAGapIsNegativeAtTheRim)
+{
+    // A 1 m trench at 7 m: only the top 8 cm of its far wall are in view, never deeper than minDepthM (0.10 m),
+    // but the rays to it cross the ground up to 1 m before it (a gap in the seen ground): a drop.
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    paintFarWall(d16, 7.0, 8.0);
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Obstacle);
+    EXPECT_EQ(ahead.kind, ObstacleKind::Negative);
+    EXPECT_NEAR(ahead.rangeM, 7.0, 0.03 * 7.0);
+}
+
+TEST(SectorBuilder, ShallowDipWithoutAGapIsGround)
+{
+    // The ground 4 cm lower from 2 m to 3 m (a dip seen from above, no hidden ground): the rays cross the ground
+    // plane at most 3 * 0.04 / 0.63 = 0.19 m before the points, less than minDropGapM: ground, and Clear.
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    constexpr double kDipM = 0.04;
+    paintSunkenGround(d16, kDipM, 2.0, 3.0, 1.0);
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Clear);
 }
 
 TEST(SectorBuilder, GroundSeenOnlyNearIsUnknownNotClear)
@@ -298,7 +363,7 @@ void expectMatchesGroundTruth(const char* name, double rangeM, double bearingDeg
         for (int u = 0; u < frame.labels.cols; ++u) {
             const std::uint8_t l = frame.labels.at<std::uint8_t>(y, u);
             const float h = frame.height.at<float>(y, u);
-            if ((l == 1 && h > 0.10F) || (l == 2 && h < -0.10F)) {
+            if ((l == 1 && h > 0.10F) || (l == 2 && h < -0.02F)) { // the simulator's qualifying hits
                 const double z = frame.depth.at<float>(y, u);
                 const double bearing = std::atan2(-(u - kProjection.cx) * z / kProjection.fx, z) * 180.0 / M_PI;
                 const int s = static_cast<int>(std::floor((bearing + 60.7 / 2.0) / binDeg));

@@ -11,7 +11,8 @@
 /// matcher's disparity and once at the ground disparity d_g(x, y), both sub-pixel (1/16 px, linear along x).
 /// The obstacle hypothesis stands when cost(d) < acceptRatio * cost(d_g); otherwise the ground explains the
 /// window at least as well and the pixel is marked invalid (neither obstacle nor ground support, so it can never
-/// make a sector Clear). A window with too little contrast to decide is invalidated too: its disparity is the
+/// make a sector Clear). A window with too little contrast to decide (minContrast; minContrastBelow where the
+/// disparity is below the ground's) is invalidated too: its disparity is the
 /// matcher's guess (a textureless obstacle is then seen through its textured edges, and its sectors cannot turn
 /// Clear because the ground behind it is not seen; see SectorBuilderConfig::clearRangeM). Windows that leave the
 /// image keep the matcher's disparity.
@@ -37,6 +38,10 @@ struct ObstacleVerifierConfig {
     float minResidualPx = 1.0F; ///< pixels with |d - d_g| at or below this are not tested [px]
     float acceptRatio = 0.85F;  ///< the obstacle stands when cost(d) < acceptRatio * cost(d_g)
     float minContrast = 3.0F;   ///< mean |L - mean(L)| of the window below which the test cannot decide [grey]
+    /// The same for a disparity below the ground's (a drop): the far wall of a trench is in shadow and weakly
+    /// textured, but the ratio test still decides there (the fill-in this guards against is a strong
+    /// surface's larger disparity spreading over the ground: above it) [grey]
+    float minContrastBelow = 1.0F;
 };
 
 enum class VerifyStatus : std::uint8_t {

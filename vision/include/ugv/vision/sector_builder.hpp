@@ -7,15 +7,18 @@
 /// Every analysed ROI pixel with a valid disparity becomes a vehicle-frame point (GroundPlane::pixelToVehicle)
 /// and is binned by the bearing of the point, atan2(y, x), into `sectorCount` equal bins over the horizontal
 /// field of view 2 atan(width / (2 fx)) (as the simulator's ground truth, bringup/sim/README.md):
-///  - positive vote: z > minHeightM; negative vote: z < -minDepthM. With `useDenseCue` every such pixel votes
-///    (weight 1); a pixel that the label image also marks (1 positive, 2 negative) votes with weight
-///    1 + labelWeight. Without the dense cue only labelled pixels vote (unlabelled ones still forbid Clear).
-///  - ground support: |z| <= minHeightM (and >= -minDepthM).
+///  - positive vote: z > minHeightM; negative vote: z < -minDepthM, or z < -minDropDepthM where the ray to the
+///    point crosses the ground at least minDropGapM before it (the point is seen over a gap: a drop, not a dip;
+///    beyond 4 m only the top centimetres of a trench's far wall are in view). With `useDenseCue` every such pixel
+///    votes (weight 1); a pixel that the label image also marks (1 positive, 2 negative) votes with weight 1 +
+///    labelWeight. Without the dense cue only labelled pixels vote (unlabelled ones still forbid Clear).
+///  - ground support: every other point.
 /// The range of a positive vote is the point's horizontal range; that of a negative vote is where the ray to it
 /// crosses the ground plane (the near rim of the drop, where the vehicle must stop), as the simulator's truth.
 /// Per sector and kind, the votes go into a range histogram (rangeBinM bins up to maxRangeM). The nearest
 /// cluster is the first window [r, r (1 + clusterFraction) + clusterWindowM] holding >= minSupport votes;
-/// its range is the rangePercentile-quantile of the votes inside the window (robust to single outliers).
+/// its range is the rangePercentile-quantile (dropRangePercentile for negative votes) of the votes inside the window
+/// (robust to single outliers).
 /// Sector state: Obstacle (nearer kind wins) when a cluster exists; else Clear (range +inf) when the ground
 /// support is >= clearGroundFraction of the sector's analysed pixels, at least minClearFarVotes of those ground
 /// pixels lie at or beyond clearRangeM (the ground is seen to be free that far) and the stray votes are < minSupport;
@@ -41,13 +44,21 @@ struct SectorBuilderConfig {
     int sectorCount = 64;
     float minHeightM = 0.10F;          ///< [m] positive obstacle points are higher than this
     float minDepthM = 0.10F;           ///< [m] negative obstacle points are deeper than this
+    float minDropDepthM = 0.03F;       ///< [m] ... or deeper than this when the ground they hide is long:
+    float minDropGapM = 0.25F;         ///< [m] the ray to the point crosses the ground this far before it
+                                       ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
+                                       ///< view beyond 4 m, a few centimetres below the ground, behind a gap
     float maxRangeM = 12.0F;           ///< [m] points farther away are ignored (disparity too coarse)
     float rangeBinM = 0.02F;           ///< [m] histogram resolution
     int minSupport = 40;               ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
                                        ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float dropSupportRangeM = 5.0F;    ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
+    int minDropSupport = 20;           ///< ... but at least this many votes
     float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
     float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
     float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
+    float dropRangePercentile = 0.05F; ///< the same for negative votes: their rim ranges spread from the rim
+                                       ///< to the far wall (only the nearest are the rim)
     float clearGroundFraction = 0.25F; ///< ground support (fraction of the sector's pixels) needed for Clear
     float clearRangeM = 5.0F;          ///< [m] Clear means free ground seen out to at least this range ...
     int minClearFarVotes = 20;         ///< ... by this many ground pixels at or beyond it (a textureless wall at
@@ -107,7 +118,7 @@ private:
         int votes = 0;
         float rangeM = 0.0F;
     };
-    [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram) const noexcept;
+    [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram, float percentile, bool drop) const noexcept;
     BuildStatus buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
                           std::uint64_t sequence, std::int64_t stampNs, bool reference) noexcept;
 

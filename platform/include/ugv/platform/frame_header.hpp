@@ -15,7 +15,7 @@
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/result.hpp"
 
-namespace ugv::ipc {
+namespace ugv {
 
 enum class PixelFormat : std::uint16_t { Grey8 = 1 };
 
@@ -59,4 +59,4 @@ struct StereoViews {
 /// `availableBytes`; errors as validate().
 Result<StereoViews, FrameError> viewFrame(const std::byte* frame, std::size_t availableBytes) noexcept;
 
-} // namespace ugv::ipc
+} // namespace ugv

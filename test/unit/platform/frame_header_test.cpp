@@ -1,11 +1,11 @@
-#include "ugv/ipc/frame_header.hpp"
+#include "ugv/platform/frame_header.hpp"
 
 #include <cstring>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-namespace ugv::ipc {
+namespace ugv {
 namespace {
 
 constexpr std::uint32_t kWidth = 5;
@@ -112,4 +112,4 @@ TEST(FrameHeader, EveryErrorHasText)
 }
 
 } // namespace
-} // namespace ugv::ipc
+} // namespace ugv

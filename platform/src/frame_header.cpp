@@ -1,8 +1,8 @@
-#include "ugv/ipc/frame_header.hpp"
+#include "ugv/platform/frame_header.hpp"
 
 #include <cstring>
 
-namespace ugv::ipc {
+namespace ugv {
 
 const char* toString(FrameError error) noexcept
 {
@@ -79,4 +79,4 @@ Result<StereoViews, FrameError> viewFrame(const std::byte* frame, std::size_t av
                        ConstImageViewU8(pixels + stride * height, width, height, stride)};
 }
 
-} // namespace ugv::ipc
+} // namespace ugv
