@@ -14,6 +14,7 @@ packages=(
     libopencv-dev          # core/imgproc/calib3d (service), imgcodecs (host tool), with CMake config
     libyaml-cpp-dev        # service config file
     libeigen3-dev          # small dense linear algebra (ground plane, correlator)
+    zlib1g-dev             # CRC-32 of recording records (hal/recording)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
 )
 

@@ -89,6 +89,27 @@ const char* className(DangerClass c)
 
 } // namespace
 
+std::string calibrationText(const Rig& rig)
+{
+    cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    fs << "schema_version" << 1;
+    fs << "rectified" << 1;
+    fs << "image_width" << rig.width;
+    fs << "image_height" << rig.height;
+    fs << "fx" << rig.focalPx;
+    fs << "fy" << rig.focalPx;
+    fs << "cx" << rig.cx();
+    fs << "cy" << rig.cy();
+    fs << "baseline_m" << rig.baselineM;
+    fs << "mount"
+       << "{";
+    fs << "height_m" << rig.heightM;
+    fs << "pitch_deg" << rig.pitchDeg;
+    fs << "roll_deg" << rig.rollDeg;
+    fs << "}";
+    return fs.releaseAndGetString();
+}
+
 Result<void, Error> writeCalibration(const Rig& rig, const std::filesystem::path& dir)
 {
     const std::filesystem::path path = dir / "calibration.yaml";
@@ -96,29 +117,11 @@ Result<void, Error> writeCalibration(const Rig& rig, const std::filesystem::path
     if (!std::filesystem::is_directory(dir, ec)) {
         return Unexpected(fileError(dir, "not a directory"));
     }
-    try {
-        cv::FileStorage fs(path.string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-        if (!fs.isOpened()) {
-            return Unexpected(fileError(path, "cannot open for writing"));
-        }
-        fs << "schema_version" << 1;
-        fs << "rectified" << 1;
-        fs << "image_width" << rig.width;
-        fs << "image_height" << rig.height;
-        fs << "fx" << rig.focalPx;
-        fs << "fy" << rig.focalPx;
-        fs << "cx" << rig.cx();
-        fs << "cy" << rig.cy();
-        fs << "baseline_m" << rig.baselineM;
-        fs << "mount"
-           << "{";
-        fs << "height_m" << rig.heightM;
-        fs << "pitch_deg" << rig.pitchDeg;
-        fs << "roll_deg" << rig.rollDeg;
-        fs << "}";
-        fs.release();
-    } catch (const std::exception& e) { // cv::Exception from FileStorage
-        return Unexpected(fileError(path, std::string("cannot write: ") + e.what()));
+    std::ofstream out(path, std::ios::binary);
+    out << calibrationText(rig);
+    out.flush();
+    if (!out) {
+        return Unexpected(fileError(path, "cannot write"));
     }
     return {};
 }

@@ -28,6 +28,9 @@ inline constexpr double kDisparityScale = 256.0;
 /// Value scale of `<stem>_depth.png`: stored = round(Z [m] * kDepthScale), i.e. millimetres.
 inline constexpr double kDepthScale = 1000.0;
 
+/// The calibration of the rig as the text of `calibration.yaml` (see writeCalibration()).
+[[nodiscard]] std::string calibrationText(const Rig& rig);
+
 /// Writes `calibration.yaml` into `dir`: the already-rectified form (cv::FileStorage YAML) with the keys
 /// schema_version (1), rectified (1), image_width, image_height, fx, fy, cx, cy, baseline_m and a `mount` map
 /// with height_m, pitch_deg, roll_deg.

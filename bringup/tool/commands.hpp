@@ -12,5 +12,6 @@ int runRectify(int argc, char** argv);
 int runSim(int argc, char** argv);
 int runDetect(int argc, char** argv);
 int runEval(int argc, char** argv);
+int runRecording(int argc, char** argv);
 
 } // namespace ugv::tool

@@ -21,6 +21,7 @@ constexpr Subcommand kSubcommands[] = {
     {"sim", "generate synthetic stereo data (chessboard pairs for calibration)", ugv::tool::runSim},
     {"detect", "detect obstacles in one stereo pair (sectors, JSON, overlay)", ugv::tool::runDetect},
     {"eval", "evaluate detection on simulator scenes and matching on Middlebury data", ugv::tool::runEval},
+    {"recording", "inspect, import (PNG pairs) and export recordings", ugv::tool::runRecording},
 };
 
 void printHelp(std::ostream& out)

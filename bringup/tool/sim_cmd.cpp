@@ -3,7 +3,8 @@
 //   `ugvsense calibrate` can be checked against it.
 // - Any scene of the ray-cast simulator's catalogue (bringup/sim): one sample with its ground truth
 //   (sim::writeSample) and calibration.yaml (sim::writeCalibration).
-// - A course: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, y, yaw).
+// - A course: a recording (--out REC.ugvrec) with its ground truth in REC.ugvrec.truth.csv, or numbered samples
+//   frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, y, yaw) in a folder.
 
 #include <cmath>
 #include <cstdint>
@@ -20,9 +21,11 @@
 #include "args.hpp"
 #include "chessboard_render.hpp"
 #include "commands.hpp"
+#include "detection.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
 #include "sim/writer.hpp"
+#include "ugv/hal/recording.hpp"
 
 namespace ugv::tool {
 namespace {
@@ -215,6 +218,63 @@ int runCatalogueScene(const Args& args)
     return 0;
 }
 
+/// A course as a recording (hal/recording.hpp) at `out` and its ground truth beside it in `<out>.truth.csv`:
+/// one row per frame and sector (sequence, time, vehicle pose, sector bounds, state, kind, range, class).
+int writeCourseRecording(const sim::Course& course, std::size_t count, double fps, const std::filesystem::path& out)
+{
+    const sim::Rig& rig = course.scene.rig;
+    hal::RecordingWriterOptions options;
+    options.overwrite = true;
+    options.syncEveryFrame = false; // generated data: one sync at close is enough
+    auto writer =
+        hal::RecordingWriter::create(out.string(), static_cast<std::uint32_t>(rig.width),
+                                     static_cast<std::uint32_t>(rig.height), sim::calibrationText(rig), options);
+    if (!writer) {
+        return reportFailure(writer.error());
+    }
+    const std::filesystem::path truthPath = out.string() + ".truth.csv";
+    std::ofstream truth(truthPath);
+    truth << "sequence,t_s,x_m,y_m,yaw_deg,sector,bearing_min_deg,bearing_max_deg,state,kind,range_m,class\n";
+    truth.precision(6);
+    for (std::size_t k = 0; k < count; ++k) {
+        auto frame = sim::renderCourseFrame(course, k);
+        if (!frame) {
+            return reportFailure(frame.error());
+        }
+        // Stamps as a camera's monotonic clock would give them: 1 s after boot, then one frame period each.
+        const auto stampNs = static_cast<std::int64_t>(std::llround((1.0 + static_cast<double>(k) / fps) * 1e9));
+        const cv::Mat& left = frame->left;
+        const cv::Mat& right = frame->right;
+        const ConstImageViewU8 l(left.ptr<std::uint8_t>(), left.cols, left.rows, static_cast<int>(left.step));
+        const ConstImageViewU8 r(right.ptr<std::uint8_t>(), right.cols, right.rows, static_cast<int>(right.step));
+        if (auto appended = writer->append(k, stampNs, stampNs, l, r); !appended) {
+            return reportFailure(Error{out.string(), std::string("cannot append frame: ") + appended.error().text(),
+                                       "check the free space"});
+        }
+        const sim::Pose& pose = course.poses[k];
+        const ObstacleSectors& sectors = frame->sectors;
+        for (int i = 0; i < sectors.count; ++i) {
+            const Sector& sector = sectors.sectors[static_cast<std::size_t>(i)];
+            truth << k << ',' << static_cast<double>(k) / fps << ',' << pose.x << ',' << pose.y << ',' << pose.yawDeg
+                  << ',' << i << ',' << sector.bearingMinDeg << ',' << sector.bearingMaxDeg << ','
+                  << tool::stateName(sector.state) << ',' << tool::kindName(sector.kind) << ','
+                  << (std::isfinite(sector.rangeM) ? std::to_string(sector.rangeM) : std::string("inf")) << ','
+                  << tool::className(sector.danger) << '\n';
+        }
+    }
+    truth.flush();
+    if (!truth) {
+        return reportFailure(Error{truthPath.string(), "cannot write the file", "check the folder"});
+    }
+    if (auto closed = writer->close(); !closed) {
+        return reportFailure(Error{out.string(), std::string("cannot close: ") + closed.error().text(), ""});
+    }
+    std::cout << "wrote " << count << " of " << course.poses.size() << " frames of the course to the recording "
+              << out.string() << " (" << rig.width << "x" << rig.height << ", " << fps << " fps) and its ground truth "
+              << truthPath.string() << "\n";
+    return 0;
+}
+
 int runCourse(const Args& args)
 {
     const std::string name = args.get("course");
@@ -237,6 +297,9 @@ int runCourse(const Args& args)
     const std::size_t count =
         args.has("frames") && *frames >= 1.0 ? std::min(total, static_cast<std::size_t>(*frames)) : total;
     const std::filesystem::path out = args.get("out");
+    if (out.extension() == ".ugvrec") {
+        return writeCourseRecording(*course, count, *fps, out);
+    }
     if (auto prepared = prepareOutput(out); !prepared) {
         return reportFailure(prepared.error());
     }
@@ -277,11 +340,13 @@ int runSim(int argc, char** argv)
               "(--scene NAME | --course NAME) --out DIR [options] | --list\n"
               "  --scene chessboard: calibration pairs and truth.yaml ([--pairs N] [--seed S] [--noise SIGMA])\n"
               "  --scene NAME (ugvsense sim --list): one simulator sample with ground truth and calibration.yaml\n"
-              "  --course NAME: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, y, yaw);\n"
-              "    a plain folder of samples: the recording format proper comes in a later issue",
+              "  --course NAME --out REC.ugvrec: a recording of the drive and REC.ugvrec.truth.csv (truth per frame "
+              "and sector);\n"
+              "  --course NAME --out DIR: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, "
+              "y, yaw)",
               {{"scene", "NAME", "scene to render: chessboard, or a simulator scene (see --list)", false},
                {"course", "NAME", "course to render as a sequence (see --list)", false},
-               {"out", "DIR", "output folder (created if missing)", false},
+               {"out", "DIR|REC", "output folder (created if missing), or a course's recording REC.ugvrec", false},
                {"list", "", "print the scene and course names", false},
                {"range", "M", "simulator scene: obstacle range in metres, default 5", false},
                {"bearing", "DEG", "simulator scene: obstacle bearing, positive left, default 0", false},
