@@ -15,6 +15,7 @@ packages=(
     libyaml-cpp-dev        # service config file
     libeigen3-dev          # small dense linear algebra (ground plane, correlator)
     zlib1g-dev             # CRC-32 of recording records (hal/recording)
+    iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev   # shared-memory frame and sector rings (RouDi + posh)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
 )
 

@@ -312,4 +312,19 @@ Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path
     }
 }
 
+Result<vision::StereoCalibration, Error> parseCalibration(const std::string& text, const std::string& where)
+{
+    try {
+        const cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+        if (!fs.isOpened()) {
+            return Unexpected(Error{where, "cannot parse the calibration", kRecalibrate});
+        }
+        const Reader reader(fs.root(), where);
+        return readFile(reader);
+    } catch (const cv::Exception& e) {
+        return Unexpected(Error{where, std::string("corrupt or truncated YAML: ") + e.err,
+                                "repair the calibration or " + std::string(kRecalibrate)});
+    }
+}
+
 } // namespace ugv::bringup

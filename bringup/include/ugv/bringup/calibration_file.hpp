@@ -34,4 +34,7 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
 /// Thread-safety: reentrant. RT-safe: no.
 Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path);
 
+/// As loadCalibration() on the text of a calibration file (a recording's stored calibration); errors name `where`.
+Result<vision::StereoCalibration, Error> parseCalibration(const std::string& text, const std::string& where);
+
 } // namespace ugv::bringup

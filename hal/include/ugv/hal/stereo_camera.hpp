@@ -1,0 +1,70 @@
+#pragma once
+
+/// @file
+/// The one stereo-camera interface of the service. Backends: replay (a recording, replay_camera.hpp) now;
+/// V4L2 and libcamera next. The capture task calls grab() in a loop; everything a backend needs is allocated
+/// in open().
+///
+/// Frame life: grab() fills a CameraFrame whose views stay valid until the next grab() or close() (the backend
+/// owns the buffers: an mmap'ed driver buffer, a recording's frame buffer). Stamps are CLOCK_MONOTONIC exposure
+/// times; sequence numbers come from the device (or the recording) and gaps mean frames the device lost.
+///
+/// Thread-safety: thread-bound (one capture thread). RT-safe: grab() allocates nothing; it blocks only in the
+/// wait for the next frame, bounded by its timeout.
+
+#include <chrono>
+#include <cstdint>
+
+#include "ugv/platform/frame_header.hpp"
+#include "ugv/platform/image_view.hpp"
+
+namespace ugv::hal {
+
+struct CameraFrame {
+    std::uint64_t sequence = 0;
+    std::int64_t leftStampNs = 0;  ///< [ns] CLOCK_MONOTONIC
+    std::int64_t rightStampNs = 0; ///< [ns]
+    ConstImageViewU8 left;
+    ConstImageViewU8 right;
+};
+
+enum class GrabStatus : std::uint8_t {
+    Frame,        ///< `out` holds a new pair
+    Timeout,      ///< no pair within the timeout (the camera may be slow or stalled)
+    End,          ///< a finite source (a recording without looping) has no more frames
+    Disconnected, ///< the device vanished (ENODEV, EIO) or the source failed: the caller reopens with backoff
+    BadFrame,     ///< a pair arrived but was unusable (wrong size, corrupt): counted, skipped
+};
+
+/// Counters since open().
+struct CameraStats {
+    std::uint64_t frames = 0;       ///< pairs delivered
+    std::uint64_t sequenceGaps = 0; ///< pairs the device's sequence numbers say were lost
+    std::uint64_t badFrames = 0;    ///< pairs skipped as unusable
+    std::uint64_t disconnects = 0;  ///< times the source went away
+};
+
+class StereoCamera {
+public:
+    virtual ~StereoCamera() = default;
+    StereoCamera() = default;
+    StereoCamera(const StereoCamera&) = delete;
+    StereoCamera& operator=(const StereoCamera&) = delete;
+    StereoCamera(StereoCamera&&) = delete;
+    StereoCamera& operator=(StereoCamera&&) = delete;
+
+    /// Waits up to `timeout` for the next pair. RT-safe (no allocation).
+    virtual GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept = 0;
+    /// Tries to bring a Disconnected source back (reopen the device). Not RT-safe; called with backoff.
+    virtual bool reconnect() noexcept = 0;
+
+    [[nodiscard]] virtual int width() const noexcept = 0;
+    [[nodiscard]] virtual int height() const noexcept = 0;
+    /// The nominal frame period (from the device's frame rate or the recording) [ns].
+    [[nodiscard]] virtual std::chrono::nanoseconds period() const noexcept = 0;
+    [[nodiscard]] virtual CameraStats stats() const noexcept = 0;
+    /// "replay /path/rec.ugvrec", "v4l2 /dev/video0+/dev/video1", ...
+    [[nodiscard]] virtual const char* description() const noexcept = 0;
+};
+
+} // namespace ugv::hal

@@ -1,0 +1,157 @@
+// The iceoryx rings with RouDi inside the test process (EmbeddedRouDi). Every test of this executable holds the
+// ctest resource lock "iceoryx": one RouDi per machine at a time.
+
+#include "ugv/ipc/iceoryx_rings.hpp"
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+
+namespace ugv::ipc {
+namespace {
+
+using std::chrono::milliseconds;
+
+constexpr int kWidth = 64;
+constexpr int kHeight = 16;
+
+class IceoryxRings : public ::testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        auto started = EmbeddedRouDi::start("ugv-ipc-test", frameBytes(kWidth, kHeight));
+        ASSERT_TRUE(started.has_value()) << started.error().message();
+        roudi_ = std::move(*started).release();
+    }
+    static void TearDownTestSuite()
+    {
+        delete roudi_;
+        roudi_ = nullptr;
+    }
+
+    void fill(int k)
+    {
+        for (int y = 0; y < kHeight; ++y) {
+            for (int x = 0; x < kWidth; ++x) {
+                left_.view().at(x, y) = static_cast<std::uint8_t>(k + x);
+                right_.view().at(x, y) = static_cast<std::uint8_t>(k + y);
+            }
+        }
+    }
+
+    static EmbeddedRouDi* roudi_;
+    Image<std::uint8_t> left_{kWidth, kHeight};
+    Image<std::uint8_t> right_{kWidth, kHeight};
+};
+EmbeddedRouDi* IceoryxRings::roudi_ = nullptr;
+
+SectorsMessage validMessage(std::uint64_t sequence)
+{
+    SectorsMessage m;
+    initSectors(m.sectors, 8, 60.0F);
+    m.sectors.sequence = sequence;
+    return m;
+}
+
+TEST_F(IceoryxRings, RouDiIsReachableAndASecondOneIsRefused)
+{
+    EXPECT_TRUE(roudiReachable());
+    const auto second = EmbeddedRouDi::start("ugv-ipc-test-2", 1024);
+    ASSERT_FALSE(second.has_value());
+    EXPECT_NE(second.error().message().find("already runs"), std::string::npos) << second.error().message();
+}
+
+TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)
+{
+    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto vision = FrameSubscriber::create(1).value();
+    auto recorder = FrameSubscriber::create(4).value();
+    for (int k = 0; k < 3; ++k) {
+        fill(k);
+        ASSERT_TRUE(publisher->publish(static_cast<std::uint64_t>(100 + k), 1000 * k, 1000 * k + 7, left_.view(),
+                                       right_.view()));
+    }
+    EXPECT_TRUE(publisher->hasSubscribers());
+
+    TakenFrame frame;
+    ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
+    EXPECT_EQ(frame.header.sequence, 102U); // the two older pairs were discarded, not queued
+    EXPECT_EQ(frame.header.rightStampNs, 2007);
+    EXPECT_EQ(frame.views.left.at(5, 0), 7);
+    EXPECT_EQ(frame.views.right.at(0, 9), 11);
+    vision->release(frame);
+    EXPECT_EQ(vision->take(frame, milliseconds(10)), TakeStatus::Timeout);
+
+    std::uint64_t expected = 100;
+    while (recorder->take(frame, milliseconds(10)) == TakeStatus::Frame) {
+        // A recorder's queue holds every pair; take() returns the newest queued, so drain one by one.
+        EXPECT_GE(frame.header.sequence, expected);
+        expected = frame.header.sequence + 1;
+        recorder->release(frame);
+    }
+    EXPECT_EQ(expected, 103U);
+}
+
+TEST_F(IceoryxRings, WrongSizeImagesAreRefusedAndCounted)
+{
+    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    Image<std::uint8_t> small(kWidth - 1, kHeight);
+    EXPECT_FALSE(publisher->publish(1, 0, 0, small.view(), right_.view()));
+    EXPECT_EQ(publisher->loanFailures(), 1U);
+    EXPECT_FALSE(FramePublisher::create(0, kHeight).has_value());
+    EXPECT_FALSE(FrameSubscriber::create(0).has_value());
+}
+
+TEST_F(IceoryxRings, SectorsArriveValidatedAndMalformedOnesAreCounted)
+{
+    auto publisher = SectorsPublisher::create().value();
+    auto subscriber = SectorsSubscriber::create(8).value();
+    ASSERT_TRUE(publisher->publish(validMessage(5)));
+    SectorsMessage bad = validMessage(6);
+    bad.sectors.sectors[0].rangeM = std::numeric_limits<float>::quiet_NaN();
+    ASSERT_TRUE(publisher->publish(bad));
+
+    SectorsMessage got;
+    ASSERT_EQ(subscriber->take(got, milliseconds(500)), TakeStatus::Frame);
+    EXPECT_EQ(got.sectors.sequence, 5U);
+    EXPECT_EQ(subscriber->take(got, milliseconds(500)), TakeStatus::Malformed);
+    EXPECT_EQ(got.sectors.sequence, 5U); // untouched
+    EXPECT_EQ(subscriber->malformed(), 1U);
+    EXPECT_EQ(subscriber->take(got, milliseconds(10)), TakeStatus::Timeout);
+}
+
+TEST_F(IceoryxRings, SteadyStateHandOverAllocatesNothing)
+{
+    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto vision = FrameSubscriber::create(1).value();
+    auto sectorsOut = SectorsPublisher::create().value();
+    auto sectorsIn = SectorsSubscriber::create(4).value();
+    fill(1);
+    TakenFrame frame;
+    SectorsMessage message = validMessage(0);
+    ASSERT_TRUE(publisher->publish(0, 0, 0, left_.view(), right_.view()));
+    ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
+    vision->release(frame);
+
+    const ugv::test::AllocationScope scope;
+    int frames = 0;
+    for (int k = 1; k <= 300; ++k) {
+        publisher->publish(static_cast<std::uint64_t>(k), k, k, left_.view(), right_.view());
+        if (vision->take(frame, milliseconds(500)) == TakeStatus::Frame) {
+            ++frames;
+            message.sectors.sequence = frame.header.sequence;
+            vision->release(frame);
+        }
+        sectorsOut->publish(message);
+        (void)sectorsIn->take(message, milliseconds(500));
+    }
+    EXPECT_EQ(scope.count(), 0U);
+    EXPECT_EQ(frames, 300);
+}
+
+} // namespace
+} // namespace ugv::ipc
