@@ -45,7 +45,7 @@ struct RoiConfig {
 };
 
 struct StereoConfig {
-    MatcherMode mode = MatcherMode::Sgbm;
+    MatcherMode mode = MatcherMode::Sgbm3Way; ///< the detector's default (vision/roi_matcher.hpp)
     int numDisparities = 128; ///< [px] multiple of 16
     int blockSize = 5;        ///< [px] odd
 };

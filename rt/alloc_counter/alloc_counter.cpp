@@ -1,4 +1,4 @@
-#include "alloc_counter.hpp"
+#include "ugv/rt/alloc_counter.hpp"
 
 #include <atomic>
 #include <cerrno>
@@ -232,7 +232,7 @@ void* pvalloc(std::size_t size)
 #endif
 // NOLINTEND(cppcoreguidelines-no-malloc, misc-new-delete-overloads)
 
-namespace ugv::test {
+namespace ugv::rt {
 
 AllocationScope::AllocationScope() noexcept
 {
@@ -270,4 +270,4 @@ bool mallocFamilyCounted() noexcept
     return UGV_ALLOC_COUNTER_SANITIZED == 0;
 }
 
-} // namespace ugv::test
+} // namespace ugv::rt

@@ -1,0 +1,55 @@
+#pragma once
+
+/// @file
+/// The vision task's work on one stereo pair: ROI rectification then the obstacle detector, built once from the
+/// calibration and the service config. Shared by ugvsensed and `ugvsense bench`.
+///
+/// Thread-safety: thread-bound. RT-safe: process() allocates nothing of ours (OpenCV's StereoSGBM::compute inside
+/// the detector allocates internally: see vision/roi_matcher.hpp); create() no.
+
+#include <cstdint>
+#include <memory>
+
+#include "ugv/bringup/config.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/obstacle_sectors.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/vision/obstacle_detector.hpp"
+#include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/stereo_calibration.hpp"
+
+namespace ugv::service {
+
+/// Detector settings of the service config (sectors, danger distances, obstacle thresholds, matcher).
+vision::DetectorConfig detectorConfigFrom(const bringup::ServiceConfig& config);
+
+enum class PipelineStatus : std::uint8_t { Ok, WrongInputSize, RectifyFailed, DetectorFailed };
+
+class FramePipeline {
+public:
+    /// Errors: a calibration without a mount section (the service needs the camera's height and tilt), a frame
+    /// size that differs from the calibration's, and the stages' own config errors.
+    static Result<std::unique_ptr<FramePipeline>, Error> create(const vision::StereoCalibration& calibration,
+                                                                const bringup::ServiceConfig& config);
+
+    /// Rectifies the pair and detects. `rectifiedNs` receives the monotonic time after rectification.
+    PipelineStatus process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence, std::int64_t stampNs,
+                           std::int64_t& rectifiedNs) noexcept;
+
+    [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return detector_.sectors(); }
+    [[nodiscard]] int width() const noexcept { return width_; }
+    [[nodiscard]] int height() const noexcept { return height_; }
+    [[nodiscard]] const vision::ObstacleDetector& detector() const noexcept { return detector_; }
+    [[nodiscard]] const vision::Rectifier& rectifier() const noexcept { return rectifier_; }
+
+private:
+    FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector, int width, int height);
+
+    vision::Rectifier rectifier_;
+    vision::ObstacleDetector detector_;
+    int width_;
+    int height_;
+};
+
+} // namespace ugv::service

@@ -1,0 +1,162 @@
+#include "runner.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/ipc/iceoryx_rings.hpp"
+#include "ugv/platform/log.hpp"
+#include "ugv/rt/memory.hpp"
+
+namespace ugv::service {
+
+namespace {
+
+constexpr std::chrono::milliseconds kMonitorPoll{20};
+
+void sleepMs(std::chrono::milliseconds d)
+{
+    timespec t{};
+    t.tv_sec = static_cast<time_t>(d.count() / 1000);
+    t.tv_nsec = static_cast<long>(d.count() % 1000) * 1'000'000;
+    ::nanosleep(&t, nullptr);
+}
+
+Error joinErrors(const bringup::ConfigErrors& errors)
+{
+    Error e = errors.front();
+    for (std::size_t i = 1; i < errors.size(); ++i) {
+        e.what += "; also " + errors[i].message();
+    }
+    return e;
+}
+
+} // namespace
+
+std::string summaryLine(const PublishedFrame& frame)
+{
+    const ObstacleSectors& s = frame.message.sectors;
+    int obstacles = 0;
+    int clear = 0;
+    int unknown = 0;
+    int red = 0;
+    int blue = 0;
+    const Sector* nearest = nullptr;
+    for (int i = 0; i < s.count; ++i) {
+        const Sector& sector = s.sectors[static_cast<std::size_t>(i)];
+        switch (sector.state) {
+        case SectorState::Obstacle:
+            ++obstacles;
+            red += sector.danger == DangerClass::Red ? 1 : 0;
+            blue += sector.danger == DangerClass::Blue ? 1 : 0;
+            if (nearest == nullptr || sector.rangeM < nearest->rangeM) {
+                nearest = &sector;
+            }
+            break;
+        case SectorState::Clear:
+            ++clear;
+            break;
+        case SectorState::Unknown:
+            ++unknown;
+            break;
+        }
+    }
+    char text[320];
+    int n = std::snprintf(text, sizeof(text), "frame %llu: %d obstacle (red %d, blue %d",
+                          static_cast<unsigned long long>(s.sequence), obstacles, red, blue);
+    if (nearest != nullptr) {
+        n += std::snprintf(text + n, sizeof(text) - static_cast<std::size_t>(n), ", nearest %.2f m at %.1f deg %s",
+                           static_cast<double>(nearest->rangeM),
+                           0.5 * static_cast<double>(nearest->bearingMinDeg + nearest->bearingMaxDeg),
+                           nearest->kind == ObstacleKind::Negative ? "negative" : "positive");
+    }
+    std::snprintf(text + n, sizeof(text) - static_cast<std::size_t>(n), "), %d clear, %d unknown%s; %.1f ms%s", clear,
+                  unknown, s.degraded ? " (degraded)" : "",
+                  static_cast<double>(frame.stageNs[static_cast<std::size_t>(Stage::EndToEnd)]) * 1e-6,
+                  frame.deadlineMissed ? " DEADLINE MISSED" : "");
+    return text;
+}
+
+Result<RunResult, Error> runService(const RunOptions& options)
+{
+    bringup::ServiceConfig config;
+    if (!options.configPath.empty()) {
+        auto loaded = bringup::loadConfig(options.configPath);
+        if (!loaded) {
+            return Unexpected(joinErrors(loaded.error()));
+        }
+        config = std::move(*loaded);
+    }
+    if (options.replayPath.empty()) {
+        return Unexpected(Error{"ugvsensed", "no camera source: this version replays recordings only",
+                                "give --replay REC (V4L2 and libcamera backends follow: see README status)"});
+    }
+    auto camera = hal::ReplayCamera::open(options.replayPath, options.replay);
+    if (!camera) {
+        return Unexpected(camera.error());
+    }
+    if ((*camera)->truncated()) {
+        UGV_LOG(Hal, Warn) << options.replayPath << ": the recording ends in a cut-off frame; replaying its "
+                           << (*camera)->recordedFrames() << " complete frames";
+    }
+    auto calibration =
+        options.calibrationPath.empty()
+            ? bringup::parseCalibration((*camera)->calibrationText(), options.replayPath + " (its stored calibration)")
+            : bringup::loadCalibration(options.calibrationPath);
+    if (!calibration) {
+        return Unexpected(calibration.error());
+    }
+
+    std::unique_ptr<ipc::EmbeddedRouDi> roudi;
+    const bool embedded =
+        options.roudi == RouDiMode::Embedded || (options.roudi == RouDiMode::Auto && !ipc::roudiReachable());
+    if (embedded) {
+        auto started =
+            ipc::EmbeddedRouDi::start(options.appName, ipc::frameBytes((*camera)->width(), (*camera)->height()));
+        if (!started) {
+            return Unexpected(started.error());
+        }
+        roudi = std::move(*started);
+    } else if (auto runtime = ipc::startRuntime(options.appName); !runtime) {
+        return Unexpected(runtime.error());
+    }
+
+    RunResult result;
+    const rt::MemoryReport memory = rt::lockMemory();
+    for (const std::string& warning : memory.warnings) {
+        UGV_LOG(Rt, Warn) << warning;
+    }
+    result.extras.lockedBytes = memory.lockedBytes;
+
+    auto service = Service::create(config, *calibration, std::move(*camera), options.service);
+    if (!service) {
+        return Unexpected(service.error());
+    }
+    for (const std::string& warning : (*service)->startReport().warnings) {
+        UGV_LOG(Rt, Warn) << warning;
+    }
+    result.extras.threadCount = processThreadCount();
+    (*service)->start();
+    PublishedFrame frame;
+    std::uint64_t seen = 0;
+    while (!(options.stop != nullptr && options.stop->load()) && !(*service)->finished()) {
+        while ((*service)->nextPublished(frame)) {
+            ++seen;
+            if (options.printEvery > 0 && seen % static_cast<std::uint64_t>(options.printEvery) == 0) {
+                std::printf("%s\n", summaryLine(frame).c_str());
+                std::fflush(stdout);
+            }
+        }
+        sleepMs(kMonitorPoll);
+    }
+    (*service)->stop();
+    result.report = (*service)->report();
+    service->reset(); // threads and iceoryx ports go before the runtime
+    return result;
+}
+
+} // namespace ugv::service

@@ -1,0 +1,52 @@
+#pragma once
+
+/// @file
+/// One run of the service, as ugvsensed's main() and `ugvsense bench` do it: config, calibration, iceoryx (a
+/// running RouDi, or one inside this process), memory locking, the camera (replay for now), the Service threads,
+/// a monitor loop on the calling thread (printing, stop conditions), and the report.
+///
+/// Thread-safety: call from the main thread. RT-safe: no (it is the non-RT side of the service).
+
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "report.hpp"
+#include "service.hpp"
+#include "ugv/hal/replay_camera.hpp"
+
+namespace ugv::service {
+
+enum class RouDiMode : std::uint8_t {
+    External, ///< a RouDi must run (iox-roudi, the ugvsense-roudi unit): error otherwise
+    Embedded, ///< start RouDi inside this process
+    Auto,     ///< use a running RouDi, else start one inside this process
+};
+
+struct RunOptions {
+    std::string appName = "ugvsensed";
+    std::string configPath;      ///< empty: built-in defaults
+    std::string replayPath;      ///< the recording to replay (the only backend of this version)
+    std::string calibrationPath; ///< empty: the recording's own calibration
+    hal::ReplayOptions replay;
+    RouDiMode roudi = RouDiMode::External;
+    ServiceOptions service;
+    int printEvery = 0;                      ///< print one sector summary every N published frames (0: none)
+    const std::atomic<bool>* stop = nullptr; ///< set by a signal handler: stop now
+};
+
+struct RunResult {
+    ServiceReport report;
+    ReportExtras extras;
+};
+
+/// Runs until the recording ends (without looping), maxFrames are published, or *stop is set.
+/// @return the figures, or an error naming what failed at start (config, calibration, RouDi, recording).
+Result<RunResult, Error> runService(const RunOptions& options);
+
+/// "frame 120 +2.41 m: 3 obstacle (red 0, blue 3, nearest 2.41 m at 12.3 deg negative), 50 clear, 11 unknown,
+/// 31.2 ms" for a published frame.
+std::string summaryLine(const PublishedFrame& frame);
+
+} // namespace ugv::service

@@ -1,0 +1,415 @@
+#include "service.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <utility>
+
+#include "ugv/platform/clock.hpp"
+#include "ugv/rt/task.hpp"
+
+namespace ugv::service {
+
+namespace {
+
+constexpr std::chrono::milliseconds kWaitSlice{50}; ///< longest wait before a thread looks at its stop flag
+constexpr std::chrono::milliseconds kMinBackoff{100};
+constexpr std::chrono::milliseconds kMaxBackoff{2000};
+
+double threadCpuSeconds() noexcept
+{
+    timespec t{};
+    ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+}
+
+void sleepFor(std::chrono::nanoseconds d) noexcept
+{
+    timespec t{};
+    t.tv_sec = static_cast<time_t>(d.count() / 1'000'000'000);
+    t.tv_nsec = static_cast<long>(d.count() % 1'000'000'000);
+    while (::nanosleep(&t, &t) != 0 && errno == EINTR) {
+    }
+}
+
+/// A wait on the semaphore of at most `d`.
+void semWait(sem_t* sem, std::chrono::nanoseconds d) noexcept
+{
+    timespec t{};
+    ::clock_gettime(CLOCK_REALTIME, &t); // sem_timedwait's clock (glibc 2.36 has sem_clockwait too)
+    const std::int64_t ns = t.tv_nsec + d.count();
+    t.tv_sec += static_cast<time_t>(ns / 1'000'000'000);
+    t.tv_nsec = static_cast<long>(ns % 1'000'000'000);
+    while (::sem_clockwait(sem, CLOCK_REALTIME, &t) != 0 && errno == EINTR) {
+    }
+}
+
+} // namespace
+
+const char* stageName(Stage stage) noexcept
+{
+    switch (stage) {
+    case Stage::Capture:
+        return "capture";
+    case Stage::Handover:
+        return "handover";
+    case Stage::Rectify:
+        return "rectify";
+    case Stage::Detect:
+        return "detect";
+    case Stage::Publish:
+        return "publish";
+    case Stage::EndToEnd:
+        return "end_to_end";
+    }
+    return "?";
+}
+
+Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceConfig& config,
+                                                        const vision::StereoCalibration& calibration,
+                                                        std::unique_ptr<hal::StereoCamera> camera,
+                                                        const ServiceOptions& options)
+{
+    if (!camera) {
+        return Unexpected(Error{"ugvsensed", "no camera", "a bug: pass the opened camera"});
+    }
+    if (camera->width() != calibration.imageSize.width || camera->height() != calibration.imageSize.height) {
+        return Unexpected(Error{camera->description(),
+                                "delivers " + std::to_string(camera->width()) + "x" + std::to_string(camera->height()) +
+                                    " frames but the calibration is for " +
+                                    std::to_string(calibration.imageSize.width) + "x" +
+                                    std::to_string(calibration.imageSize.height),
+                                "use the calibration of this camera at this resolution"});
+    }
+    if (!(options.deadlineFactor > 0.0) || options.stallPeriods < 1 || options.warmupFrames < 0) {
+        return Unexpected(Error{"ugvsensed", "deadline factor, stall periods or warm-up out of range",
+                                "deadline factor > 0, stall periods >= 1, warm-up >= 0"});
+    }
+    bringup::ServiceConfig effective = config;
+    effective.camera.width = camera->width();
+    effective.camera.height = camera->height();
+    auto pipeline = FramePipeline::create(calibration, effective);
+    if (!pipeline) {
+        return Unexpected(pipeline.error());
+    }
+    auto framesOut = ipc::FramePublisher::create(camera->width(), camera->height());
+    auto framesIn = ipc::FrameSubscriber::create(1);
+    auto sectorsOut = ipc::SectorsPublisher::create();
+    if (!framesOut || !framesIn || !sectorsOut) {
+        return Unexpected(!framesOut ? framesOut.error() : !framesIn ? framesIn.error() : sectorsOut.error());
+    }
+
+    std::unique_ptr<Service> s(new Service());
+    s->options_ = options;
+    s->period_ = camera->period();
+    s->deadline_ = std::chrono::nanoseconds(
+        static_cast<std::int64_t>(std::llround(static_cast<double>(s->period_.count()) * options.deadlineFactor)));
+    s->camera_ = std::move(camera);
+    s->pipeline_ = std::move(*pipeline);
+    s->framesOut_ = std::move(*framesOut);
+    s->framesIn_ = std::move(*framesIn);
+    s->sectorsOut_ = std::move(*sectorsOut);
+    if (::sem_init(&s->published_, 0, 0) != 0) {
+        return Unexpected(Error{"ugvsensed", "sem_init failed", "check the system"});
+    }
+    s->semaphoreReady_ = true;
+    const vision::RectifiedProjection& projection = s->pipeline_->rectifier().projection();
+    const auto hfovDeg = static_cast<float>(
+        2.0 * std::atan(static_cast<double>(s->camera_->width()) / (2.0 * projection.fx)) * 180.0 / M_PI);
+    initSectors(s->unknownSectors_, config.obstacles.sectorCount, hfovDeg);
+    s->unknownSectors_.degraded = true;
+
+    const std::pair<const char*, rt::TaskBody> bodies[] = {
+        {"capture", &Service::captureBody}, {"vision", &Service::visionBody}, {"publish", &Service::publishBody}};
+    for (const auto& [name, body] : bodies) {
+        const auto spec = rt::findTask(config.tasks, name);
+        if (!spec) {
+            return Unexpected(Error{"ugvsensed", std::string("task table has no '") + name + "' task",
+                                    "restore the default task table"});
+        }
+        if (auto added = s->runner_.addTask(*spec, body, s.get()); !added) {
+            return Unexpected(added.error());
+        }
+    }
+    if (auto created = s->runner_.createAll(); !created) {
+        return Unexpected(created.error());
+    }
+    return s;
+}
+
+Service::~Service()
+{
+    stop();
+    if (semaphoreReady_) {
+        ::sem_destroy(&published_);
+    }
+}
+
+void Service::start() noexcept
+{
+    startNs_ = MonotonicClock::nowNs();
+    runner_.startAll();
+}
+
+void Service::stop() noexcept
+{
+    runner_.stopAll();
+    if (endNs_.load(std::memory_order_relaxed) == 0) {
+        endNs_.store(MonotonicClock::nowNs(), std::memory_order_relaxed);
+    }
+}
+
+bool Service::finished() const noexcept
+{
+    const std::uint64_t published = publishedCount_.load(std::memory_order_acquire);
+    if (options_.maxFrames > 0 && published >= options_.maxFrames) {
+        return true;
+    }
+    if (!cameraEnded_.load(std::memory_order_acquire)) {
+        return false;
+    }
+    // The last pair captured was processed (the queue of one always ends with it) and everything processed was
+    // published (or lost to a full hand-over ring, counted).
+    const std::uint64_t captured = captured_.load(std::memory_order_acquire);
+    const bool lastSeen = captured == 0 || lastProcessedSeq_.load(std::memory_order_acquire) ==
+                                               lastCapturedSeq_.load(std::memory_order_acquire);
+    return lastSeen &&
+           published + handoverFull_.load(std::memory_order_acquire) >= processed_.load(std::memory_order_acquire);
+}
+
+void Service::probeSteady(const char* task, std::uint64_t frames, bool& done) const noexcept
+{
+    if (!done && options_.probe != nullptr && frames >= static_cast<std::uint64_t>(options_.warmupFrames)) {
+        options_.probe(options_.probeContext, task, ProbeEvent::SteadyState);
+        done = true;
+    }
+}
+
+void Service::probeStopping(const char* task) const noexcept
+{
+    if (options_.probe != nullptr) {
+        options_.probe(options_.probeContext, task, ProbeEvent::Stopping);
+    }
+}
+
+void Service::captureBody(void* self, const std::atomic<bool>& stop)
+{
+    static_cast<Service*>(self)->captureLoop(stop);
+}
+void Service::visionBody(void* self, const std::atomic<bool>& stop)
+{
+    static_cast<Service*>(self)->visionLoop(stop);
+}
+void Service::publishBody(void* self, const std::atomic<bool>& stop)
+{
+    static_cast<Service*>(self)->publishLoop(stop);
+}
+
+void Service::captureLoop(const std::atomic<bool>& stop) noexcept
+{
+    hal::CameraFrame frame;
+    std::chrono::nanoseconds backoff = kMinBackoff;
+    std::chrono::nanoseconds sinceFrame{0};
+    const std::chrono::nanoseconds stall = period_ * options_.stallPeriods;
+    std::uint64_t frames = 0;
+    bool steady = false;
+    while (!stop.load(std::memory_order_relaxed) && !cameraEnded_.load(std::memory_order_relaxed)) {
+        const hal::GrabStatus status = camera_->grab(frame, std::min<std::chrono::nanoseconds>(kWaitSlice, stall));
+        switch (status) {
+        case hal::GrabStatus::Frame: {
+            sinceFrame = {};
+            backoff = kMinBackoff;
+            cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Streaming), std::memory_order_relaxed);
+            const hal::CameraStats stats = camera_->stats();
+            cameraGaps_.store(stats.sequenceGaps, std::memory_order_relaxed);
+            // The ring-publish time goes in a slot per sequence, written before the frame becomes visible.
+            ringStampNs_[frame.sequence % kPublishSlots].store(MonotonicClock::nowNs(), std::memory_order_relaxed);
+            if (!framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right)) {
+                loanFailures_.store(framesOut_->loanFailures(), std::memory_order_relaxed);
+            }
+            lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
+            captured_.fetch_add(1, std::memory_order_release);
+            probeSteady("capture", ++frames, steady);
+            break;
+        }
+        case hal::GrabStatus::Timeout:
+            sinceFrame += kWaitSlice;
+            if (sinceFrame >= stall) {
+                cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting),
+                                   std::memory_order_relaxed);
+            }
+            break;
+        case hal::GrabStatus::BadFrame:
+            badFrames_.fetch_add(1, std::memory_order_relaxed);
+            break;
+        case hal::GrabStatus::End:
+            cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Stopped), std::memory_order_relaxed);
+            cameraEnded_.store(true, std::memory_order_release);
+            break;
+        case hal::GrabStatus::Disconnected:
+            cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting), std::memory_order_relaxed);
+            sleepFor(backoff);
+            if (camera_->reconnect()) {
+                reconnects_.fetch_add(1, std::memory_order_relaxed);
+                backoff = kMinBackoff;
+            } else {
+                backoff = std::min<std::chrono::nanoseconds>(backoff * 2, kMaxBackoff);
+            }
+            break;
+        }
+    }
+    probeStopping("capture");
+    cpuSeconds_[0].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+void Service::visionLoop(const std::atomic<bool>& stop) noexcept
+{
+    ipc::TakenFrame frame;
+    Handover out;
+    bool haveLast = false;
+    std::uint64_t lastSequence = 0;
+    std::uint64_t frames = 0;
+    bool steady = false;
+    while (!stop.load(std::memory_order_relaxed)) {
+        const ipc::TakeStatus status = framesIn_->take(frame, kWaitSlice);
+        if (status == ipc::TakeStatus::Timeout) {
+            continue;
+        }
+        if (status == ipc::TakeStatus::Malformed) {
+            badFrames_.fetch_add(1, std::memory_order_relaxed);
+            continue;
+        }
+        const std::int64_t takenNs = MonotonicClock::nowNs();
+        const FrameHeader h = frame.header; // a copy: release() clears the frame
+        if (haveLast && h.sequence > lastSequence + 1) {
+            // Pairs the vision task never saw: replaced by newer ones in its queue of one, or lost by the camera.
+            dropped_.fetch_add(h.sequence - lastSequence - 1, std::memory_order_relaxed);
+        }
+        haveLast = true;
+        lastSequence = h.sequence;
+        std::int64_t rectifiedNs = 0;
+        const PipelineStatus done =
+            pipeline_->process(frame.views.left, frame.views.right, h.sequence, h.leftStampNs, rectifiedNs);
+        const std::int64_t detectedNs = MonotonicClock::nowNs();
+        if (done == PipelineStatus::Ok) {
+            out.sectors = pipeline_->sectors();
+            if (out.sectors.degraded) {
+                degraded_.fetch_add(1, std::memory_order_relaxed);
+            }
+        } else {
+            badFrames_.fetch_add(1, std::memory_order_relaxed);
+            out.sectors = unknownSectors_;
+            out.sectors.sequence = h.sequence;
+            out.sectors.captureStampNs = h.leftStampNs;
+            degraded_.fetch_add(1, std::memory_order_relaxed);
+        }
+        out.stampNs = {h.leftStampNs,
+                       ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_relaxed),
+                       takenNs,
+                       rectifiedNs,
+                       detectedNs,
+                       0,
+                       0};
+        framesIn_->release(frame);
+        if (toPublish_.tryPush(out)) {
+            ::sem_post(&published_);
+        } else {
+            handoverFull_.fetch_add(1, std::memory_order_relaxed);
+        }
+        lastProcessedSeq_.store(h.sequence, std::memory_order_relaxed);
+        processed_.fetch_add(1, std::memory_order_release);
+        probeSteady("vision", ++frames, steady);
+    }
+    probeStopping("vision");
+    cpuSeconds_[1].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+ipc::HealthRecord Service::health() const noexcept
+{
+    ipc::HealthRecord h;
+    h.framesCaptured = captured_.load(std::memory_order_relaxed);
+    h.framesProcessed = processed_.load(std::memory_order_relaxed);
+    h.cameraGaps = cameraGaps_.load(std::memory_order_relaxed);
+    h.framesDropped = dropped_.load(std::memory_order_relaxed);
+    h.deadlineMisses = misses_.load(std::memory_order_relaxed);
+    h.degradedFrames = degraded_.load(std::memory_order_relaxed);
+    h.cameraReconnects = reconnects_.load(std::memory_order_relaxed);
+    h.lastLatencyNs = lastLatencyNs_.load(std::memory_order_relaxed);
+    h.camera = static_cast<ipc::CameraState>(cameraState_.load(std::memory_order_relaxed));
+    return h;
+}
+
+void Service::publishLoop(const std::atomic<bool>& stop) noexcept
+{
+    Handover in;
+    PublishedFrame seen;
+    std::uint64_t count = 0;
+    bool steady = false;
+    while (!stop.load(std::memory_order_relaxed)) {
+        semWait(&published_, kWaitSlice);
+        while (toPublish_.tryPop(in)) {
+            ipc::SectorsMessage& m = seen.message;
+            m.sectors = in.sectors;
+            m.health = health();
+            const std::int64_t publishNs = MonotonicClock::nowNs();
+            m.publishStampNs = publishNs;
+            m.health.lastLatencyNs = publishNs - in.stampNs[0];
+            sectorsOut_->publish(m);
+            const std::int64_t doneNs = MonotonicClock::nowNs();
+            const std::int64_t endToEnd = doneNs - in.stampNs[0];
+            seen.stageNs = {in.stampNs[1] - in.stampNs[0], in.stampNs[2] - in.stampNs[1], in.stampNs[3] - in.stampNs[2],
+                            in.stampNs[4] - in.stampNs[3], doneNs - in.stampNs[4],        endToEnd};
+            seen.deadlineMissed = endToEnd > deadline_.count();
+            if (seen.deadlineMissed) {
+                misses_.fetch_add(1, std::memory_order_relaxed);
+            }
+            lastLatencyNs_.store(endToEnd, std::memory_order_relaxed);
+            if (count >= static_cast<std::uint64_t>(options_.warmupFrames)) {
+                for (int s = 0; s < kStageCount; ++s) {
+                    histograms_[static_cast<std::size_t>(s)].record(
+                        std::chrono::nanoseconds(seen.stageNs[static_cast<std::size_t>(s)]));
+                }
+            }
+            ++count;
+            if (!monitor_.tryPush(seen)) {
+                monitorDrops_.fetch_add(1, std::memory_order_relaxed);
+            }
+            publishedCount_.fetch_add(1, std::memory_order_release);
+            probeSteady("publish", count, steady);
+            if (options_.maxFrames > 0 && count >= options_.maxFrames) {
+                endNs_.store(doneNs, std::memory_order_relaxed);
+            }
+        }
+    }
+    probeStopping("publish");
+    cpuSeconds_[2].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+ServiceReport Service::report() const
+{
+    ServiceReport r;
+    r.framesCaptured = captured_.load();
+    r.framesPublished = publishedCount_.load();
+    r.cameraGaps = cameraGaps_.load();
+    r.framesDropped = dropped_.load();
+    r.deadlineMisses = misses_.load();
+    r.degradedFrames = degraded_.load();
+    r.badFrames = badFrames_.load();
+    r.loanFailures = loanFailures_.load() + sectorsOut_->loanFailures() + handoverFull_.load();
+    r.cameraReconnects = reconnects_.load();
+    r.monitorDrops = monitorDrops_.load();
+    r.deadline = deadline_;
+    const std::int64_t end = endNs_.load() != 0 ? endNs_.load() : MonotonicClock::nowNs();
+    r.wallSeconds = static_cast<double>(end - startNs_) * 1e-9;
+    r.stages = histograms_;
+    r.cpu = {TaskCpu{"capture", cpuSeconds_[0].load()}, TaskCpu{"vision", cpuSeconds_[1].load()},
+             TaskCpu{"publish", cpuSeconds_[2].load()}};
+    r.threads = rt::formatReport(runner_.report());
+    return r;
+}
+
+} // namespace ugv::service

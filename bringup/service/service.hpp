@@ -1,0 +1,186 @@
+#pragma once
+
+/// @file
+/// ugvsensed's core: three fixed-priority threads around the shared-memory rings, all buffers allocated by
+/// create().
+///
+///   capture (FIFO 80)  camera.grab() -> FramePublisher (iceoryx `ugvsense/stereo/frames`, loaned chunk)
+///   vision  (FIFO 70)  FrameSubscriber (queue of 1: latest pair wins, older ones dropped and counted)
+///                      -> FramePipeline (rectify, detect) -> SPSC ring -> semaphore post
+///   publish (FIFO 60)  SPSC ring -> SectorsMessage + health -> SectorsPublisher (`ugvsense/obstacles/sectors`)
+///                      -> stage histograms, deadline check -> monitor ring (non-RT reader: printing, tests)
+///
+/// No thread takes a lock on the frame path: the rings are iceoryx's lock-free queues and our wait-free SPSC
+/// rings; the waits are a semaphore (vision -> publish) and iceoryx's wait set (capture -> vision), bounded by a
+/// timeout so that stop requests are seen. The capture thread alone does blocking I/O (the camera; a recording's
+/// file reads). The deadline of a frame is `deadlineFactor` camera periods from its exposure to its sectors being
+/// published; a frame past it is counted as a miss (it is still published: late sectors are flagged by their
+/// capture stamp, the consumer decides).
+///
+/// Camera trouble: Timeout for `stallPeriods` periods marks the camera Reconnecting in the health record;
+/// Disconnected reconnects with exponential backoff (100 ms .. 2 s) while the service keeps running and publishes
+/// nothing new (consumers see the health record's camera state and the capture stamps age).
+///
+/// Thread-safety: create/start/stop/report from one owner thread; the monitor ring has one reader. RT-safe: the
+/// three task bodies after their first frame (asserted by the allocation test in test/unit/service/).
+
+#include <semaphore.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "frame_pipeline.hpp"
+#include "ugv/bringup/config.hpp"
+#include "ugv/hal/stereo_camera.hpp"
+#include "ugv/ipc/iceoryx_rings.hpp"
+#include "ugv/ipc/sectors_message.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/platform/spsc_ring.hpp"
+#include "ugv/rt/latency_histogram.hpp"
+#include "ugv/rt/thread_runner.hpp"
+
+namespace ugv::service {
+
+/// Instrumentation seam: called from inside a task thread (tests count that thread's allocations from its
+/// steady state on). `task` is "capture", "vision" or "publish".
+enum class ProbeEvent : std::uint8_t { SteadyState, Stopping };
+using TaskProbe = void (*)(void* context, const char* task, ProbeEvent event);
+
+struct ServiceOptions {
+    double deadlineFactor = 1.0; ///< deadline = this many camera periods from exposure to published sectors
+    int stallPeriods = 10;       ///< camera periods without a frame before the camera counts as stalled
+    std::uint64_t maxFrames = 0; ///< stop after this many published frames (0 = run until stopped or the end)
+    int warmupFrames = 5;        ///< frames not counted in the histograms (first-touch costs)
+    TaskProbe probe = nullptr;   ///< SteadyState after a task's warmupFrames-th frame, Stopping at its end
+    void* probeContext = nullptr;
+};
+
+/// Stages of one frame, in the order of its path.
+enum class Stage : std::uint8_t { Capture, Handover, Rectify, Detect, Publish, EndToEnd };
+inline constexpr int kStageCount = 6;
+/// "capture" (exposure -> published to the ring), "handover" (-> taken by vision), "rectify", "detect",
+/// "publish" (-> sectors published), "end_to_end" (exposure -> sectors published).
+const char* stageName(Stage stage) noexcept;
+
+/// What the monitor sees of each published frame.
+struct PublishedFrame {
+    ipc::SectorsMessage message;
+    std::array<std::int64_t, kStageCount> stageNs{}; ///< per Stage
+    bool deadlineMissed = false;
+};
+
+struct TaskCpu {
+    const char* name = "";
+    double cpuSeconds = 0.0; ///< CLOCK_THREAD_CPUTIME_ID at the task's end
+};
+
+/// Figures of a run (after stop()).
+struct ServiceReport {
+    std::uint64_t framesCaptured = 0;
+    std::uint64_t framesPublished = 0;
+    std::uint64_t framesDropped = 0; ///< captured but never processed (latest frame wins) + camera gaps
+    std::uint64_t cameraGaps = 0;
+    std::uint64_t deadlineMisses = 0;
+    std::uint64_t degradedFrames = 0;
+    std::uint64_t badFrames = 0; ///< malformed chunks, wrong sizes, failed stages
+    std::uint64_t loanFailures = 0;
+    std::uint64_t cameraReconnects = 0;
+    std::uint64_t monitorDrops = 0; ///< published frames the monitor reader was too slow to see
+    std::chrono::nanoseconds deadline{};
+    double wallSeconds = 0.0;
+    std::array<rt::LatencyHistogram, kStageCount> stages{};
+    std::array<TaskCpu, 3> cpu{};
+    std::string threads; ///< rt::formatReport of the tasks
+};
+
+class Service {
+public:
+    /// Builds the pipeline and the rings and creates the threads (held at their start gate). The iceoryx
+    /// runtime must be up (ipc::startRuntime or ipc::EmbeddedRouDi). The camera's size must match the calibration.
+    static Result<std::unique_ptr<Service>, Error> create(const bringup::ServiceConfig& config,
+                                                          const vision::StereoCalibration& calibration,
+                                                          std::unique_ptr<hal::StereoCamera> camera,
+                                                          const ServiceOptions& options = {});
+    ~Service();
+    Service(const Service&) = delete;
+    Service& operator=(const Service&) = delete;
+    Service(Service&&) = delete;
+    Service& operator=(Service&&) = delete;
+
+    void start() noexcept;
+    /// Stops and joins the threads. Idempotent.
+    void stop() noexcept;
+    /// True once the camera reported End (a finished recording) and every captured frame was handled, or
+    /// maxFrames were published.
+    [[nodiscard]] bool finished() const noexcept;
+    /// Next frame seen by the monitor, if any (one reader thread).
+    bool nextPublished(PublishedFrame& out) noexcept { return monitor_.tryPop(out); }
+    [[nodiscard]] ServiceReport report() const;
+    [[nodiscard]] const rt::StartReport& startReport() const noexcept { return runner_.report(); }
+    [[nodiscard]] std::chrono::nanoseconds period() const noexcept { return period_; }
+
+private:
+    Service() = default;
+    static void captureBody(void* self, const std::atomic<bool>& stop);
+    static void visionBody(void* self, const std::atomic<bool>& stop);
+    static void publishBody(void* self, const std::atomic<bool>& stop);
+    void captureLoop(const std::atomic<bool>& stop) noexcept;
+    void visionLoop(const std::atomic<bool>& stop) noexcept;
+    void publishLoop(const std::atomic<bool>& stop) noexcept;
+    ipc::HealthRecord health() const noexcept;
+    /// Calls the probe for `task` once its frame count reaches the warm-up.
+    void probeSteady(const char* task, std::uint64_t frames, bool& done) const noexcept;
+    void probeStopping(const char* task) const noexcept;
+
+    struct Handover {
+        ObstacleSectors sectors;
+        std::array<std::int64_t, kStageCount + 1> stampNs{}; ///< exposure, ring, taken, rectified, detected
+    };
+    static constexpr std::size_t kPublishSlots = 64; ///< capture's ring-publish time per sequence % slots
+
+    ServiceOptions options_;
+    std::chrono::nanoseconds period_{};
+    std::chrono::nanoseconds deadline_{};
+    std::unique_ptr<hal::StereoCamera> camera_;
+    std::unique_ptr<FramePipeline> pipeline_;
+    std::unique_ptr<ipc::FramePublisher> framesOut_;
+    std::unique_ptr<ipc::FrameSubscriber> framesIn_;
+    std::unique_ptr<ipc::SectorsPublisher> sectorsOut_;
+    SpscRing<Handover, 4> toPublish_;
+    SpscRing<PublishedFrame, 64> monitor_;
+    sem_t published_{};
+    bool semaphoreReady_ = false;
+    std::array<std::atomic<std::int64_t>, kPublishSlots> ringStampNs_{};
+    ObstacleSectors unknownSectors_{};
+    rt::ThreadRunner runner_;
+
+    // Counters: each written by one thread (named), read by others (relaxed).
+    std::atomic<std::uint64_t> captured_{0};                     // capture
+    std::atomic<std::uint64_t> cameraGaps_{0};                   // capture
+    std::atomic<std::uint64_t> reconnects_{0};                   // capture
+    std::atomic<std::uint64_t> loanFailures_{0};                 // capture
+    std::atomic<std::uint8_t> cameraState_{0};                   // capture (ipc::CameraState)
+    std::atomic<bool> cameraEnded_{false};                       // capture
+    std::atomic<std::uint64_t> lastCapturedSeq_{0};              // capture
+    std::atomic<std::uint64_t> lastProcessedSeq_{0};             // vision
+    std::atomic<std::uint64_t> processed_{0};                    // vision
+    std::atomic<std::uint64_t> dropped_{0};                      // vision
+    std::atomic<std::uint64_t> badFrames_{0};                    // vision
+    std::atomic<std::uint64_t> degraded_{0};                     // vision
+    std::atomic<std::uint64_t> handoverFull_{0};                 // vision
+    std::atomic<std::uint64_t> publishedCount_{0};               // publish
+    std::atomic<std::uint64_t> misses_{0};                       // publish
+    std::atomic<std::uint64_t> monitorDrops_{0};                 // publish
+    std::atomic<std::int64_t> lastLatencyNs_{0};                 // publish
+    std::array<rt::LatencyHistogram, kStageCount> histograms_{}; // publish (read after stop)
+    std::array<std::atomic<double>, 3> cpuSeconds_{};            // each task at its end
+    std::int64_t startNs_ = 0;
+    std::atomic<std::int64_t> endNs_{0};
+};
+
+} // namespace ugv::service

@@ -1,0 +1,302 @@
+// The whole service (capture, iceoryx frame ring, vision, publish, iceoryx sectors) on simulator recordings, with
+// RouDi inside the test process. Every test holds the ctest resource lock "iceoryx".
+// - HIL: a simulator course replayed through the unchanged service; a planner-like subscriber receives every
+//   frame's sectors, which are checked against the simulator's ground truth.
+// - Allocations: 300 frames through the service; the capture and publish threads allocate nothing, the vision
+//   thread nothing beyond OpenCV's StereoSGBM::compute (measured alone on the same frames).
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "runner.hpp"
+#include "service.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+#include "sim/writer.hpp"
+#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/hal/recording.hpp"
+#include "ugv/hal/replay_camera.hpp"
+#include "ugv/ipc/iceoryx_rings.hpp"
+#include "ugv/vision/roi_matcher.hpp"
+
+namespace ugv::service {
+namespace {
+
+using std::chrono::milliseconds;
+
+struct Course {
+    std::string path;
+    std::vector<ObstacleSectors> truth; ///< per frame
+    std::string calibration;
+};
+
+ConstImageViewU8 viewOf(const cv::Mat& m)
+{
+    return ConstImageViewU8(m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step));
+}
+
+/// The first `frames` frames of the default course at 10 fps, as a recording in `dir`.
+Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::size_t firstFrame = 0)
+{
+    Course out;
+    auto course = sim::makeCourse("default", 1.5, 10.0);
+    EXPECT_TRUE(course.has_value());
+    out.calibration = sim::calibrationText(course->scene.rig);
+    out.path = (dir / "course.ugvrec").string();
+    hal::RecordingWriterOptions options;
+    options.syncEveryFrame = false;
+    auto writer =
+        hal::RecordingWriter::create(out.path, static_cast<std::uint32_t>(course->scene.rig.width),
+                                     static_cast<std::uint32_t>(course->scene.rig.height), out.calibration, options);
+    EXPECT_TRUE(writer.has_value());
+    for (std::size_t k = 0; k < frames; ++k) {
+        auto frame = sim::renderCourseFrame(*course, firstFrame + k);
+        EXPECT_TRUE(frame.has_value());
+        const auto stamp = static_cast<std::int64_t>(k) * 100'000'000;
+        EXPECT_TRUE(writer->append(k, stamp, stamp, viewOf(frame->left), viewOf(frame->right)).has_value());
+        out.truth.push_back(frame->sectors);
+    }
+    return out;
+}
+
+class ServiceTest : public ::testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        auto started = ipc::EmbeddedRouDi::start("ugv-service-test", ipc::frameBytes(640, 480));
+        ASSERT_TRUE(started.has_value()) << started.error().message();
+        roudi_ = std::move(*started).release();
+    }
+    static void TearDownTestSuite()
+    {
+        delete roudi_;
+        roudi_ = nullptr;
+    }
+    void SetUp() override
+    {
+        dir_ = std::filesystem::temp_directory_path() / ("ugv-service-test-" + std::to_string(::getpid()));
+        std::filesystem::create_directories(dir_);
+    }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+
+    static ipc::EmbeddedRouDi* roudi_;
+    std::filesystem::path dir_;
+};
+ipc::EmbeddedRouDi* ServiceTest::roudi_ = nullptr;
+
+std::unique_ptr<Service> makeService(const Course& course, const hal::ReplayOptions& replay,
+                                     const ServiceOptions& options = {})
+{
+    auto camera = hal::ReplayCamera::open(course.path, replay);
+    EXPECT_TRUE(camera.has_value()) << (camera ? "" : camera.error().message());
+    auto calibration = bringup::parseCalibration(course.calibration, "course");
+    EXPECT_TRUE(calibration.has_value());
+    auto service = Service::create(bringup::ServiceConfig{}, *calibration, std::move(*camera), options);
+    EXPECT_TRUE(service.has_value()) << (service ? "" : service.error().message());
+    return service ? std::move(*service) : nullptr;
+}
+
+TEST_F(ServiceTest, HardwareInTheLoopCourseSectorsMatchTheGroundTruth)
+{
+    constexpr std::size_t kFrames = 40;
+    const Course course = writeCourse(dir_, kFrames);
+    auto planner = ipc::SectorsSubscriber::create(256).value(); // a local consumer on the sectors topic
+    hal::ReplayOptions replay;
+    replay.pace = hal::ReplayPace::Forced;
+    replay.forcedFps = 5.0; // slow enough that no frame is dropped on a loaded 2-core machine
+    auto service = makeService(course, replay);
+    ASSERT_NE(service, nullptr);
+
+    service->start();
+    std::map<std::uint64_t, ObstacleSectors> received;
+    ipc::SectorsMessage message;
+    while (!service->finished() || planner->take(message, milliseconds(0)) == ipc::TakeStatus::Frame) {
+        if (planner->take(message, milliseconds(50)) == ipc::TakeStatus::Frame) {
+            received[message.sectors.sequence] = message.sectors;
+        }
+    }
+    while (planner->take(message, milliseconds(100)) == ipc::TakeStatus::Frame) {
+        received[message.sectors.sequence] = message.sectors;
+    }
+    service->stop();
+    const ServiceReport report = service->report();
+
+    EXPECT_EQ(report.framesCaptured, kFrames);
+    EXPECT_EQ(report.framesPublished, kFrames);
+    EXPECT_EQ(report.framesDropped, 0U);
+    EXPECT_EQ(report.badFrames, 0U);
+    EXPECT_EQ(planner->malformed(), 0U);
+    ASSERT_EQ(received.size(), kFrames);
+
+    // Every ground-truth obstacle within 8 m is reported in its sector or a neighbour; no red where the truth
+    // has no obstacle nearby.
+    int truthObstacles = 0;
+    int detected = 0;
+    int falseRed = 0;
+    for (std::size_t k = 0; k < kFrames; ++k) {
+        const ObstacleSectors& want = course.truth[k];
+        const ObstacleSectors& got = received[k];
+        ASSERT_EQ(got.count, want.count);
+        EXPECT_EQ(got.captureStampNs > 0, true);
+        for (int i = 0; i < want.count; ++i) {
+            const auto at = [&](const ObstacleSectors& s, int j) -> const Sector& {
+                return s.sectors[static_cast<std::size_t>(std::clamp(j, 0, s.count - 1))];
+            };
+            const Sector& w = at(want, i);
+            const bool reported = at(got, i - 1).state == SectorState::Obstacle ||
+                                  at(got, i).state == SectorState::Obstacle ||
+                                  at(got, i + 1).state == SectorState::Obstacle;
+            if (w.state == SectorState::Obstacle && w.rangeM <= 8.0F) {
+                ++truthObstacles;
+                detected += reported ? 1 : 0;
+            }
+            const bool truthNear = at(want, i - 1).state == SectorState::Obstacle || w.state == SectorState::Obstacle ||
+                                   at(want, i + 1).state == SectorState::Obstacle;
+            falseRed += at(got, i).danger == DangerClass::Red && !truthNear ? 1 : 0;
+        }
+    }
+    std::printf("[ MEASURED ] HIL %zu frames: %d of %d ground-truth obstacle sectors (<= 8 m) detected, %d false "
+                "red; end-to-end p50 %.1f ms p99 %.1f ms\n",
+                kFrames, detected, truthObstacles, falseRed,
+                static_cast<double>(report.stages[static_cast<std::size_t>(Stage::EndToEnd)].p50().count()) * 1e-6,
+                static_cast<double>(report.stages[static_cast<std::size_t>(Stage::EndToEnd)].p99().count()) * 1e-6);
+    ASSERT_GT(truthObstacles, 50);
+    EXPECT_GE(detected, truthObstacles * 9 / 10);
+    EXPECT_EQ(falseRed, 0);
+}
+
+/// Per task: allocations of that thread from its steady state to its end.
+struct Probe {
+    Probe()
+    {
+        for (const char* task : {"capture", "vision", "publish"}) { // no map insertion while a scope counts
+            scopes[task] = nullptr;
+            counts[task] = 0;
+            ended[task] = false;
+        }
+    }
+    std::map<std::string, std::size_t> counts;
+    std::map<std::string, bool> ended;
+    std::map<std::string, std::unique_ptr<test::ThreadAllocationScope>> scopes;
+    std::mutex mutex; // the probe's own bookkeeping; not on the measured path (counted after the scope ends)
+    static void call(void* self, const char* task, ProbeEvent event)
+    {
+        auto* p = static_cast<Probe*>(self);
+        if (event == ProbeEvent::SteadyState) {
+            auto scope = std::make_unique<test::ThreadAllocationScope>(); // allocated before the scope counts
+            std::lock_guard<std::mutex> lock(p->mutex);
+            p->scopes[task] = std::move(scope);
+            return;
+        }
+        std::size_t count = 0;
+        std::unique_ptr<test::ThreadAllocationScope> scope;
+        {
+            std::lock_guard<std::mutex> lock(p->mutex);
+            auto it = p->scopes.find(task);
+            if (it == p->scopes.end() || !it->second) {
+                return;
+            }
+            count = it->second->count();
+            scope = std::move(it->second);
+        }
+        std::lock_guard<std::mutex> lock(p->mutex);
+        p->counts[task] = count;
+        p->ended[task] = true;
+    }
+};
+
+TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingBeyondOpenCvStereoSgbm)
+{
+    if (!test::mallocFamilyCounted()) {
+        GTEST_SKIP() << "the sanitizer owns malloc: OpenCV's allocations cannot be counted in this build";
+    }
+    constexpr std::size_t kDistinct = 6;
+    const Course course = writeCourse(dir_, kDistinct, 20);
+    hal::ReplayOptions replay;
+    replay.loop = true;
+    replay.pace = hal::ReplayPace::Forced;
+    replay.forcedFps = 60.0;
+    Probe probe;
+    ServiceOptions options;
+    options.maxFrames = 310;
+    options.warmupFrames = 10;
+    options.probe = &Probe::call;
+    options.probeContext = &probe;
+    auto service = makeService(course, replay, options);
+    ASSERT_NE(service, nullptr);
+    service->start();
+    PublishedFrame seen;
+    while (!service->finished()) {
+        while (service->nextPublished(seen)) {
+        }
+        ::usleep(20000);
+    }
+    service->stop();
+    const ServiceReport report = service->report();
+    ASSERT_GE(report.framesPublished, 310U);
+    for (const char* task : {"capture", "vision", "publish"}) {
+        ASSERT_TRUE(probe.ended[task]) << task << " never reached its steady state";
+    }
+
+    // What OpenCV's StereoSGBM::compute allocates per call on these frames, alone.
+    auto matcher = vision::RoiMatcher::create(vision::RoiMatcherConfig{}, cv::Size(640, 480 - 232)).value();
+    auto reader = hal::RecordingReader::open(course.path).value();
+    std::vector<std::size_t> perFrame;
+    while (reader.next() == hal::ReadStatus::Frame) {
+        const StereoViews v = reader.views();
+        const Rect roi{0, 232, 640, 248};
+        (void)matcher.match(v.left.sub(roi), v.right.sub(roi)); // first touch
+        const test::ThreadAllocationScope scope;
+        (void)matcher.match(v.left.sub(roi), v.right.sub(roi));
+        perFrame.push_back(scope.count());
+    }
+    const auto [minIt, maxIt] = std::minmax_element(perFrame.begin(), perFrame.end());
+    const std::uint64_t visionFrames = report.framesPublished - static_cast<std::uint64_t>(options.warmupFrames);
+    std::printf("[ MEASURED ] %llu frames published, %llu dropped by latest-frame-wins; allocations after warm-up: "
+                "capture %zu, publish %zu, vision %zu (StereoSGBM alone: %zu..%zu per frame)\n",
+                static_cast<unsigned long long>(report.framesPublished),
+                static_cast<unsigned long long>(report.framesDropped), probe.counts["capture"], probe.counts["publish"],
+                probe.counts["vision"], *minIt, *maxIt);
+    EXPECT_EQ(probe.counts["capture"], 0U);
+    EXPECT_EQ(probe.counts["publish"], 0U);
+    // Every vision allocation is StereoSGBM's: at most its per-frame maximum per processed frame (+1 frame of
+    // slack for the frame in flight when the scope ended).
+    EXPECT_LE(probe.counts["vision"], (visionFrames + 1) * *maxIt);
+    EXPECT_GE(probe.counts["vision"], (visionFrames - 1) * *minIt);
+}
+
+TEST_F(ServiceTest, CalibrationWithoutMountOrOfAnotherSizeIsRefused)
+{
+    const Course course = writeCourse(dir_, 1);
+    auto calibration = bringup::parseCalibration(course.calibration, "course").value();
+    calibration.mount.reset();
+    auto camera = hal::ReplayCamera::open(course.path, {}).value();
+    auto noMount = Service::create(bringup::ServiceConfig{}, calibration, std::move(camera));
+    ASSERT_FALSE(noMount.has_value());
+    EXPECT_NE(noMount.error().message().find("no mount section"), std::string::npos) << noMount.error().message();
+
+    auto other = bringup::parseCalibration(course.calibration, "course").value();
+    other.imageSize = cv::Size(320, 240);
+    auto camera2 = hal::ReplayCamera::open(course.path, {}).value();
+    auto wrongSize = Service::create(bringup::ServiceConfig{}, other, std::move(camera2));
+    ASSERT_FALSE(wrongSize.has_value());
+    EXPECT_NE(wrongSize.error().message().find("delivers 640x480 frames but the calibration is for 320x240"),
+              std::string::npos)
+        << wrongSize.error().message();
+}
+
+} // namespace
+} // namespace ugv::service
