@@ -91,6 +91,11 @@ Result<RunResult, Error> runService(const RunOptions& options)
         }
         config = std::move(*loaded);
     }
+    if (options.pinAllTasksTo >= 0) {
+        for (rt::TaskSpec& task : config.tasks) {
+            task.cpu = options.pinAllTasksTo;
+        }
+    }
     if (options.replayPath.empty()) {
         return Unexpected(Error{"ugvsensed", "no camera source: this version replays recordings only",
                                 "give --replay REC (V4L2 and libcamera backends follow: see README status)"});

@@ -226,9 +226,10 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
             cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Streaming), std::memory_order_relaxed);
             const hal::CameraStats stats = camera_->stats();
             cameraGaps_.store(stats.sequenceGaps, std::memory_order_relaxed);
-            // The ring-publish time goes in a slot per sequence, written before the frame becomes visible.
-            ringStampNs_[frame.sequence % kPublishSlots].store(MonotonicClock::nowNs(), std::memory_order_relaxed);
-            if (!framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right)) {
+            // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written
+            // before the frame becomes visible to the vision task.
+            if (!framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
+                                     &ringStampNs_[frame.sequence % kPublishSlots])) {
                 loanFailures_.store(framesOut_->loanFailures(), std::memory_order_relaxed);
             }
             lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
@@ -308,7 +309,7 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             degraded_.fetch_add(1, std::memory_order_relaxed);
         }
         out.stampNs = {h.leftStampNs,
-                       ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_relaxed),
+                       ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire),
                        takenNs,
                        rectifiedNs,
                        detectedNs,

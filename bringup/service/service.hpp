@@ -63,7 +63,8 @@ struct ServiceOptions {
 /// Stages of one frame, in the order of its path.
 enum class Stage : std::uint8_t { Capture, Handover, Rectify, Detect, Publish, EndToEnd };
 inline constexpr int kStageCount = 6;
-/// "capture" (exposure -> published to the ring), "handover" (-> taken by vision), "rectify", "detect",
+/// "capture" (exposure -> the pair copied into its chunk, about to be published), "handover" (iceoryx publish ->
+/// taken by vision: the shared-memory hand-over), "rectify", "detect",
 /// "publish" (-> sectors published), "end_to_end" (exposure -> sectors published).
 const char* stageName(Stage stage) noexcept;
 

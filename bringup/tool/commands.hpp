@@ -13,5 +13,6 @@ int runSim(int argc, char** argv);
 int runDetect(int argc, char** argv);
 int runEval(int argc, char** argv);
 int runRecording(int argc, char** argv);
+int runBench(int argc, char** argv);
 
 } // namespace ugv::tool

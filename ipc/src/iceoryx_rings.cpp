@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <ctime>
 
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_hoofs/posix_wrapper/posix_access_rights.hpp"
@@ -210,7 +211,8 @@ Result<std::unique_ptr<FramePublisher>, Error> FramePublisher::create(int width,
 }
 
 bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs,
-                             ConstImageViewU8 left, ConstImageViewU8 right) noexcept
+                             ConstImageViewU8 left, ConstImageViewU8 right,
+                             std::atomic<std::int64_t>* publishStampNs) noexcept
 {
     if (left.width() != width_ || left.height() != height_ || right.width() != width_ || right.height() != height_) {
         ++loanFailures_;
@@ -232,6 +234,12 @@ bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, s
             std::memcpy(pixels, image.row(y), static_cast<std::size_t>(width_));
             pixels += width_;
         }
+    }
+    if (publishStampNs != nullptr) {
+        timespec now{};
+        ::clock_gettime(CLOCK_MONOTONIC, &now);
+        publishStampNs->store(static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec,
+                              std::memory_order_release);
     }
     impl_->publisher.publish(chunk);
     ++published_;

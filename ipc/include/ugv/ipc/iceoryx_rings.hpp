@@ -24,6 +24,7 @@
 /// wait/take/release and the sectors publish/take allocate nothing after create() (iceoryx's lock-free mempools
 /// and queues; the wait is a semaphore, not a lock); create() and the runtime start are not.
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -88,9 +89,10 @@ public:
     FramePublisher& operator=(FramePublisher&&) = delete;
 
     /// Loans a chunk, writes the header and copies both images in (packed), publishes it. False (counted in
-    /// loanFailures) when no chunk is free, or when an image is not width x height.
+    /// loanFailures) when no chunk is free, or when an image is not width x height. `publishStampNs`, when given,
+    /// receives CLOCK_MONOTONIC right before the chunk is handed to iceoryx (the start of the hand-over).
     bool publish(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs, ConstImageViewU8 left,
-                 ConstImageViewU8 right) noexcept;
+                 ConstImageViewU8 right, std::atomic<std::int64_t>* publishStampNs = nullptr) noexcept;
     [[nodiscard]] std::uint64_t published() const noexcept { return published_; }
     [[nodiscard]] std::uint64_t loanFailures() const noexcept { return loanFailures_; }
     /// True when at least one subscriber is connected.

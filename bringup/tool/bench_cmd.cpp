@@ -1,0 +1,193 @@
+// ugvsense bench: latency budgets. Replays a recording through the real service (iceoryx rings, the three
+// fixed-priority threads where permitted) and reports per stage and end to end: p50, p90, p99, p99.9, max,
+// deadline misses, drops, CPU per task, allocations after warm-up (this tool links rt's allocation counter), the
+// threads and the locked memory. --sweep finds the highest rate without deadline misses.
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "runner.hpp"
+#include "ugv/rt/alloc_counter.hpp"
+
+namespace ugv::tool {
+namespace {
+
+constexpr const char* kCommand = "bench";
+
+/// Counts each task thread's allocations from its steady state to its end (ServiceOptions::probe).
+class AllocationProbe {
+public:
+    AllocationProbe()
+    {
+        for (const char* task : {"capture", "vision", "publish"}) {
+            scopes_[task] = nullptr; // no map insertion while a scope counts
+            counts_[task] = 0;
+        }
+    }
+    static void call(void* self, const char* task, service::ProbeEvent event)
+    {
+        auto* p = static_cast<AllocationProbe*>(self);
+        if (event == service::ProbeEvent::SteadyState) {
+            auto scope = std::make_unique<rt::ThreadAllocationScope>();
+            const std::lock_guard<std::mutex> lock(p->mutex_);
+            p->scopes_[task] = std::move(scope);
+            return;
+        }
+        const std::lock_guard<std::mutex> lock(p->mutex_);
+        auto& scope = p->scopes_[task];
+        if (scope) {
+            p->counts_[task] = scope->count();
+            scope.reset();
+        }
+    }
+    std::uint64_t total()
+    {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        std::uint64_t sum = 0;
+        for (const auto& [task, count] : counts_) {
+            sum += count;
+        }
+        return sum;
+    }
+    std::string byTask()
+    {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        std::string text;
+        for (const auto& [task, count] : counts_) {
+            text += (text.empty() ? "" : ", ") + task + " " + std::to_string(count);
+        }
+        return text;
+    }
+
+private:
+    std::mutex mutex_;
+    std::map<std::string, std::unique_ptr<rt::ThreadAllocationScope>> scopes_;
+    std::map<std::string, std::size_t> counts_;
+};
+
+int fail(const Error& error)
+{
+    std::cerr << "ugvsense bench: error: " << error.message() << '\n';
+    return 1;
+}
+
+struct BenchRun {
+    service::RunResult result;
+    std::string allocationsByTask;
+};
+
+Result<BenchRun, Error> benchOnce(const std::string& recording, const std::string& config, double rate,
+                                  std::uint64_t frames, bool oneCore)
+{
+    service::RunOptions options;
+    options.appName = "ugvsense-bench";
+    options.replayPath = recording;
+    options.configPath = config;
+    options.roudi = service::RouDiMode::Auto;
+    options.replay.loop = true;
+    if (rate > 0.0) {
+        options.replay.pace = hal::ReplayPace::Forced;
+        options.replay.forcedFps = rate;
+    }
+    options.service.maxFrames = frames;
+    options.service.warmupFrames = 10;
+    AllocationProbe probe;
+    options.service.probe = &AllocationProbe::call;
+    options.service.probeContext = &probe;
+    options.pinAllTasksTo = oneCore ? 0 : -1;
+    auto run = service::runService(options);
+    if (!run) {
+        return Unexpected(run.error());
+    }
+    BenchRun out{std::move(*run), probe.byTask()};
+    out.result.extras.allocationsAfterWarmup = probe.total();
+    return out;
+}
+
+} // namespace
+
+int runBench(int argc, char** argv)
+{
+    Args args(kCommand,
+              "--recording REC [--rate FPS] [--frames N] [--json OUT] [--one-core] [--sweep] [--config FILE]\n"
+              "  Replays REC (looping) through the real service: iceoryx rings (a running RouDi, else one inside this\n"
+              "  process), capture/vision/publish threads at their configured priorities where permitted. Reports\n"
+              "  per stage and end to end (exposure stamp to sectors published) p50/p90/p99/p99.9/max, deadline\n"
+              "  misses (deadline = 1/rate), drops, CPU per task, allocations after warm-up, threads, locked memory.\n"
+              "  --sweep: rates 10, 15, 20, 25, 30 fps, N frames each; prints the highest rate without a miss.",
+              {{"recording", "REC", "the recording to replay (ugvsense sim --course default --out REC)", true},
+               {"rate", "FPS", "replay rate, default: the recorded pace", false},
+               {"frames", "N", "frames to publish, default 300", false},
+               {"json", "OUT", "write the report as JSON (frames, deadline_misses, drops, end_to_end, stages, ...)",
+                false},
+               {"one-core", "", "pin the three tasks to CPU 0 (the one-core budget)", false},
+               {"sweep", "", "find the highest rate without deadline misses", false},
+               {"config", "FILE", "service config (default: built-in defaults)", false}});
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError(kCommand, parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    const auto rate = args.number("rate", 0.0, 0.0, 1000.0);
+    const auto frames = args.number("frames", 300, 20, 1e9);
+    for (const auto* value : {&rate, &frames}) {
+        if (!*value) {
+            return reportUsageError(kCommand, value->error());
+        }
+    }
+    const bool oneCore = args.has("one-core");
+    if (args.has("sweep")) {
+        double best = 0.0;
+        std::printf("rate_fps  frames  misses  drops  e2e_p50_ms  e2e_p99_ms  e2e_max_ms\n");
+        for (const double r : {10.0, 15.0, 20.0, 25.0, 30.0}) {
+            auto run = benchOnce(args.get("recording"), args.get("config"), r, static_cast<std::uint64_t>(*frames),
+                                 oneCore);
+            if (!run) {
+                return fail(run.error());
+            }
+            const service::ServiceReport& rep = run->result.report;
+            const auto& e2e = rep.stages[static_cast<std::size_t>(service::Stage::EndToEnd)];
+            std::printf("%8.0f  %6llu  %6llu  %5llu  %10.1f  %10.1f  %10.1f\n", r,
+                        static_cast<unsigned long long>(rep.framesPublished),
+                        static_cast<unsigned long long>(rep.deadlineMisses),
+                        static_cast<unsigned long long>(rep.framesDropped),
+                        static_cast<double>(e2e.p50().count()) * 1e-6, static_cast<double>(e2e.p99().count()) * 1e-6,
+                        static_cast<double>(e2e.max().count()) * 1e-6);
+            if (rep.deadlineMisses == 0 && rep.framesDropped == 0) {
+                best = r;
+            }
+        }
+        std::printf("highest rate without a deadline miss or a drop: %s\n",
+                    best > 0.0 ? (std::to_string(static_cast<int>(best)) + " fps").c_str() : "none of the rates");
+        return 0;
+    }
+    auto run = benchOnce(args.get("recording"), args.get("config"), *rate, static_cast<std::uint64_t>(*frames),
+                         oneCore);
+    if (!run) {
+        return fail(run.error());
+    }
+    std::printf("%s", service::formatReport(run->result.report, run->result.extras).c_str());
+    std::printf("allocations after warm-up by task: %s (vision: OpenCV's StereoSGBM::compute, see README)\n",
+                run->allocationsByTask.c_str());
+    if (args.has("json")) {
+        std::ofstream out(args.get("json"));
+        out << service::reportJson(run->result.report, run->result.extras);
+        if (!out) {
+            return fail(Error{args.get("json"), "cannot write the file", "check the folder"});
+        }
+        std::printf("wrote %s\n", args.get("json").c_str());
+    }
+    return 0;
+}
+
+} // namespace ugv::tool
