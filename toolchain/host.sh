@@ -49,17 +49,35 @@ build() {
 }
 
 run_main_job() {
-    local tool=build/release/bringup/ugvsense out=build/run
+    local tool=build/release/bringup/ugvsense service=build/release/bringup/ugvsensed out=build/run
+    local recording=build/default.ugvrec
     rm -rf "$out" && mkdir -p "$out"
-    echo "== 1/3 simulate: chessboard pairs seen by a known stereo rig"
+    echo "== 1/5 calibrate: chessboard pairs seen by a known stereo rig (ugvsense sim), calibrated and rectified"
     "$tool" sim --scene chessboard --out "$out/pairs" --pairs 12
-    echo "== 2/3 calibrate"
     "$tool" calibrate --images "$out/pairs" --board 9x6 --square 0.025 --out "$out/calibration.yaml" \
         --json "$out/calibration.json"
-    echo "== 3/3 rectify: the obstacle region of interest (the service's path), then full frames to check row alignment"
     "$tool" rectify --calib "$out/calibration.yaml" --images "$out/pairs"
-    "$tool" rectify --calib "$out/calibration.yaml" --images "$out/pairs" --full --out "$out/rectified"
-    echo "== done: calibration in $out/calibration.yaml, report in $out/calibration.json, images in $out/rectified/"
+    echo "== 2/5 the embedded default recording: the simulator drives the default course (made once, then reused)"
+    if ! "$tool" recording info "$recording" >/dev/null 2>&1; then
+        "$tool" sim --course default --out "$recording"
+    fi
+    "$tool" recording info "$recording"
+    echo "== 3/5 RouDi (iceoryx): use a running one, else start iox-roudi with bringup/roudi.toml"
+    local roudi_pid=""
+    if ! pgrep -x iox-roudi >/dev/null; then
+        iox-roudi -c bringup/roudi.toml -l warning >"$out/roudi.log" 2>&1 &
+        roudi_pid=$!
+        trap '[ -n "$roudi_pid" ] && kill "$roudi_pid" 2>/dev/null' EXIT
+        for _ in $(seq 50); do [ -S /tmp/roudi ] && break; sleep 0.1; done
+    fi
+    echo "== 4/5 ugvsensed replays the recording at its recorded pace (10 fps): sectors every 10th frame, then the latency report"
+    "$service" --replay "$recording" --print-every 10
+    echo "== 5/5 overlay of frame 60 (obstacles and the red/blue/green sector bar)"
+    "$tool" recording export "$recording" --frame 60 --out "$out/frame60" >/dev/null
+    "$tool" detect --calib "$out/frame60/calibration.yaml" --left "$out/frame60/frame_000060_left.png" \
+        --right "$out/frame60/frame_000060_right.png" --overlay "$out/overlay.png" --json "$out/sectors.json" | tail -3
+    if [ -n "$roudi_pid" ]; then kill "$roudi_pid" 2>/dev/null; wait "$roudi_pid" 2>/dev/null || true; fi
+    echo "== done: calibration in $out/calibration.yaml, sectors of frame 60 in $out/sectors.json, overlay $out/overlay.png"
 }
 
 run_tests() {

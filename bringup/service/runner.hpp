@@ -33,7 +33,7 @@ struct RunOptions {
     RouDiMode roudi = RouDiMode::External;
     ServiceOptions service;
     int printEvery = 0;                      ///< print one sector summary every N published frames (0: none)
-    int pinAllTasksTo = -1; ///< >= 0: capture, vision and publish on this CPU (one-core budgets)
+    int pinAllTasksTo = -1;                  ///< >= 0: capture, vision and publish on this CPU (one-core budgets)
     const std::atomic<bool>* stop = nullptr; ///< set by a signal handler: stop now
 };
 

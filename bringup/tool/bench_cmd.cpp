@@ -116,21 +116,21 @@ Result<BenchRun, Error> benchOnce(const std::string& recording, const std::strin
 
 int runBench(int argc, char** argv)
 {
-    Args args(kCommand,
-              "--recording REC [--rate FPS] [--frames N] [--json OUT] [--one-core] [--sweep] [--config FILE]\n"
-              "  Replays REC (looping) through the real service: iceoryx rings (a running RouDi, else one inside this\n"
-              "  process), capture/vision/publish threads at their configured priorities where permitted. Reports\n"
-              "  per stage and end to end (exposure stamp to sectors published) p50/p90/p99/p99.9/max, deadline\n"
-              "  misses (deadline = 1/rate), drops, CPU per task, allocations after warm-up, threads, locked memory.\n"
-              "  --sweep: rates 10, 15, 20, 25, 30 fps, N frames each; prints the highest rate without a miss.",
-              {{"recording", "REC", "the recording to replay (ugvsense sim --course default --out REC)", true},
-               {"rate", "FPS", "replay rate, default: the recorded pace", false},
-               {"frames", "N", "frames to publish, default 300", false},
-               {"json", "OUT", "write the report as JSON (frames, deadline_misses, drops, end_to_end, stages, ...)",
-                false},
-               {"one-core", "", "pin the three tasks to CPU 0 (the one-core budget)", false},
-               {"sweep", "", "find the highest rate without deadline misses", false},
-               {"config", "FILE", "service config (default: built-in defaults)", false}});
+    Args args(
+        kCommand,
+        "--recording REC [--rate FPS] [--frames N] [--json OUT] [--one-core] [--sweep] [--config FILE]\n"
+        "  Replays REC (looping) through the real service: iceoryx rings (a running RouDi, else one inside this\n"
+        "  process), capture/vision/publish threads at their configured priorities where permitted. Reports\n"
+        "  per stage and end to end (exposure stamp to sectors published) p50/p90/p99/p99.9/max, deadline\n"
+        "  misses (deadline = 1/rate), drops, CPU per task, allocations after warm-up, threads, locked memory.\n"
+        "  --sweep: rates 10, 15, 20, 25, 30 fps, N frames each; prints the highest rate without a miss.",
+        {{"recording", "REC", "the recording to replay (ugvsense sim --course default --out REC)", true},
+         {"rate", "FPS", "replay rate, default: the recorded pace", false},
+         {"frames", "N", "frames to publish, default 300", false},
+         {"json", "OUT", "write the report as JSON (frames, deadline_misses, drops, end_to_end, stages, ...)", false},
+         {"one-core", "", "pin the three tasks to CPU 0 (the one-core budget)", false},
+         {"sweep", "", "find the highest rate without deadline misses", false},
+         {"config", "FILE", "service config (default: built-in defaults)", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError(kCommand, parsed.error());
     }
@@ -150,8 +150,8 @@ int runBench(int argc, char** argv)
         double best = 0.0;
         std::printf("rate_fps  frames  misses  drops  e2e_p50_ms  e2e_p99_ms  e2e_max_ms\n");
         for (const double r : {10.0, 15.0, 20.0, 25.0, 30.0}) {
-            auto run = benchOnce(args.get("recording"), args.get("config"), r, static_cast<std::uint64_t>(*frames),
-                                 oneCore);
+            auto run =
+                benchOnce(args.get("recording"), args.get("config"), r, static_cast<std::uint64_t>(*frames), oneCore);
             if (!run) {
                 return fail(run.error());
             }
@@ -171,8 +171,8 @@ int runBench(int argc, char** argv)
                     best > 0.0 ? (std::to_string(static_cast<int>(best)) + " fps").c_str() : "none of the rates");
         return 0;
     }
-    auto run = benchOnce(args.get("recording"), args.get("config"), *rate, static_cast<std::uint64_t>(*frames),
-                         oneCore);
+    auto run =
+        benchOnce(args.get("recording"), args.get("config"), *rate, static_cast<std::uint64_t>(*frames), oneCore);
     if (!run) {
         return fail(run.error());
     }

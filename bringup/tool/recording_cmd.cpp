@@ -211,9 +211,19 @@ int runExport(const Args& args)
     std::ofstream(out / "calibration.yaml", std::ios::binary) << reader->info().calibrationText;
     std::ofstream index(out / "frames.csv");
     index << "frame,sequence,left_stamp_ns,right_stamp_ns\n";
+    const auto only = args.number("frame", -1, 0, 1e12);
+    if (!only) {
+        return reportUsageError(kCommand, only.error());
+    }
     std::size_t k = 0;
+    std::size_t written = 0;
     hal::ReadStatus status = hal::ReadStatus::Frame;
     while ((status = reader->next()) == hal::ReadStatus::Frame) {
+        if (*only >= 0 && static_cast<double>(k) != *only) {
+            ++k;
+            continue;
+        }
+        ++written;
         const StereoViews v = reader->views();
         char stem[32];
         std::snprintf(stem, sizeof(stem), "frame_%06zu", k);
@@ -232,8 +242,8 @@ int runExport(const Args& args)
     if (status == hal::ReadStatus::IoError) {
         return fail(Error{path, std::string("read failed: ") + reader->lastError().text(), "check the device"});
     }
-    std::printf("exported %zu frame(s) of %s to %s (frame_NNNNNN_{left,right}.png, frames.csv, calibration.yaml)\n", k,
-                path.c_str(), out.string().c_str());
+    std::printf("exported %zu frame(s) of %s to %s (frame_NNNNNN_{left,right}.png, frames.csv, calibration.yaml)\n",
+                written, path.c_str(), out.string().c_str());
     if (reader->corruptFrames() > 0) {
         std::printf("skipped %llu corrupt frame(s)\n", static_cast<unsigned long long>(reader->corruptFrames()));
     }
@@ -250,7 +260,7 @@ int runRecording(int argc, char** argv)
 {
     Args args(kCommand,
               "info REC | import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F] [--force] | "
-              "export REC --out DIR\n"
+              "export REC --out DIR [--frame N]\n"
               "  info: frame count, sequence gaps, duration, corrupt frames and a cut-off tail (what a crash left)\n"
               "  import: left*/right* image pairs (name order) into a recording; stamps from --timestamps\n"
               "    (frame,stamp_ns lines, frame = index in name order) or every 1/fps s\n"
@@ -260,7 +270,8 @@ int runRecording(int argc, char** argv)
                {"out", "REC|DIR", "import: the recording to write; export: the folder", false},
                {"timestamps", "CSV", "import: frame,stamp_ns per pair", false},
                {"fps", "F", "import: frame rate when there are no timestamps, default 10", false},
-               {"force", "", "import: overwrite an existing recording", false}});
+               {"force", "", "import: overwrite an existing recording", false},
+               {"frame", "N", "export: only frame N (0-based, in file order)", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError(kCommand, parsed.error());
     }
