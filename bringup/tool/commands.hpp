@@ -14,5 +14,6 @@ int runDetect(int argc, char** argv);
 int runEval(int argc, char** argv);
 int runRecording(int argc, char** argv);
 int runBench(int argc, char** argv);
+int runRecord(int argc, char** argv);
 
 } // namespace ugv::tool

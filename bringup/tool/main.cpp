@@ -22,6 +22,7 @@ constexpr Subcommand kSubcommands[] = {
     {"detect", "detect obstacles in one stereo pair (sectors, JSON, overlay)", ugv::tool::runDetect},
     {"eval", "evaluate detection on simulator scenes and matching on Middlebury data", ugv::tool::runEval},
     {"recording", "inspect, import (PNG pairs) and export recordings", ugv::tool::runRecording},
+    {"record", "record the frames the running service publishes (low priority, crash-safe)", ugv::tool::runRecord},
     {"bench", "latency budget: replay a recording through the real service and report p50..max", ugv::tool::runBench},
 };
 

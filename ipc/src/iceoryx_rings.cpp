@@ -273,12 +273,26 @@ Result<std::unique_ptr<FrameSubscriber>, Error> FrameSubscriber::create(int queu
 
 TakeStatus FrameSubscriber::take(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept
 {
+    return takeFrame(out, timeout, true);
+}
+
+TakeStatus FrameSubscriber::takeOldest(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept
+{
+    return takeFrame(out, timeout, false);
+}
+
+TakeStatus FrameSubscriber::takeFrame(TakenFrame& out, std::chrono::nanoseconds timeout, bool newest) noexcept
+{
     const void* payload = impl_->take(timeout);
     if (payload == nullptr) {
         return TakeStatus::Timeout;
     }
     // Latest frame wins: anything newer already queued replaces it.
-    for (auto newer = impl_->subscriber.take(); !newer.has_error(); newer = impl_->subscriber.take()) {
+    while (newest && impl_->subscriber.hasData()) {
+        auto newer = impl_->subscriber.take();
+        if (newer.has_error()) {
+            break;
+        }
         impl_->subscriber.release(payload);
         payload = newer.value();
     }

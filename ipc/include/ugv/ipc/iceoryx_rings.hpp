@@ -131,6 +131,8 @@ public:
     /// Waits up to `timeout` for a frame and takes the newest one queued. A malformed chunk (the header does
     /// not validate against its size) is released and reported as Malformed (counted).
     TakeStatus take(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept;
+    /// As take(), but the oldest queued frame (a recorder keeps every pair its queue holds).
+    TakeStatus takeOldest(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept;
     /// Gives the chunk back to the pool.
     void release(TakenFrame& frame) noexcept;
     [[nodiscard]] std::uint64_t malformed() const noexcept { return malformed_; }
@@ -138,6 +140,7 @@ public:
 private:
     struct Impl;
     explicit FrameSubscriber(std::unique_ptr<Impl> impl);
+    TakeStatus takeFrame(TakenFrame& out, std::chrono::nanoseconds timeout, bool newest) noexcept;
     std::unique_ptr<Impl> impl_;
     std::uint64_t malformed_ = 0;
 };

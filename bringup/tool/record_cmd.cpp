@@ -1,0 +1,151 @@
+// ugvsense record: subscribes to the service's frame ring (iceoryx `ugvsense/stereo/frames`) at low priority and
+// writes a recording (hal/recording.hpp), syncing every frame so that a crash or a power cut loses at most the frame
+// being written. Its queue (16 pairs) rides out write stalls; pairs it still misses are counted from the sequence
+// numbers. Stops on SIGINT/SIGTERM, after --frames or --seconds.
+
+#include <sys/resource.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "ugv/hal/recording.hpp"
+#include "ugv/ipc/iceoryx_rings.hpp"
+#include "ugv/platform/clock.hpp"
+
+namespace ugv::tool {
+namespace {
+
+constexpr const char* kCommand = "record";
+constexpr int kQueue = 16;
+constexpr int kNiceness = 10; ///< below every service task
+
+std::atomic<bool> g_stop{false};
+
+void onSignal(int /*signal*/)
+{
+    g_stop.store(true);
+}
+
+int fail(const Error& error)
+{
+    std::cerr << "ugvsense record: error: " << error.message() << '\n';
+    return 1;
+}
+
+} // namespace
+
+int runRecord(int argc, char** argv)
+{
+    Args args(kCommand,
+              "--out REC --calib FILE [--frames N] [--seconds S] [--no-sync] [--force]\n"
+              "  Records the stereo pairs the running service publishes (iceoryx, zero copy) into REC with the\n"
+              "  calibration FILE; syncs every frame (a crash loses at most the frame being written) unless\n"
+              "  --no-sync. Needs a running RouDi and ugvsensed. Stops on Ctrl-C, after N frames or S seconds.",
+              {{"out", "REC", "the recording to write", true},
+               {"calib", "FILE", "the calibration of the camera being recorded (stored in the recording)", true},
+               {"frames", "N", "stop after N frames", false},
+               {"seconds", "S", "stop after S seconds", false},
+               {"no-sync", "", "do not fdatasync each frame (faster, a power cut may lose more)", false},
+               {"force", "", "overwrite an existing recording", false}});
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError(kCommand, parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    const auto frames = args.number("frames", 0, 1, 1e12);
+    const auto seconds = args.number("seconds", 0, 0.1, 1e9);
+    for (const auto* value : {&frames, &seconds}) {
+        if (!*value) {
+            return reportUsageError(kCommand, value->error());
+        }
+    }
+    std::ifstream calibFile(args.get("calib"), std::ios::binary);
+    if (!calibFile) {
+        return fail(Error{args.get("calib"), "cannot read the calibration file", "give the camera's calibration"});
+    }
+    const std::string calibration{std::istreambuf_iterator<char>(calibFile), std::istreambuf_iterator<char>()};
+    (void)::setpriority(PRIO_PROCESS, 0, kNiceness); // low priority: never in the service's way
+
+    if (auto runtime = ipc::startRuntime("ugvsense-record"); !runtime) {
+        return fail(runtime.error());
+    }
+    auto created = ipc::FrameSubscriber::create(kQueue);
+    if (!created) {
+        return fail(created.error());
+    }
+    const std::unique_ptr<ipc::FrameSubscriber> subscriber = std::move(*created);
+    struct sigaction action {};
+    action.sa_handler = onSignal;
+    ::sigaction(SIGINT, &action, nullptr);
+    ::sigaction(SIGTERM, &action, nullptr);
+
+    std::optional<hal::RecordingWriter> writer;
+    std::uint64_t written = 0;
+    std::uint64_t missed = 0;
+    std::uint64_t firstSequence = 0;
+    std::uint64_t lastSequence = 0;
+    const std::int64_t startNs = MonotonicClock::nowNs();
+    const auto timeUp = [&] {
+        return args.has("seconds") && static_cast<double>(MonotonicClock::nowNs() - startNs) * 1e-9 >= *seconds;
+    };
+    std::fprintf(stderr, "ugvsense record: waiting for frames on ugvsense/stereo/frames ...\n");
+    ipc::TakenFrame frame;
+    while (!g_stop.load() && !(args.has("frames") && static_cast<double>(written) >= *frames) && !timeUp()) {
+        // Oldest first: a recorder keeps every pair its queue holds.
+        const ipc::TakeStatus status = subscriber->takeOldest(frame, std::chrono::milliseconds(100));
+        if (status != ipc::TakeStatus::Frame) {
+            continue;
+        }
+        const FrameHeader& h = frame.header;
+        if (!writer) {
+            hal::RecordingWriterOptions options;
+            options.syncEveryFrame = !args.has("no-sync");
+            options.overwrite = args.has("force");
+            auto opened = hal::RecordingWriter::create(args.get("out"), h.width, h.height, calibration, options);
+            if (!opened) {
+                subscriber->release(frame);
+                return fail(opened.error());
+            }
+            writer.emplace(std::move(*opened));
+            firstSequence = h.sequence;
+        } else if (h.sequence > lastSequence + 1) {
+            missed += h.sequence - lastSequence - 1;
+        }
+        lastSequence = h.sequence;
+        const auto appended =
+            writer->append(h.sequence, h.leftStampNs, h.rightStampNs, frame.views.left, frame.views.right);
+        subscriber->release(frame);
+        if (!appended) {
+            std::fprintf(stderr,
+                         "ugvsense record: error: %s: cannot append: %s (%s); the %llu frames before are kept "
+                         "(fix: free space on the device)\n",
+                         args.get("out").c_str(), appended.error().text(), appended.error().name(),
+                         static_cast<unsigned long long>(written));
+            return 1;
+        }
+        ++written;
+    }
+    if (!writer) {
+        std::fprintf(stderr, "ugvsense record: no frame arrived; nothing written (is ugvsensed running?)\n");
+        return 1;
+    }
+    if (auto closed = writer->close(); !closed) {
+        return fail(Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
+    }
+    std::printf("recorded %llu frame(s) to %s (sequence %llu..%llu; %llu missed by the recorder)\n",
+                static_cast<unsigned long long>(written), args.get("out").c_str(),
+                static_cast<unsigned long long>(firstSequence), static_cast<unsigned long long>(lastSequence),
+                static_cast<unsigned long long>(missed));
+    return 0;
+}
+
+} // namespace ugv::tool
