@@ -16,6 +16,7 @@ packages=(
     libeigen3-dev          # small dense linear algebra (ground plane, correlator)
     zlib1g-dev             # CRC-32 of recording records (hal/recording)
     iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev   # shared-memory frame and sector rings (RouDi + posh)
+    libsystemd-dev         # sd_notify: READY and the watchdog of the service unit
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
 )
 

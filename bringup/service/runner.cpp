@@ -8,7 +8,9 @@
 #include <memory>
 
 #include "ugv/bringup/calibration_file.hpp"
+#include "ugv/hal/systemd_notify.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
+#include "ugv/platform/clock.hpp"
 #include "ugv/platform/log.hpp"
 #include "ugv/rt/memory.hpp"
 
@@ -146,18 +148,34 @@ Result<RunResult, Error> runService(const RunOptions& options)
     }
     result.extras.threadCount = processThreadCount();
     (*service)->start();
+    const hal::SystemdNotifier systemd;
+    systemd.ready();
+    systemd.status("replaying " + options.replayPath);
+    // The watchdog is pinged at half its interval, and only when frames were published since the last ping: a
+    // stalled camera or pipeline stops the pings and systemd restarts the service.
+    const std::chrono::nanoseconds pingEvery = systemd.watchdogInterval() / 2;
+    std::int64_t lastPingNs = 0;
+    bool framesSincePing = false;
     PublishedFrame frame;
     std::uint64_t seen = 0;
     while (!(options.stop != nullptr && options.stop->load()) && !(*service)->finished()) {
         while ((*service)->nextPublished(frame)) {
             ++seen;
+            framesSincePing = true;
             if (options.printEvery > 0 && seen % static_cast<std::uint64_t>(options.printEvery) == 0) {
                 std::printf("%s\n", summaryLine(frame).c_str());
                 std::fflush(stdout);
             }
         }
+        const std::int64_t now = MonotonicClock::nowNs();
+        if (pingEvery.count() > 0 && framesSincePing && now - lastPingNs >= pingEvery.count()) {
+            systemd.watchdog();
+            lastPingNs = now;
+            framesSincePing = false;
+        }
         sleepMs(kMonitorPoll);
     }
+    systemd.stopping();
     (*service)->stop();
     result.report = (*service)->report();
     service->reset(); // threads and iceoryx ports go before the runtime
