@@ -86,7 +86,7 @@ Result<std::unique_ptr<FramePipeline>, Error> FramePipeline::create(const vision
 }
 
 PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence,
-                                      std::int64_t stampNs, std::int64_t& rectifiedNs) noexcept
+                                      std::int64_t stampNs, std::int64_t& rectifiedNs, bool groundOnly) noexcept
 {
     if (left.width() != width_ || left.height() != height_ || right.width() != width_ || right.height() != height_) {
         rectifiedNs = nowNs();
@@ -97,7 +97,11 @@ PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 ri
         return PipelineStatus::RectifyFailed;
     }
     rectifiedNs = nowNs();
-    detector_.process(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), sequence, stampNs);
+    if (groundOnly) {
+        detector_.processGroundOnly(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), sequence, stampNs);
+    } else {
+        detector_.process(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), sequence, stampNs);
+    }
     return detector_.status() == vision::DetectorStatus::Ok ? PipelineStatus::Ok : PipelineStatus::DetectorFailed;
 }
 

@@ -33,9 +33,10 @@ public:
     static Result<std::unique_ptr<FramePipeline>, Error> create(const vision::StereoCalibration& calibration,
                                                                 const bringup::ServiceConfig& config);
 
-    /// Rectifies the pair and detects. `rectifiedNs` receives the monotonic time after rectification.
+    /// Rectifies the pair and detects; `groundOnly` takes the overload path (ObstacleDetector::processGroundOnly: no
+    /// dense matching, degraded sectors). `rectifiedNs` receives the monotonic time after rectification.
     PipelineStatus process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence, std::int64_t stampNs,
-                           std::int64_t& rectifiedNs) noexcept;
+                           std::int64_t& rectifiedNs, bool groundOnly = false) noexcept;
 
     [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return detector_.sectors(); }
     [[nodiscard]] int width() const noexcept { return width_; }

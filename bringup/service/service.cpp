@@ -275,6 +275,8 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
     std::uint64_t lastSequence = 0;
     std::uint64_t frames = 0;
     bool steady = false;
+    double fullMeanNs = 0.0; // running mean of the full pipeline's time (rectified -> detected) [ns]
+    int degradedInARow = 0;
     while (!stop.load(std::memory_order_relaxed)) {
         const ipc::TakeStatus status = framesIn_->take(frame, kWaitSlice);
         if (status == ipc::TakeStatus::Timeout) {
@@ -292,10 +294,21 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
         }
         haveLast = true;
         lastSequence = h.sequence;
+        const bool late = fullMeanNs > 0.0 && static_cast<double>(takenNs - h.leftStampNs) + fullMeanNs >
+                                                  static_cast<double>(deadline_.count());
+        const bool groundOnly =
+            options_.overload == OverloadPolicy::Degrade && late && degradedInARow < options_.fullFrameEvery;
         std::int64_t rectifiedNs = 0;
         const PipelineStatus done =
-            pipeline_->process(frame.views.left, frame.views.right, h.sequence, h.leftStampNs, rectifiedNs);
+            pipeline_->process(frame.views.left, frame.views.right, h.sequence, h.leftStampNs, rectifiedNs, groundOnly);
         const std::int64_t detectedNs = MonotonicClock::nowNs();
+        if (groundOnly) {
+            ++degradedInARow;
+        } else {
+            degradedInARow = 0;
+            const auto took = static_cast<double>(detectedNs - rectifiedNs);
+            fullMeanNs = fullMeanNs > 0.0 ? 0.8 * fullMeanNs + 0.2 * took : took;
+        }
         if (done == PipelineStatus::Ok) {
             out.sectors = pipeline_->sectors();
             if (out.sectors.degraded) {

@@ -51,12 +51,22 @@ namespace ugv::service {
 enum class ProbeEvent : std::uint8_t { SteadyState, Stopping };
 using TaskProbe = void (*)(void* context, const char* task, ProbeEvent event);
 
+/// What the vision task does when a frame cannot make its deadline with the full pipeline.
+enum class OverloadPolicy : std::uint8_t {
+    Degrade, ///< ground-plane-only sectors (no dense matching), flagged degraded; older frames are dropped anyway
+    Drop,    ///< always the full pipeline; the latest-frame-wins queue drops what it cannot process
+};
+
 struct ServiceOptions {
     double deadlineFactor = 1.0; ///< deadline = this many camera periods from exposure to published sectors
     int stallPeriods = 10;       ///< camera periods without a frame before the camera counts as stalled
     std::uint64_t maxFrames = 0; ///< stop after this many published frames (0 = run until stopped or the end)
     int warmupFrames = 5;        ///< frames not counted in the histograms (first-touch costs)
-    TaskProbe probe = nullptr;   ///< SteadyState after a task's warmupFrames-th frame, Stopping at its end
+    OverloadPolicy overload = OverloadPolicy::Degrade;
+    /// Degrade when (already late) + (the full pipeline's running mean time) exceeds the deadline; after this many
+    /// degraded frames in a row one full frame runs anyway, so that the mean follows the scene.
+    int fullFrameEvery = 10;
+    TaskProbe probe = nullptr; ///< SteadyState after a task's warmupFrames-th frame, Stopping at its end
     void* probeContext = nullptr;
 };
 

@@ -56,7 +56,15 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
     ObstacleDetector sut(std::move(matcherResult).value(), std::move(builderResult).value(),
                          std::move(estimatorResult).value(), std::move(mismatchResult).value(),
                          std::move(verifierResult).value(), roi);
+    SectorBuilderConfig groundOnlyConfig = config.sectors;
+    groundOnlyConfig.minSupport = config.groundOnlyMinSupport;
+    auto groundOnly = SectorBuilder::create(groundOnlyConfig, projection, roi, roi.y + config.marginRows);
+    if (!groundOnly) {
+        return Unexpected(std::move(groundOnly).error());
+    }
+    sut.groundOnlyBuilder_.emplace(std::move(groundOnly).value());
     sut.configuredGround_ = configuredGround;
+    sut.projection_ = projection;
     sut.ground_ = configuredGround;
     sut.roi_ = roi;
     return sut;
@@ -65,6 +73,7 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
 const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, ConstImageViewU8 rectRightRoi,
                                                  std::uint64_t sequence, std::int64_t stampNs) noexcept
 {
+    lastGroundOnly_ = false;
     const auto sizeOk = [this](ConstImageViewU8 v) {
         return v.data() != nullptr && v.width() == roi_.width && v.height() == roi_.height;
     };
@@ -84,7 +93,7 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
     if (warpGround(rectLeftRoi, estimate.disparity, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok &&
         mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, estimate.disparity, roi_.y) ==
             GroundMismatchStatus::Ok) {
-        labelsToLeftGrid(estimate.disparity);
+        labelsToLeftGrid(estimate.disparity, false);
         labels = leftLabels_.view();
     }
     ImageView<const std::int16_t> disparity = matcher_.disparityView();
@@ -96,14 +105,46 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
     return builder_.sectors();
 }
 
-void ObstacleDetector::labelsToLeftGrid(const DisparityPlane& plane) noexcept
+const ObstacleSectors& ObstacleDetector::processGroundOnly(ConstImageViewU8 rectLeftRoi, ConstImageViewU8 rectRightRoi,
+                                                           std::uint64_t sequence, std::int64_t stampNs) noexcept
+{
+    lastGroundOnly_ = true;
+    const auto sizeOk = [this](ConstImageViewU8 v) {
+        return v.data() != nullptr && v.width() == roi_.width && v.height() == roi_.height;
+    };
+    if (!sizeOk(rectLeftRoi) || !sizeOk(rectRightRoi)) {
+        status_ = DetectorStatus::WrongInputSize;
+        groundOnlyBuilder_->setAllUnknown(sequence, stampNs);
+        return groundOnlyBuilder_->sectors();
+    }
+    ground_ = configuredGround_;
+    const DisparityPlane plane = ground_.disparityPlane(projection_);
+    if (warpGround(rectLeftRoi, plane, roi_.y, warped_.view(), spans_) != GroundWarpStatus::Ok ||
+        mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, plane, roi_.y) != GroundMismatchStatus::Ok) {
+        status_ = DetectorStatus::BuildFailed;
+        groundOnlyBuilder_->setAllUnknown(sequence, stampNs);
+        return groundOnlyBuilder_->sectors();
+    }
+    labelsToLeftGrid(plane, true);
+    const BuildStatus built = groundOnlyBuilder_->build(sparse_.view(), leftLabels_.view(), ground_, sequence, stampNs);
+    groundOnlyBuilder_->markDegraded();
+    status_ = built == BuildStatus::Ok ? DetectorStatus::Ok : DetectorStatus::BuildFailed;
+    return groundOnlyBuilder_->sectors();
+}
+
+void ObstacleDetector::labelsToLeftGrid(const DisparityPlane& plane, bool withDisparity) noexcept
 {
     const ConstImageViewU8 rightLabels = mismatch_.labels();
     const ImageView<const std::int8_t> residuals = mismatch_.residuals();
     const ImageViewU8 out = leftLabels_.view();
+    const ImageView<std::int16_t> sparse = sparse_.view();
     for (int y = 0; y < out.height(); ++y) {
         std::uint8_t* dst = out.row(y);
         std::fill(dst, dst + out.width(), static_cast<std::uint8_t>(GroundLabel::NotTested));
+        std::int16_t* disparity = sparse.row(y);
+        if (withDisparity) {
+            std::fill(disparity, disparity + sparse.width(), static_cast<std::int16_t>(-16));
+        }
         const std::uint8_t* labels = rightLabels.row(y);
         const std::int8_t* residual = residuals.row(y);
         const WarpRowMap map = warpRowMap(plane, roi_.y + y);
@@ -115,8 +156,13 @@ void ObstacleDetector::labelsToLeftGrid(const DisparityPlane& plane) noexcept
             // The right pixel sees the point the left image shows at the ground-model source plus the residual.
             const int xl =
                 static_cast<int>(std::lround(map.scale * static_cast<float>(xr) + map.offset)) + residual[xr];
-            if (xl >= 0 && xl < out.width()) {
-                dst[xl] = labels[xr];
+            if (xl < 0 || xl >= out.width()) {
+                continue;
+            }
+            dst[xl] = labels[xr];
+            const double d = plane.at(xl + roi_.x, y + roi_.y) + residual[xr];
+            if (withDisparity && d > 0.0) {
+                disparity[xl] = static_cast<std::int16_t>(std::lround(d * 16.0));
             }
         }
     }

@@ -233,6 +233,7 @@ TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingBeyondOpenCvStereoSgbm)
     ServiceOptions options;
     options.maxFrames = 310;
     options.warmupFrames = 10;
+    options.overload = OverloadPolicy::Drop; // the full pipeline every frame (its allocations are the question)
     options.probe = &Probe::call;
     options.probeContext = &probe;
     auto service = makeService(course, replay, options);
@@ -276,6 +277,49 @@ TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingBeyondOpenCvStereoSgbm)
     // slack for the frame in flight when the scope ended).
     EXPECT_LE(probe.counts["vision"], (visionFrames + 1) * *maxIt);
     EXPECT_GE(probe.counts["vision"], (visionFrames - 1) * *minIt);
+}
+
+TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEveryDeadline)
+{
+    // 60 fps: the full pipeline (~30-40 ms here) cannot make a 16.7 ms deadline; the ground-only path can.
+    const Course course = writeCourse(dir_, 6, 20);
+    hal::ReplayOptions replay;
+    replay.loop = true;
+    replay.pace = hal::ReplayPace::Forced;
+    replay.forcedFps = 60.0;
+    ServiceOptions options;
+    options.maxFrames = 120;
+    auto service = makeService(course, replay, options);
+    ASSERT_NE(service, nullptr);
+    service->start();
+    PublishedFrame seen;
+    int degraded = 0;
+    int degradedClear = 0;
+    while (!service->finished()) {
+        while (service->nextPublished(seen)) {
+            if (seen.message.sectors.degraded) {
+                ++degraded;
+                for (int i = 0; i < seen.message.sectors.count; ++i) {
+                    degradedClear +=
+                        seen.message.sectors.sectors[static_cast<std::size_t>(i)].state == SectorState::Clear ? 1 : 0;
+                }
+            }
+        }
+        ::usleep(10000);
+    }
+    service->stop();
+    while (service->nextPublished(seen)) {
+        degraded += seen.message.sectors.degraded ? 1 : 0;
+    }
+    const ServiceReport report = service->report();
+    std::printf(
+        "[ MEASURED ] 60 fps: %llu published, %llu degraded, %llu deadline misses, %llu dropped\n",
+        static_cast<unsigned long long>(report.framesPublished), static_cast<unsigned long long>(report.degradedFrames),
+        static_cast<unsigned long long>(report.deadlineMisses), static_cast<unsigned long long>(report.framesDropped));
+    EXPECT_GT(report.degradedFrames, report.framesPublished / 2);
+    EXPECT_EQ(static_cast<std::uint64_t>(degraded), report.degradedFrames);
+    EXPECT_EQ(degradedClear, 0);
+    EXPECT_LT(report.deadlineMisses, report.framesPublished / 4);
 }
 
 TEST_F(ServiceTest, CalibrationWithoutMountOrOfAnotherSizeIsRefused)

@@ -267,3 +267,63 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateOnlyInsideStereoSgbm)
 
 } // namespace
 } // namespace ugv::vision
+
+namespace ugv::vision {
+namespace {
+
+/// The nearest range reported in the sectors the ground truth marks as obstacle (+inf when none).
+float nearestInTruthSectors(const ObstacleSectors& got, const ObstacleSectors& truth)
+{
+    float nearest = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < got.count; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        if (truth.sectors[k].state == SectorState::Obstacle && got.sectors[k].state == SectorState::Obstacle) {
+            nearest = std::min(nearest, got.sectors[k].rangeM);
+        }
+    }
+    return nearest;
+}
+
+TEST(ObstacleDetector, GroundOnlyPathFindsObstaclesIsNeverClearAndIsFlaggedDegraded)
+{
+    auto sut = makeDetector();
+    for (const char* name : {"box", "pole", "barrier"}) {
+        for (const double rangeM : {2.0, 4.0}) {
+            const auto frame = renderScene(name, rangeM, 5.0);
+
+            const ObstacleSectors& out = sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 9U, 3);
+
+            ASSERT_EQ(sut.status(), DetectorStatus::Ok);
+            EXPECT_TRUE(out.degraded);
+            EXPECT_EQ(out.sequence, 9U);
+            const float nearest = nearestInTruthSectors(out, frame.sectors);
+            EXPECT_NEAR(nearest, rangeM, 0.10 * rangeM) << name << " at " << rangeM << " m";
+            for (int i = 0; i < out.count; ++i) {
+                EXPECT_NE(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << name << " " << i;
+            }
+        }
+    }
+    // Empty ground: nothing red or blue.
+    const auto empty = renderScene("empty", 5.0, 0.0);
+    const ObstacleSectors& out = sut.processGroundOnly(roiView(empty.left), roiView(empty.right), 1U, 0);
+    for (int i = 0; i < out.count; ++i) {
+        const DangerClass d = out.sectors[static_cast<std::size_t>(i)].danger;
+        EXPECT_TRUE(d != DangerClass::Red && d != DangerClass::Blue) << "sector " << i;
+    }
+}
+
+TEST(ObstacleDetector, GroundOnlyPathAllocatesNothingOverHundredsOfFrames)
+{
+    auto sut = makeDetector();
+    const auto frame = renderScene("box", 3.0, 0.0);
+    (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 0U, 0);
+
+    const ugv::test::ThreadAllocationScope scope;
+    for (int k = 1; k <= 300; ++k) {
+        (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), static_cast<std::uint64_t>(k), k);
+    }
+    EXPECT_EQ(scope.count(), 0U);
+}
+
+} // namespace
+} // namespace ugv::vision

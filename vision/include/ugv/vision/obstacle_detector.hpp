@@ -16,6 +16,7 @@
 /// disparity and therefore Unknown sectors (SectorBuilder needs ground support for Clear).
 
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -51,6 +52,9 @@ struct DetectorConfig {
     /// Rows at the top of the ROI that only give the matcher's block context and are not analysed [px]
     /// (RectifierConfig::roiMarginRows).
     int marginRows = 8;
+    /// Votes a cluster needs on the ground-only (overload) path, whose votes are edge pixels only (a box's
+    /// uniform faces give none; the dense path's minSupport would miss it).
+    int groundOnlyMinSupport = 12;
 };
 
 /// Outcome of the last ObstacleDetector::process(); no strings on the frame path.
@@ -79,8 +83,19 @@ public:
     const ObstacleSectors& process(ConstImageViewU8 rectLeftRoi, ConstImageViewU8 rectRightRoi, std::uint64_t sequence,
                                    std::int64_t stampNs) noexcept;
 
+    /// The overload path (no dense matching, about a tenth of process()'s time): on the configured ground, the
+    /// ground-mismatch stage's positive and negative edge pixels, at the ground disparity plus their residual,
+    /// become a sparse disparity map for the sector builder. No pixel gives ground support, so no sector can be
+    /// Clear: each is Obstacle or Unknown, and the sectors are flagged degraded.
+    const ObstacleSectors& processGroundOnly(ConstImageViewU8 rectLeftRoi, ConstImageViewU8 rectRightRoi,
+                                             std::uint64_t sequence, std::int64_t stampNs) noexcept;
+
     [[nodiscard]] DetectorStatus status() const noexcept { return status_; }
-    [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return builder_.sectors(); }
+    /// The sectors of the last process() or processGroundOnly().
+    [[nodiscard]] const ObstacleSectors& sectors() const noexcept
+    {
+        return lastGroundOnly_ ? groundOnlyBuilder_->sectors() : builder_.sectors();
+    }
     /// Intermediate buffers of the last frame, read-only (tools, overlays).
     [[nodiscard]] const cv::Mat& disparity16() const noexcept { return matcher_.disparity16(); }
     /// The disparity the sectors were built from: the matcher's, less the pixels the verifier rejected.
@@ -100,20 +115,26 @@ private:
                      ObstacleVerifier verifier, Rect roi) noexcept
         : matcher_(std::move(matcher)), builder_(std::move(builder)), estimator_(std::move(estimator)),
           mismatch_(std::move(mismatch)), verifier_(std::move(verifier)), warped_(roi.width, roi.height),
-          spans_(static_cast<std::size_t>(roi.height)), leftLabels_(roi.width, roi.height)
+          spans_(static_cast<std::size_t>(roi.height)), leftLabels_(roi.width, roi.height),
+          sparse_(roi.width, roi.height)
     {
     }
-    /// Moves the mismatch labels from the right grid to the left grid (leftLabels_).
-    void labelsToLeftGrid(const DisparityPlane& plane) noexcept;
+    /// Moves the mismatch labels from the right grid to the left grid (leftLabels_); with `withDisparity` also
+    /// their disparity d_g + residual into sparse_ (the ground-only path).
+    void labelsToLeftGrid(const DisparityPlane& plane, bool withDisparity) noexcept;
 
     RoiMatcher matcher_;
     SectorBuilder builder_;
+    std::optional<SectorBuilder> groundOnlyBuilder_; ///< processGroundOnly(): minSupport = groundOnlyMinSupport
+    bool lastGroundOnly_ = false;
     GroundEstimator estimator_;
     GroundMismatch mismatch_;
     ObstacleVerifier verifier_;
     Image<std::uint8_t> warped_;
     std::vector<WarpSpan> spans_;
     Image<std::uint8_t> leftLabels_;
+    Image<std::int16_t> sparse_; ///< processGroundOnly(): labelled edge pixels' disparity (x16), else invalid
+    RectifiedProjection projection_;
     GroundPlane configuredGround_;
     GroundPlane ground_;
     Rect roi_;

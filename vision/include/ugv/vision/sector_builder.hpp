@@ -107,6 +107,8 @@ public:
 
     /// Marks all sectors Unknown and degraded (callers' failure paths).
     void setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) noexcept;
+    /// Flags the last build's sectors as produced by a fallback path (ObstacleDetector::processGroundOnly).
+    void markDegraded() noexcept { sectors_.degraded = true; }
 
     [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return sectors_; }
     [[nodiscard]] const SectorBuilderConfig& config() const noexcept { return config_; }
