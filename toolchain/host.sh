@@ -64,11 +64,11 @@ run_main_job() {
     fi
     "$tool" recording info "$recording"
     echo "== 3/5 RouDi (iceoryx): use a running one, else start iox-roudi with bringup/roudi.toml"
-    local roudi_pid=""
+    roudi_pid=""
     if ! pgrep -x iox-roudi >/dev/null; then
         iox-roudi -c bringup/roudi.toml -l warning >"$out/roudi.log" 2>&1 &
         roudi_pid=$!
-        trap '[ -n "$roudi_pid" ] && kill "$roudi_pid" 2>/dev/null' EXIT
+        trap 'if [ -n "${roudi_pid:-}" ]; then kill "$roudi_pid" 2>/dev/null || true; fi' EXIT
         for _ in $(seq 50); do [ -S /tmp/roudi ] && break; sleep 0.1; done
     fi
     echo "== 4/5 ugvsensed replays the recording at its recorded pace (10 fps): sectors every 10th frame, then the latency report"
@@ -77,7 +77,7 @@ run_main_job() {
     "$tool" recording export "$recording" --frame 60 --out "$out/frame60" >/dev/null
     "$tool" detect --calib "$out/frame60/calibration.yaml" --left "$out/frame60/frame_000060_left.png" \
         --right "$out/frame60/frame_000060_right.png" --overlay "$out/overlay.png" --json "$out/sectors.json" | tail -3
-    if [ -n "$roudi_pid" ]; then kill "$roudi_pid" 2>/dev/null; wait "$roudi_pid" 2>/dev/null || true; fi
+    if [ -n "$roudi_pid" ]; then kill "$roudi_pid" 2>/dev/null; wait "$roudi_pid" 2>/dev/null || true; roudi_pid=""; fi
     echo "== done: calibration in $out/calibration.yaml, sectors of frame 60 in $out/sectors.json, overlay $out/overlay.png"
 }
 

@@ -1,0 +1,117 @@
+#pragma once
+
+/// @file
+/// The V4L2 backend: two capture devices (left, right) or one side-by-side stereo device, MMAP streaming with a
+/// small buffer ring, driver timestamps (CLOCK_MONOTONIC), GREY or YUYV (the Y bytes are the grey image),
+/// left/right pairing by timestamp within a skew, dropped frames from the drivers' sequence numbers, and a vanished
+/// device (ENODEV, EIO, POLLERR) reported as Disconnected; reconnect() reopens the devices (the capture task calls
+/// it with backoff while the service stays up).
+///
+/// The OS calls go through V4l2Ops (open/close/ioctl/mmap/munmap/poll), so the backend is tested against a fake
+/// device speaking the V4L2 protocol (test/unit/hal/fake_v4l2.hpp): no camera or kernel module exists here.
+///
+/// Thread-safety: thread-bound (the capture thread). RT-safe: grab() allocates nothing (buffers mapped and grey
+/// images allocated at open); it blocks in poll() up to its timeout.
+
+#include <linux/videodev2.h>
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "ugv/hal/stereo_camera.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/result.hpp"
+
+struct pollfd;
+
+namespace ugv::hal {
+
+/// The system calls the backend makes (errno semantics: -1 and errno on failure).
+struct V4l2Ops {
+    int (*open)(void* context, const char* path, int flags) = nullptr;
+    int (*close)(void* context, int fd) = nullptr;
+    int (*ioctl)(void* context, int fd, unsigned long request, void* arg) = nullptr;
+    void* (*mmap)(void* context, std::size_t length, int fd, std::int64_t offset) = nullptr; ///< MAP_FAILED on error
+    int (*munmap)(void* context, void* address, std::size_t length) = nullptr;
+    int (*poll)(void* context, pollfd* fds, unsigned count, int timeoutMs) = nullptr;
+    void* context = nullptr;
+};
+/// The real calls (open(2), ioctl(2), mmap(2), ...).
+V4l2Ops realV4l2Ops() noexcept;
+
+enum class V4l2Format : std::uint8_t { Grey, Yuyv };
+
+struct V4l2Options {
+    std::string leftDevice = "/dev/video0";  ///< or the side-by-side device
+    std::string rightDevice = "/dev/video1"; ///< empty: side-by-side on leftDevice (left half, right half)
+    int width = 640;                         ///< [px] per camera
+    int height = 480;                        ///< [px]
+    double fps = 30.0;                       ///< requested rate (VIDIOC_S_PARM; drivers may refuse)
+    V4l2Format format = V4l2Format::Yuyv;
+    int buffers = 4;          ///< MMAP buffers per device, 2..8
+    double maxPairSkewMs = 5; ///< left/right stamps further apart are not a pair
+};
+
+class V4l2StereoCamera final : public StereoCamera {
+public:
+    /// Opens and starts the device(s). Errors name the device, the failed step and errno, and the fix.
+    static Result<std::unique_ptr<V4l2StereoCamera>, Error> open(const V4l2Options& options,
+                                                                 V4l2Ops ops = realV4l2Ops());
+    ~V4l2StereoCamera() override;
+
+    GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
+    bool reconnect() noexcept override;
+    [[nodiscard]] int width() const noexcept override { return options_.width; }
+    [[nodiscard]] int height() const noexcept override { return options_.height; }
+    [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
+    [[nodiscard]] CameraStats stats() const noexcept override { return stats_; }
+    [[nodiscard]] const char* description() const noexcept override { return description_.c_str(); }
+    /// Frames dequeued but not paired (the other camera's frame was too far away in time).
+    [[nodiscard]] std::uint64_t unpaired() const noexcept { return unpaired_; }
+
+    static constexpr int kMaxBuffers = 8;
+
+    /// One streaming device (internal, public for the tests' reach only through the camera).
+    struct Device {
+        std::string path;
+        int fd = -1;
+        int frameWidth = 0;       ///< the device's image width (2 w for side by side)
+        std::uint32_t stride = 0; ///< bytes per line (VIDIOC_S_FMT)
+        std::array<void*, kMaxBuffers> maps{};
+        std::array<std::size_t, kMaxBuffers> lengths{};
+        int buffers = 0;
+        int held = -1; ///< index dequeued and not yet given back, -1 when none
+        v4l2_buffer last{};
+        bool haveSequence = false;
+        std::uint32_t lastSequence = 0;
+    };
+
+private:
+    V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops);
+    Result<void, Error> start(Device& device, int frameWidth);
+    void stop(Device& device) noexcept;
+    /// Dequeues the next buffer of `device` within `timeoutMs`; Frame, Timeout or Disconnected.
+    GrabStatus dequeue(Device& device, int timeoutMs) noexcept;
+    void requeue(Device& device) noexcept;
+    /// Copies the grey (or Y) bytes of columns [x0, x0 + width) of the held buffer into `out`.
+    bool copyGrey(const Device& device, int x0, ImageViewU8 out) noexcept;
+
+    V4l2Options options_;
+    V4l2Ops ops_;
+    std::chrono::nanoseconds period_{};
+    std::string description_;
+    Device left_;
+    Device right_;
+    bool sideBySide_ = false;
+    Image<std::uint8_t> leftGrey_;
+    Image<std::uint8_t> rightGrey_;
+    CameraStats stats_{};
+    std::uint64_t unpaired_ = 0;
+    bool connected_ = false;
+};
+
+} // namespace ugv::hal

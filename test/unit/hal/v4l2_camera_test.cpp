@@ -1,0 +1,379 @@
+// The V4L2 backend against a fake device that speaks the V4L2 protocol through the V4l2Ops seam (no camera or
+// kernel module on our machines): formats, MMAP buffer ring, pairing by timestamp, sequence gaps, EAGAIN, unplug
+// and reconnect, open errors, and no allocation per frame.
+
+#include "ugv/hal/v4l2_camera.hpp"
+
+#include <poll.h>
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+#include <deque>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+
+namespace ugv::hal {
+namespace {
+
+using std::chrono::milliseconds;
+
+/// A frame the fake camera will deliver: every Y (or grey) byte of column x is value + (x >= split ? 100 : 0).
+struct Pending {
+    std::uint8_t value = 0;
+    std::uint32_t sequence = 0;
+    std::int64_t stampUs = 0;
+};
+
+struct FakeDevice {
+    std::string path;
+    bool present = true;
+    bool unplugged = false;
+    bool captureCapable = true;
+    int eagain = 0;          ///< DQBUF fails with EAGAIN this many times first
+    int shrinkWidth = 0;     ///< S_FMT answers with a width this much smaller
+    std::uint32_t width = 0; ///< as set by S_FMT
+    std::uint32_t height = 0;
+    std::uint32_t pixfmt = 0;
+    std::uint32_t stride = 0;
+    std::vector<std::vector<std::uint8_t>> buffers;
+    /// Buffers queued by the application, a fixed ring (no allocation in the fake's frame path either).
+    struct Ring {
+        std::uint32_t slots[16] = {};
+        int head = 0;
+        int size = 0;
+        void clear() { head = size = 0; }
+        bool empty() const { return size == 0; }
+        void push_back(std::uint32_t v) { slots[(head + size++) % 16] = v; }
+        std::uint32_t front() const { return slots[head]; }
+        void pop_front()
+        {
+            head = (head + 1) % 16;
+            --size;
+        }
+    } queued;
+    std::deque<Pending> pending;
+    int split = 1 << 30; ///< side-by-side: columns >= split are the right image
+};
+
+class FakeV4l2 {
+public:
+    FakeDevice& add(const std::string& path)
+    {
+        devices_[path].path = path;
+        return devices_[path];
+    }
+    FakeDevice& device(const std::string& path) { return devices_[path]; }
+    V4l2Ops ops() { return V4l2Ops{open, close, ioctl, mmap, munmap, poll, this}; }
+
+private:
+    static FakeV4l2& self(void* c) { return *static_cast<FakeV4l2*>(c); }
+    FakeDevice* byFd(int fd)
+    {
+        auto it = fds_.find(fd);
+        return it == fds_.end() ? nullptr : it->second;
+    }
+    static int open(void* c, const char* path, int /*flags*/)
+    {
+        auto& f = self(c);
+        auto it = f.devices_.find(path);
+        if (it == f.devices_.end() || !it->second.present) {
+            errno = ENOENT;
+            return -1;
+        }
+        if (it->second.unplugged) {
+            errno = ENODEV;
+            return -1;
+        }
+        const int fd = f.nextFd_++;
+        f.fds_[fd] = &it->second;
+        return fd;
+    }
+    static int close(void* c, int fd)
+    {
+        self(c).fds_.erase(fd);
+        return 0;
+    }
+    static int ioctl(void* c, int fd, unsigned long request, void* arg)
+    {
+        FakeDevice* d = self(c).byFd(fd);
+        if (d == nullptr) {
+            errno = EBADF;
+            return -1;
+        }
+        if (d->unplugged && request != VIDIOC_STREAMOFF) {
+            errno = ENODEV;
+            return -1;
+        }
+        switch (request) {
+        case VIDIOC_QUERYCAP: {
+            auto* cap = static_cast<v4l2_capability*>(arg);
+            std::memset(cap, 0, sizeof(*cap));
+            cap->capabilities =
+                d->captureCapable ? (V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING) : V4L2_CAP_VIDEO_OUTPUT;
+            return 0;
+        }
+        case VIDIOC_S_FMT: {
+            auto* fmt = static_cast<v4l2_format*>(arg);
+            fmt->fmt.pix.width -= static_cast<std::uint32_t>(d->shrinkWidth);
+            d->width = fmt->fmt.pix.width;
+            d->height = fmt->fmt.pix.height;
+            d->pixfmt = fmt->fmt.pix.pixelformat;
+            d->stride = d->width * (d->pixfmt == V4L2_PIX_FMT_YUYV ? 2 : 1) + 16; // padded lines
+            fmt->fmt.pix.bytesperline = d->stride;
+            return 0;
+        }
+        case VIDIOC_S_PARM:
+            return 0;
+        case VIDIOC_REQBUFS: {
+            auto* req = static_cast<v4l2_requestbuffers*>(arg);
+            d->buffers.assign(req->count, std::vector<std::uint8_t>(static_cast<std::size_t>(d->stride) * d->height));
+            d->queued.clear();
+            return 0;
+        }
+        case VIDIOC_QUERYBUF: {
+            auto* buf = static_cast<v4l2_buffer*>(arg);
+            buf->length = static_cast<std::uint32_t>(d->buffers[buf->index].size());
+            buf->m.offset = buf->index;
+            return 0;
+        }
+        case VIDIOC_QBUF:
+            d->queued.push_back(static_cast<v4l2_buffer*>(arg)->index);
+            return 0;
+        case VIDIOC_STREAMON:
+        case VIDIOC_STREAMOFF:
+            return 0;
+        case VIDIOC_DQBUF: {
+            if (d->eagain > 0) {
+                --d->eagain;
+                errno = EAGAIN;
+                return -1;
+            }
+            if (d->pending.empty() || d->queued.empty()) {
+                errno = EAGAIN;
+                return -1;
+            }
+            auto* buf = static_cast<v4l2_buffer*>(arg);
+            const Pending p = d->pending.front();
+            d->pending.pop_front();
+            buf->index = d->queued.front();
+            d->queued.pop_front();
+            std::vector<std::uint8_t>& pixels = d->buffers[buf->index];
+            const int bpp = d->pixfmt == V4L2_PIX_FMT_YUYV ? 2 : 1;
+            for (std::uint32_t y = 0; y < d->height; ++y) {
+                for (std::uint32_t x = 0; x < d->width; ++x) {
+                    const auto v = static_cast<std::uint8_t>(p.value + (static_cast<int>(x) >= d->split ? 100 : 0));
+                    pixels[y * d->stride + x * static_cast<std::uint32_t>(bpp)] = v;
+                    if (bpp == 2) {
+                        pixels[y * d->stride + x * 2 + 1] = 128; // chroma
+                    }
+                }
+            }
+            buf->sequence = p.sequence;
+            buf->timestamp.tv_sec = p.stampUs / 1'000'000;
+            buf->timestamp.tv_usec = p.stampUs % 1'000'000;
+            buf->bytesused = static_cast<std::uint32_t>(pixels.size());
+            buf->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+            return 0;
+        }
+        default:
+            errno = EINVAL;
+            return -1;
+        }
+    }
+    static void* mmap(void* c, std::size_t /*length*/, int fd, std::int64_t offset)
+    {
+        FakeDevice* d = self(c).byFd(fd);
+        return d == nullptr ? MAP_FAILED : d->buffers[static_cast<std::size_t>(offset)].data();
+    }
+    static int munmap(void* /*c*/, void* /*address*/, std::size_t /*length*/) { return 0; }
+    static int poll(void* c, pollfd* fds, unsigned count, int /*timeoutMs*/)
+    {
+        int ready = 0;
+        for (unsigned i = 0; i < count; ++i) {
+            FakeDevice* d = self(c).byFd(fds[i].fd);
+            fds[i].revents = 0;
+            if (d == nullptr || d->unplugged) {
+                fds[i].revents = POLLERR;
+                ++ready;
+            } else if (d->eagain > 0 || (!d->pending.empty() && !d->queued.empty())) {
+                fds[i].revents = POLLIN;
+                ++ready;
+            }
+        }
+        return ready;
+    }
+
+    std::map<std::string, FakeDevice> devices_;
+    std::map<int, FakeDevice*> fds_;
+    int nextFd_ = 100;
+};
+
+V4l2Options stereo(V4l2Format format = V4l2Format::Yuyv)
+{
+    V4l2Options o;
+    o.leftDevice = "/dev/video0";
+    o.rightDevice = "/dev/video1";
+    o.width = 32;
+    o.height = 8;
+    o.format = format;
+    return o;
+}
+
+TEST(V4l2Camera, TwoDevicesDeliverGreyPairsWithDriverStampsAndSequences)
+{
+    FakeV4l2 fake;
+    fake.add("/dev/video0").pending = {{10, 0, 1'000'000}, {11, 1, 1'033'333}};
+    fake.add("/dev/video1").pending = {{20, 0, 1'000'400}, {21, 1, 1'033'700}};
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
+    EXPECT_EQ((*camera)->width(), 32);
+
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.sequence, 0U);
+    EXPECT_EQ(f.leftStampNs, 1'000'000'000);
+    EXPECT_EQ(f.rightStampNs, 1'000'400'000);
+    EXPECT_EQ(f.left.at(5, 3), 10); // the Y bytes of YUYV
+    EXPECT_EQ(f.right.at(31, 7), 20);
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.sequence, 1U);
+    EXPECT_EQ(f.left.at(0, 0), 11);
+    EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Timeout); // nothing more
+    EXPECT_EQ((*camera)->stats().frames, 2U);
+}
+
+TEST(V4l2Camera, SideBySideDeviceIsSplitIntoLeftAndRight)
+{
+    FakeV4l2 fake;
+    FakeDevice& d = fake.add("/dev/video0");
+    d.split = 32;
+    d.pending = {{40, 7, 5'000'000}};
+    V4l2Options o = stereo(V4l2Format::Grey);
+    o.rightDevice.clear();
+    auto camera = V4l2StereoCamera::open(o, fake.ops());
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
+    EXPECT_EQ(fake.device("/dev/video0").width, 64U); // one 2w x h image
+
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.left.at(31, 0), 40);
+    EXPECT_EQ(f.right.at(0, 0), 140);
+    EXPECT_EQ(f.sequence, 7U);
+    EXPECT_EQ(f.leftStampNs, f.rightStampNs);
+}
+
+TEST(V4l2Camera, FramesTooFarApartAreNotPairedAndTheOlderIsDropped)
+{
+    FakeV4l2 fake;
+    fake.add("/dev/video0").pending = {{1, 0, 1'000'000}, {2, 1, 1'033'000}};
+    fake.add("/dev/video1").pending = {{3, 0, 1'033'500}};
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_TRUE(camera.has_value());
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.left.at(0, 0), 2); // left frame 0 (33 ms before the right one) was dropped
+    EXPECT_EQ(f.right.at(0, 0), 3);
+    EXPECT_EQ((*camera)->unpaired(), 1U);
+}
+
+TEST(V4l2Camera, SequenceGapsAreCountedAndEagainIsATimeout)
+{
+    FakeV4l2 fake;
+    FakeDevice& left = fake.add("/dev/video0");
+    left.pending = {{1, 0, 0}, {1, 1, 33'000}, {1, 4, 133'000}};
+    left.eagain = 1;
+    fake.add("/dev/video1").pending = {{1, 0, 0}, {1, 1, 33'000}, {1, 4, 133'000}};
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_TRUE(camera.has_value());
+    CameraFrame f;
+    EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Timeout); // EAGAIN
+    for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    }
+    EXPECT_EQ(f.sequence, 4U);
+    EXPECT_EQ((*camera)->stats().sequenceGaps, 4U); // 2 per device
+}
+
+TEST(V4l2Camera, UnplugIsDisconnectedAndReconnectWorksOnceTheCameraIsBack)
+{
+    FakeV4l2 fake;
+    fake.add("/dev/video0").pending = {{1, 0, 0}};
+    fake.add("/dev/video1").pending = {{1, 0, 0}};
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_TRUE(camera.has_value());
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+
+    fake.device("/dev/video0").pending = {{2, 1, 33'000}}; // the left camera still streams
+    fake.device("/dev/video1").unplugged = true;
+    EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Disconnected);
+    EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Disconnected);
+    EXPECT_EQ((*camera)->stats().disconnects, 1U);
+    EXPECT_FALSE((*camera)->reconnect()); // still gone: ENODEV at open
+
+    fake.device("/dev/video1").unplugged = false;
+    ASSERT_TRUE((*camera)->reconnect());
+    fake.device("/dev/video0").pending = {{5, 9, 300'000}};
+    fake.device("/dev/video1").pending = {{6, 9, 300'000}};
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.left.at(0, 0), 5);
+    EXPECT_EQ(f.sequence, 9U);
+}
+
+TEST(V4l2Camera, OpenErrorsNameTheDeviceWhatAndTheFix)
+{
+    FakeV4l2 fake;
+    fake.add("/dev/video0");
+    auto missing = V4l2StereoCamera::open(stereo(), fake.ops()); // no /dev/video1
+    ASSERT_FALSE(missing.has_value());
+    EXPECT_NE(missing.error().message().find("/dev/video1: cannot open the camera"), std::string::npos)
+        << missing.error().message();
+    EXPECT_NE(missing.error().message().find("ENOENT"), std::string::npos);
+
+    fake.add("/dev/video1").shrinkWidth = 16;
+    auto wrongSize = V4l2StereoCamera::open(stereo(V4l2Format::Grey), fake.ops());
+    ASSERT_FALSE(wrongSize.has_value());
+    EXPECT_NE(wrongSize.error().message().find("offers 16x8 GREY instead of 32x8 GREY"), std::string::npos)
+        << wrongSize.error().message();
+
+    fake.device("/dev/video1").shrinkWidth = 0;
+    fake.device("/dev/video1").captureCapable = false;
+    auto notCapture = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_FALSE(notCapture.has_value());
+    EXPECT_NE(notCapture.error().message().find("not a streaming video capture device"), std::string::npos);
+
+    V4l2Options bad = stereo();
+    bad.buffers = 1;
+    EXPECT_FALSE(V4l2StereoCamera::open(bad, fake.ops()).has_value());
+}
+
+TEST(V4l2Camera, GrabAllocatesNothingOverHundredsOfFrames)
+{
+    FakeV4l2 fake;
+    FakeDevice& l = fake.add("/dev/video0");
+    FakeDevice& r = fake.add("/dev/video1");
+    for (std::uint32_t k = 0; k < 310; ++k) {
+        l.pending.push_back({static_cast<std::uint8_t>(k), k, 33'333 * static_cast<std::int64_t>(k)});
+        r.pending.push_back({static_cast<std::uint8_t>(k), k, 33'333 * static_cast<std::int64_t>(k) + 100});
+    }
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_TRUE(camera.has_value());
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+
+    const ugv::test::ThreadAllocationScope scope;
+    for (int k = 0; k < 300; ++k) {
+        ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    }
+    EXPECT_EQ(scope.count(), 0U);
+    EXPECT_EQ((*camera)->stats().frames, 301U);
+}
+
+} // namespace
+} // namespace ugv::hal
