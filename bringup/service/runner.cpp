@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "ugv/bringup/calibration_file.hpp"
+#include "ugv/bringup/camera_factory.hpp"
 #include "ugv/hal/systemd_notify.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
 #include "ugv/platform/clock.hpp"
@@ -98,22 +99,22 @@ Result<RunResult, Error> runService(const RunOptions& options)
             task.cpu = options.pinAllTasksTo;
         }
     }
-    if (options.replayPath.empty()) {
-        return Unexpected(Error{"ugvsensed", "no camera source: this version replays recordings only",
-                                "give --replay REC (V4L2 and libcamera backends follow: see README status)"});
-    }
-    auto camera = hal::ReplayCamera::open(options.replayPath, options.replay);
+    auto camera = bringup::openCamera(config, options.replayPath, options.replay);
     if (!camera) {
         return Unexpected(camera.error());
     }
-    if ((*camera)->truncated()) {
-        UGV_LOG(Hal, Warn) << options.replayPath << ": the recording ends in a cut-off frame; replaying its "
-                           << (*camera)->recordedFrames() << " complete frames";
+    // A recording carries its calibration; a live camera uses the config's (or --calib).
+    const auto* replay = dynamic_cast<const hal::ReplayCamera*>(camera->get());
+    if (replay != nullptr && replay->truncated()) {
+        UGV_LOG(Hal, Warn) << replay->description() << ": the recording ends in a cut-off frame; replaying its "
+                           << replay->recordedFrames() << " complete frames";
     }
-    auto calibration =
-        options.calibrationPath.empty()
-            ? bringup::parseCalibration((*camera)->calibrationText(), options.replayPath + " (its stored calibration)")
-            : bringup::loadCalibration(options.calibrationPath);
+    const std::string calibrationPath =
+        !options.calibrationPath.empty() ? options.calibrationPath : (replay != nullptr ? "" : config.calibrationPath);
+    auto calibration = calibrationPath.empty()
+                           ? bringup::parseCalibration(replay->calibrationText(),
+                                                       std::string(replay->description()) + " (its stored calibration)")
+                           : bringup::loadCalibration(calibrationPath);
     if (!calibration) {
         return Unexpected(calibration.error());
     }
@@ -139,7 +140,13 @@ Result<RunResult, Error> runService(const RunOptions& options)
     }
     result.extras.lockedBytes = memory.lockedBytes;
 
-    auto service = Service::create(config, *calibration, std::move(*camera), options.service);
+    ServiceOptions serviceOptions = options.service;
+    if (options.configPath.empty() == false) {
+        serviceOptions.overload =
+            config.overload.policy == bringup::OverloadChoice::Drop ? OverloadPolicy::Drop : OverloadPolicy::Degrade;
+        serviceOptions.deadlineFactor = config.overload.deadlineFactor;
+    }
+    auto service = Service::create(config, *calibration, std::move(*camera), serviceOptions);
     if (!service) {
         return Unexpected(service.error());
     }

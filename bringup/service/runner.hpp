@@ -2,7 +2,7 @@
 
 /// @file
 /// One run of the service, as ugvsensed's main() and `ugvsense bench` do it: config, calibration, iceoryx (a
-/// running RouDi, or one inside this process), memory locking, the camera (replay for now), the Service threads,
+/// running RouDi, or one inside this process), memory locking, the camera (bringup::openCamera), the Service threads,
 /// a monitor loop on the calling thread (printing, stop conditions), and the report.
 ///
 /// Thread-safety: call from the main thread. RT-safe: no (it is the non-RT side of the service).
@@ -27,8 +27,8 @@ enum class RouDiMode : std::uint8_t {
 struct RunOptions {
     std::string appName = "ugvsensed";
     std::string configPath;      ///< empty: built-in defaults
-    std::string replayPath;      ///< the recording to replay (the only backend of this version)
-    std::string calibrationPath; ///< empty: the recording's own calibration
+    std::string replayPath;      ///< a recording to replay instead of the configured camera (camera.backend)
+    std::string calibrationPath; ///< empty: the recording's own calibration, or the config's for a live camera
     hal::ReplayOptions replay;
     RouDiMode roudi = RouDiMode::External;
     ServiceOptions service;

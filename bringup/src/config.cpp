@@ -103,6 +103,9 @@ std::vector<KeySpec> baseKeys()
                   UGV_REF(camera.fps)),
         numberKey("camera.max_pair_skew_ms", Kind::Double, 0, 100,
                   "left/right timestamps further apart are not paired [ms]", UGV_REF(camera.maxPairSkewMs)),
+        choiceKey<PixelFormatChoice>("camera.format", "V4L2 pixel format: yuyv or grey (the Y plane is used)",
+                                     {{"yuyv", PixelFormatChoice::Yuyv}, {"grey", PixelFormatChoice::Grey}},
+                                     UGV_REF(camera.format)),
         textKey("camera.replay_path", Kind::Path, "recording to replay (backend: replay)", UGV_REF(camera.replayPath)),
         choiceKey<ReplayPace>(
             "camera.replay_pace", "replay pace: as recorded, at replay_fps, or as fast as possible",
@@ -133,6 +136,13 @@ std::vector<KeySpec> baseKeys()
                   "obstacles closer than this are blue, beyond green [m]", UGV_REF(obstacles.cautionDistanceM)),
         numberKey("obstacles.min_height_m", Kind::Double, 0.02, 2, "positive obstacles taller than this count [m]",
                   UGV_REF(obstacles.minHeightM)),
+        choiceKey<OverloadChoice>(
+            "overload.policy",
+            "when a frame would miss its deadline: degrade (ground-plane-only sectors, flagged) or drop (queue of one)",
+            {{"degrade", OverloadChoice::Degrade}, {"drop", OverloadChoice::Drop}}, UGV_REF(overload.policy)),
+        numberKey("overload.deadline_factor", Kind::Double, 0.1, 10,
+                  "deadline = this many camera periods from exposure to published sectors",
+                  UGV_REF(overload.deadlineFactor)),
         numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
                   UGV_REF(obstacles.minDepthM)),
     };

@@ -322,6 +322,90 @@ TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEv
     EXPECT_LT(report.deadlineMisses, report.framesPublished / 4);
 }
 
+/// A recording-backed camera that misbehaves: frames 10 and 11 come with the wrong size (a driver returning a
+/// short or reconfigured buffer), then the camera vanishes for two reconnect attempts and comes back.
+class FlakyCamera final : public hal::StereoCamera {
+public:
+    explicit FlakyCamera(std::unique_ptr<hal::ReplayCamera> inner) : inner_(std::move(inner)) {}
+    hal::GrabStatus grab(hal::CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override
+    {
+        if (gone_) {
+            return hal::GrabStatus::Disconnected;
+        }
+        const hal::GrabStatus s = inner_->grab(out, timeout);
+        if (s != hal::GrabStatus::Frame) {
+            return s;
+        }
+        ++frames_;
+        if (frames_ == 10 || frames_ == 11) {
+            out.left = out.left.sub(Rect{0, 0, 320, 240});
+            out.right = out.right.sub(Rect{0, 0, 320, 240});
+        }
+        if (frames_ == 20) {
+            gone_ = true;
+            ++stats_.disconnects;
+            return hal::GrabStatus::Disconnected;
+        }
+        return s;
+    }
+    bool reconnect() noexcept override
+    {
+        if (++attempts_ < 3) {
+            return false; // still unplugged
+        }
+        gone_ = false;
+        return true;
+    }
+    [[nodiscard]] int width() const noexcept override { return inner_->width(); }
+    [[nodiscard]] int height() const noexcept override { return inner_->height(); }
+    [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return inner_->period(); }
+    [[nodiscard]] hal::CameraStats stats() const noexcept override { return stats_; }
+    [[nodiscard]] const char* description() const noexcept override { return "flaky replay"; }
+
+private:
+    std::unique_ptr<hal::ReplayCamera> inner_;
+    hal::CameraStats stats_{};
+    int frames_ = 0;
+    int attempts_ = 0;
+    bool gone_ = false;
+};
+
+TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
+{
+    const Course course = writeCourse(dir_, 4, 20);
+    hal::ReplayOptions replay;
+    replay.loop = true;
+    replay.pace = hal::ReplayPace::Forced;
+    replay.forcedFps = 20.0;
+    auto inner = hal::ReplayCamera::open(course.path, replay);
+    ASSERT_TRUE(inner.has_value());
+    auto calibration = bringup::parseCalibration(course.calibration, "course").value();
+    ServiceOptions options;
+    options.maxFrames = 30;
+    auto service = Service::create(bringup::ServiceConfig{}, calibration,
+                                   std::make_unique<FlakyCamera>(std::move(*inner)), options);
+    ASSERT_TRUE(service.has_value()) << service.error().message();
+    (*service)->start();
+    PublishedFrame seen;
+    std::uint64_t lastSequence = 0;
+    while (!(*service)->finished()) {
+        while ((*service)->nextPublished(seen)) {
+            lastSequence = seen.message.sectors.sequence;
+        }
+        ::usleep(10000);
+    }
+    (*service)->stop();
+    const ServiceReport report = (*service)->report();
+    std::printf(
+        "[ MEASURED ] %llu published, %llu captured, %llu loan failures (wrong size), %llu reconnects\n",
+        static_cast<unsigned long long>(report.framesPublished), static_cast<unsigned long long>(report.framesCaptured),
+        static_cast<unsigned long long>(report.loanFailures), static_cast<unsigned long long>(report.cameraReconnects));
+    EXPECT_EQ(report.framesPublished, 30U); // frames flowed again after the camera came back
+    EXPECT_EQ(report.loanFailures, 2U);     // the two wrong-size pairs were refused, not published
+    EXPECT_EQ(report.cameraReconnects, 1U); // after two failed attempts (backoff in between)
+    EXPECT_GT(lastSequence, 20U);
+}
+
 TEST_F(ServiceTest, CalibrationWithoutMountOrOfAnotherSizeIsRefused)
 {
     const Course course = writeCourse(dir_, 1);

@@ -23,18 +23,21 @@ namespace ugv::bringup {
 
 enum class CameraBackend { V4l2, Libcamera, Replay };
 enum class ReplayPace { Recorded, Fixed, Fastest };
+enum class PixelFormatChoice { Yuyv, Grey };
+enum class OverloadChoice { Degrade, Drop };
 enum class DetectorMode { Stereo, Colour, Both };
 enum class MatcherMode { Sgbm, Sgbm3Way, Hh4 };
 
 struct CameraConfig {
     CameraBackend backend = CameraBackend::Replay;
-    std::string leftDevice = "/dev/video0";  ///< V4L2 left device (or the side-by-side device)
-    std::string rightDevice = "/dev/video1"; ///< V4L2 right device; empty = side-by-side on leftDevice
-    int width = 640;                         ///< [px] per camera
-    int height = 480;                        ///< [px]
-    double fps = 30.0;                       ///< [Hz] frame rate; the frame deadline is 1/fps
-    double maxPairSkewMs = 5.0;              ///< [ms] left/right timestamps further apart are not paired
-    std::string replayPath;                  ///< recording for the replay backend
+    std::string leftDevice = "/dev/video0";             ///< V4L2 left device (or the side-by-side device)
+    std::string rightDevice = "/dev/video1";            ///< V4L2 right device; empty = side-by-side on leftDevice
+    int width = 640;                                    ///< [px] per camera
+    int height = 480;                                   ///< [px]
+    double fps = 30.0;                                  ///< [Hz] frame rate; the frame deadline is 1/fps
+    double maxPairSkewMs = 5.0;                         ///< [ms] left/right timestamps further apart are not paired
+    PixelFormatChoice format = PixelFormatChoice::Yuyv; ///< V4L2 pixel format (the Y plane is used)
+    std::string replayPath;                             ///< recording for the replay backend
     ReplayPace replayPace = ReplayPace::Recorded;
     double replayFps = 30.0; ///< [Hz] rate when replayPace is Fixed
 };
@@ -46,8 +49,8 @@ struct RoiConfig {
 
 struct StereoConfig {
     MatcherMode mode = MatcherMode::Sgbm3Way; ///< the detector's default (vision/roi_matcher.hpp)
-    int numDisparities = 128; ///< [px] multiple of 16
-    int blockSize = 5;        ///< [px] odd
+    int numDisparities = 128;                 ///< [px] multiple of 16
+    int blockSize = 5;                        ///< [px] odd
 };
 
 struct ObstacleConfig {
@@ -59,6 +62,11 @@ struct ObstacleConfig {
     double minDepthM = 0.10;       ///< [m] negative obstacles deeper than this count
 };
 
+struct OverloadConfig {
+    OverloadChoice policy = OverloadChoice::Degrade; ///< degrade (ground-plane-only sectors) or drop only
+    double deadlineFactor = 1.0; ///< deadline = this many camera periods from exposure to published sectors
+};
+
 struct ServiceConfig {
     std::string sourceFile; ///< the file this came from (for messages)
     std::string vehicleId = "ugv-1";
@@ -67,6 +75,7 @@ struct ServiceConfig {
     RoiConfig roi;
     StereoConfig stereo;
     ObstacleConfig obstacles;
+    OverloadConfig overload;
     /// The service's threads: rt's default table with the `tasks.<name>.{policy,priority,cpu}` overrides.
     std::array<rt::TaskSpec, rt::kDefaultTaskTable.size()> tasks = rt::kDefaultTaskTable;
 };
