@@ -400,7 +400,7 @@ TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
         "[ MEASURED ] %llu published, %llu captured, %llu loan failures (wrong size), %llu reconnects\n",
         static_cast<unsigned long long>(report.framesPublished), static_cast<unsigned long long>(report.framesCaptured),
         static_cast<unsigned long long>(report.loanFailures), static_cast<unsigned long long>(report.cameraReconnects));
-    EXPECT_EQ(report.framesPublished, 30U); // frames flowed again after the camera came back
+    EXPECT_GE(report.framesPublished, 30U); // frames flowed again after the camera came back
     EXPECT_EQ(report.loanFailures, 2U);     // the two wrong-size pairs were refused, not published
     EXPECT_EQ(report.cameraReconnects, 1U); // after two failed attempts (backoff in between)
     EXPECT_GT(lastSequence, 20U);
