@@ -1,16 +1,25 @@
 // ugvsense calibrate: stereo calibration from chessboard pairs in a folder; writes the calibration file and,
 // on request, a JSON report.
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "args.hpp"
 #include "commands.hpp"
 #include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
+#include "ugv/bringup/camera_factory.hpp"
+#include "ugv/bringup/config.hpp"
 #include "ugv/vision/stereo_calibrator.hpp"
 
 namespace ugv::tool {
@@ -103,6 +112,105 @@ int fail(const Error& error)
 
 } // namespace
 
+/// Grabs pairs from the configured camera (or --replay REC) and keeps those where the board is found in both
+/// images at a new place or size (centroid moved by 5 % of the width, or the corner span changed by 10 %), as
+/// left_NN.png / right_NN.png in --images DIR. Returns the number kept.
+Result<int, Error> capturePairs(const Args& args, cv::Size board)
+{
+    const auto pairs = args.number("pairs", 15, 4, 60);
+    const auto seconds = args.number("seconds", 300, 1, 86400);
+    for (const auto* value : {&pairs, &seconds}) {
+        if (!*value) {
+            return Unexpected(value->error());
+        }
+    }
+    bringup::ServiceConfig config;
+    if (args.has("config")) {
+        auto loaded = bringup::loadConfig(args.get("config"));
+        if (!loaded) {
+            return Unexpected(loaded.error().front());
+        }
+        config = std::move(*loaded);
+    }
+    hal::ReplayOptions replay;
+    replay.pace = hal::ReplayPace::AsFastAsPossible;
+    auto camera = bringup::openCamera(config, args.get("replay"), replay);
+    if (!camera) {
+        return Unexpected(camera.error());
+    }
+    const std::filesystem::path dir = args.get("images");
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        return Unexpected(Error{dir.string(), "cannot create the folder: " + ec.message(), "choose a writable place"});
+    }
+    std::printf("capturing from %s: hold the %dx%d board at different places, distances and tilts\n",
+                (*camera)->description(), board.width, board.height);
+    struct Seen {
+        cv::Point2f centre;
+        float span;
+    };
+    std::vector<Seen> kept;
+    const auto start = std::chrono::steady_clock::now();
+    hal::CameraFrame frame;
+    int grabbed = 0;
+    while (static_cast<double>(kept.size()) < *pairs &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < *seconds) {
+        const hal::GrabStatus status = (*camera)->grab(frame, std::chrono::milliseconds(500));
+        if (status == hal::GrabStatus::End) {
+            break;
+        }
+        if (status == hal::GrabStatus::Disconnected) {
+            return Unexpected(Error{(*camera)->description(), "the camera went away during the capture",
+                                    "plug it back in and capture again"});
+        }
+        if (status != hal::GrabStatus::Frame) {
+            continue;
+        }
+        ++grabbed;
+        const cv::Mat left(frame.left.height(), frame.left.width(), CV_8UC1,
+                           const_cast<std::uint8_t*>(frame.left.row(0)),
+                           static_cast<std::size_t>(frame.left.strideBytes()));
+        const cv::Mat right(frame.right.height(), frame.right.width(), CV_8UC1,
+                            const_cast<std::uint8_t*>(frame.right.row(0)),
+                            static_cast<std::size_t>(frame.right.strideBytes()));
+        std::vector<cv::Point2f> cornersL;
+        std::vector<cv::Point2f> cornersR;
+        const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
+        if (!cv::findChessboardCorners(left, board, cornersL, flags) ||
+            !cv::findChessboardCorners(right, board, cornersR, flags)) {
+            continue;
+        }
+        const cv::Rect box = cv::boundingRect(cornersL);
+        const Seen seen{cv::Point2f(static_cast<float>(box.x) + static_cast<float>(box.width) / 2.0F,
+                                    static_cast<float>(box.y) + static_cast<float>(box.height) / 2.0F),
+                        static_cast<float>(std::max(box.width, box.height))};
+        const auto similar = [&](const Seen& s) {
+            return cv::norm(s.centre - seen.centre) < 0.05 * left.cols && std::abs(s.span - seen.span) < 0.1F * s.span;
+        };
+        if (std::any_of(kept.begin(), kept.end(), similar)) {
+            continue;
+        }
+        char name[32];
+        std::snprintf(name, sizeof(name), "_%02zu.png", kept.size() + 1);
+        if (!cv::imwrite((dir / (std::string("left") + name)).string(), left) ||
+            !cv::imwrite((dir / (std::string("right") + name)).string(), right)) {
+            return Unexpected(Error{dir.string(), "cannot write the captured images", "check the free space"});
+        }
+        kept.push_back(seen);
+        std::printf("  pair %zu kept (frame %llu, board at %.0f,%.0f px, %.0f px across)\n", kept.size(),
+                    static_cast<unsigned long long>(frame.sequence), static_cast<double>(seen.centre.x),
+                    static_cast<double>(seen.centre.y), static_cast<double>(seen.span));
+    }
+    if (kept.size() < 4) {
+        return Unexpected(Error{(*camera)->description(),
+                                "only " + std::to_string(kept.size()) + " distinct board view(s) in " +
+                                    std::to_string(grabbed) + " frames",
+                                "show the whole board to both cameras at more places and distances"});
+    }
+    return static_cast<int>(kept.size());
+}
+
 int runCalibrate(int argc, char** argv)
 {
     Args args(
@@ -114,7 +222,13 @@ int runCalibrate(int argc, char** argv)
          {"json", "REPORT.json", "also write a JSON report", false},
          {"mount-height", "M", "camera height above ground, (0, 10] m (writes the mount section)", false},
          {"mount-pitch", "DEG", "camera pitch, [-45, 45] deg, default 0", false},
-         {"mount-roll", "DEG", "camera roll, [-30, 30] deg, default 0", false}});
+         {"mount-roll", "DEG", "camera roll, [-30, 30] deg, default 0", false},
+         {"capture", "", "first grab chessboard pairs from the camera into --images DIR (when the board is seen)",
+          false},
+         {"config", "FILE", "capture: the service config naming the camera (default: built-in defaults)", false},
+         {"replay", "REC", "capture: take the pairs from a recording instead of the camera", false},
+         {"pairs", "N", "capture: pairs to keep, 4..60, default 15", false},
+         {"seconds", "S", "capture: give up after S seconds, default 300", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError("calibrate", parsed.error());
     }
@@ -160,6 +274,13 @@ int runCalibrate(int argc, char** argv)
         }
     }
 
+    if (args.has("capture")) {
+        auto captured = capturePairs(args, config.innerCorners);
+        if (!captured) {
+            return fail(captured.error());
+        }
+        std::printf("captured %d pair(s) into %s\n", *captured, args.get("images").c_str());
+    }
     const auto listing = listPairs(args.get("images"));
     if (!listing) {
         return fail(listing.error());
