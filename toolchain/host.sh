@@ -17,6 +17,7 @@ packages=(
     zlib1g-dev             # CRC-32 of recording records (hal/recording)
     iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev   # shared-memory frame and sector rings (RouDi + posh)
     libsystemd-dev         # sd_notify: READY and the watchdog of the service unit
+    libcamera-dev          # the libcamera camera backend
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
 )
 

@@ -1,5 +1,6 @@
 #include "ugv/bringup/camera_factory.hpp"
 
+#include "ugv/hal/libcamera_camera.hpp"
 #include "ugv/hal/v4l2_camera.hpp"
 
 namespace ugv::bringup {
@@ -49,12 +50,23 @@ Result<std::unique_ptr<hal::StereoCamera>, Error> openCamera(const ServiceConfig
             config.camera.format == PixelFormatChoice::Grey ? hal::V4l2Format::Grey : hal::V4l2Format::Yuyv;
         return upcast(hal::V4l2StereoCamera::open(options));
     }
-    case CameraBackend::Libcamera:
-        break;
+    case CameraBackend::Libcamera: {
+        // libcamera names cameras by id (`cam --list`); a /dev/ path (the V4L2 default) means "in libcamera's order".
+        const auto id = [](const std::string& device) {
+            return device.rfind("/dev/", 0) == 0 ? std::string() : device;
+        };
+        hal::LibcameraOptions options;
+        options.sideBySide = config.camera.rightDevice.empty();
+        options.leftId = id(config.camera.leftDevice);
+        options.rightId = id(config.camera.rightDevice);
+        options.width = config.camera.width;
+        options.height = config.camera.height;
+        options.fps = config.camera.fps;
+        options.maxPairSkewMs = config.camera.maxPairSkewMs;
+        return upcast(hal::LibcameraStereoCamera::open(options));
     }
-    return Unexpected(Error{config.sourceFile.empty() ? std::string("camera.backend") : config.sourceFile,
-                            "camera.backend libcamera is not implemented in this version",
-                            "use camera.backend: v4l2 (UVC and most CSI cameras have a V4L2 node) or replay"});
+    }
+    return Unexpected(Error{"camera.backend", "unknown backend", "a bug"});
 }
 
 } // namespace ugv::bringup

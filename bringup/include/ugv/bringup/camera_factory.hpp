@@ -2,8 +2,9 @@
 
 /// @file
 /// The camera the config names (camera.backend): replay (camera.replay_path at camera.replay_pace), v4l2
-/// (camera.left_device/right_device, width, height, fps, format, max_pair_skew_ms), or a recording given on the
-/// command line (`--replay REC`), which overrides the config's backend.
+/// (camera.left_device/right_device, width, height, fps, format, max_pair_skew_ms), libcamera (the same keys; the
+/// devices are libcamera camera ids, or /dev/ paths for "the first and second camera"; an empty right device means
+/// one side-by-side camera), or a recording given on the command line (`--replay REC`), which overrides the config.
 ///
 /// Thread-safety: reentrant. RT-safe: no (init).
 

@@ -1,0 +1,69 @@
+#pragma once
+
+/// @file
+/// The libcamera backend (libcamera 0.0.3): two cameras (left, right), or one side-by-side stereo camera, streaming
+/// YUV420 at the configured size and rate (FrameDurationLimits); the Y plane is the grey image. Each camera's
+/// requests complete on libcamera's thread, which hands the Request pointer to the capture thread through a
+/// wait-free ring and a semaphore; grab() pairs the two cameras' frames by their sensor timestamps within a skew,
+/// copies the Y planes and requeues the requests.
+///
+/// With no camera present, open() fails with a clear error (tested here; no camera exists on our machines, so the
+/// streaming path is untested here and is checked on the vehicle: `ugvsensed --config` with camera.backend libcamera).
+/// A camera that disappears (cameraRemoved, or failed requests) makes grab() return Disconnected; reconnect() opens
+/// the cameras again.
+///
+/// Thread-safety: thread-bound (the capture thread); the completion callback runs on libcamera's thread and only
+/// touches the rings. RT-safe: grab() does not allocate in our code; libcamera's queueRequest() is not audited for
+/// allocation (its own thread does the I/O).
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "ugv/hal/stereo_camera.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+
+namespace ugv::hal {
+
+struct LibcameraOptions {
+    std::string leftId;      ///< libcamera camera id; empty: the first camera
+    std::string rightId;     ///< empty with sideBySide false: the second camera
+    bool sideBySide = false; ///< one camera delivering 2 w x h, left half then right half
+    int width = 640;
+    int height = 480;
+    double fps = 30.0;
+    double maxPairSkewMs = 5.0;
+};
+
+class LibcameraStereoCamera final : public StereoCamera {
+public:
+    /// Starts a CameraManager, acquires and configures the camera(s) and starts streaming. Errors: no camera, too
+    /// few cameras, an id not found, a size or format the camera cannot deliver, a camera in use.
+    static Result<std::unique_ptr<LibcameraStereoCamera>, Error> open(const LibcameraOptions& options);
+    ~LibcameraStereoCamera() override;
+
+    GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
+    bool reconnect() noexcept override;
+    [[nodiscard]] int width() const noexcept override { return options_.width; }
+    [[nodiscard]] int height() const noexcept override { return options_.height; }
+    [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
+    [[nodiscard]] CameraStats stats() const noexcept override { return stats_; }
+    [[nodiscard]] const char* description() const noexcept override { return description_.c_str(); }
+
+    struct Impl;
+
+private:
+    explicit LibcameraStereoCamera(const LibcameraOptions& options);
+    Result<void, Error> start();
+    void stop() noexcept;
+
+    LibcameraOptions options_;
+    std::chrono::nanoseconds period_{};
+    std::string description_;
+    CameraStats stats_{};
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace ugv::hal

@@ -1,0 +1,377 @@
+#include "ugv/hal/libcamera_camera.hpp"
+
+#include <semaphore.h>
+#include <sys/mman.h>
+
+#include <libcamera/libcamera.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <map>
+#include <vector>
+
+#include "ugv/platform/image_view.hpp"
+#include "ugv/platform/spsc_ring.hpp"
+
+namespace ugv::hal {
+
+namespace {
+
+constexpr unsigned kBuffers = 4;
+
+std::int64_t monotonicNs()
+{
+    timespec t{};
+    ::clock_gettime(CLOCK_MONOTONIC, &t);
+    return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+} // namespace
+
+/// One camera of the pair.
+struct Side {
+    std::shared_ptr<libcamera::Camera> camera;
+    std::unique_ptr<libcamera::CameraConfiguration> config;
+    libcamera::Stream* stream = nullptr;
+    std::unique_ptr<libcamera::FrameBufferAllocator> allocator;
+    std::vector<std::unique_ptr<libcamera::Request>> requests;
+    struct Mapping {
+        void* address = nullptr;
+        std::size_t length = 0;
+    };
+    std::map<const libcamera::FrameBuffer*, Mapping> maps;
+    SpscRing<libcamera::Request*, 16> completed; ///< libcamera's thread -> capture thread
+    libcamera::Request* pending = nullptr;       ///< popped, not yet delivered
+    libcamera::Request* delivered = nullptr;     ///< its buffer backs the last frame's copy: requeued next grab
+    unsigned stride = 0;
+    bool acquired = false;
+    bool started = false;
+    std::atomic<bool> failed{false};
+    bool haveSequence = false;
+    unsigned lastSequence = 0;
+};
+
+struct LibcameraStereoCamera::Impl {
+    std::unique_ptr<libcamera::CameraManager> manager;
+    Side left;
+    Side right;
+    sem_t ready{};
+    bool semaphore = false;
+    Image<std::uint8_t> leftGrey;
+    Image<std::uint8_t> rightGrey;
+
+    Impl(int width, int height) : leftGrey(width, height), rightGrey(width, height)
+    {
+        semaphore = ::sem_init(&ready, 0, 0) == 0;
+    }
+    ~Impl()
+    {
+        if (semaphore) {
+            ::sem_destroy(&ready);
+        }
+    }
+    Impl(const Impl&) = delete;
+    Impl& operator=(const Impl&) = delete;
+    Impl(Impl&&) = delete;
+    Impl& operator=(Impl&&) = delete;
+
+    void complete(Side& side, libcamera::Request* request)
+    {
+        if (request->status() == libcamera::Request::RequestCancelled) {
+            return; // stopping
+        }
+        if (request->status() != libcamera::Request::RequestComplete || !side.completed.tryPush(request)) {
+            side.failed.store(true);
+        }
+        ::sem_post(&ready);
+    }
+    void onLeft(libcamera::Request* request) { complete(left, request); }
+    void onRight(libcamera::Request* request) { complete(right, request); }
+};
+
+LibcameraStereoCamera::LibcameraStereoCamera(const LibcameraOptions& options) : options_(options)
+{
+    period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
+    description_ = options.sideBySide
+                       ? "libcamera " + (options.leftId.empty() ? "first camera" : options.leftId) + " (side by side)"
+                       : "libcamera " + (options.leftId.empty() ? "camera 0" : options.leftId) + " + " +
+                             (options.rightId.empty() ? "camera 1" : options.rightId);
+}
+
+LibcameraStereoCamera::~LibcameraStereoCamera()
+{
+    stop();
+}
+
+Result<std::unique_ptr<LibcameraStereoCamera>, Error> LibcameraStereoCamera::open(const LibcameraOptions& options)
+{
+    if (options.width <= 0 || options.height <= 0 || !(options.fps > 0.0) || !(options.maxPairSkewMs > 0.0)) {
+        return Unexpected(Error{"libcamera", "size, rate or skew out of range", "check camera.width/height/fps"});
+    }
+    std::unique_ptr<LibcameraStereoCamera> camera(new LibcameraStereoCamera(options));
+    if (auto started = camera->start(); !started) {
+        return Unexpected(started.error());
+    }
+    return camera;
+}
+
+Result<void, Error> LibcameraStereoCamera::start()
+{
+    impl_ = std::make_unique<Impl>(options_.width, options_.height);
+    if (!impl_->semaphore) {
+        return Unexpected(Error{"libcamera", "sem_init failed", "check the system"});
+    }
+    if (std::getenv("LIBCAMERA_LOG_LEVELS") == nullptr) {
+        ::setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0); // libcamera is chatty at INFO
+    }
+    impl_->manager = std::make_unique<libcamera::CameraManager>();
+    if (const int rc = impl_->manager->start(); rc != 0) {
+        return Unexpected(Error{"libcamera", std::string("CameraManager::start failed: ") + std::strerror(-rc),
+                                "check that libcamera can access /dev/media* and /dev/video*"});
+    }
+    const auto cameras = impl_->manager->cameras();
+    const std::size_t needed = options_.sideBySide ? 1 : 2;
+    if (cameras.size() < needed) {
+        return Unexpected(Error{"libcamera",
+                                cameras.empty()
+                                    ? std::string("no camera found")
+                                    : "found " + std::to_string(cameras.size()) + " camera, a stereo pair needs 2",
+                                "connect the cameras (libcamera's `cam --list` shows what it sees), set "
+                                "camera.side_by_side for a one-sensor stereo camera, or use camera.backend v4l2"});
+    }
+    const auto pick = [&](const std::string& id, std::size_t index) -> std::shared_ptr<libcamera::Camera> {
+        return id.empty() ? cameras[index] : impl_->manager->get(id);
+    };
+    const int frameWidth = options_.sideBySide ? 2 * options_.width : options_.width;
+    const auto setUp = [&](Side& side, std::shared_ptr<libcamera::Camera> cam, const std::string& id,
+                           void (Impl::*handler)(libcamera::Request*)) -> Result<void, Error> {
+        const std::string name = "libcamera " + (cam ? cam->id() : id);
+        if (!cam) {
+            return Unexpected(Error{name, "no camera with this id", "list the ids with `cam --list`"});
+        }
+        side.camera = cam;
+        if (cam->acquire() != 0) {
+            return Unexpected(Error{name, "the camera is in use by another process", "stop the other user"});
+        }
+        side.acquired = true;
+        side.config = cam->generateConfiguration({libcamera::StreamRole::Viewfinder});
+        if (!side.config || side.config->empty()) {
+            return Unexpected(Error{name, "cannot generate a stream configuration", "check the camera"});
+        }
+        libcamera::StreamConfiguration& stream = side.config->at(0);
+        stream.pixelFormat = libcamera::formats::YUV420;
+        stream.size = libcamera::Size(static_cast<unsigned>(frameWidth), static_cast<unsigned>(options_.height));
+        stream.bufferCount = kBuffers;
+        if (side.config->validate() == libcamera::CameraConfiguration::Invalid ||
+            stream.size.width != static_cast<unsigned>(frameWidth) ||
+            stream.size.height != static_cast<unsigned>(options_.height) ||
+            stream.pixelFormat != libcamera::formats::YUV420) {
+            return Unexpected(Error{name,
+                                    "cannot deliver " + std::to_string(frameWidth) + "x" +
+                                        std::to_string(options_.height) + " YUV420 (it offers " + stream.toString() +
+                                        ")",
+                                    "set camera.width/height to a mode the camera has"});
+        }
+        if (cam->configure(side.config.get()) != 0) {
+            return Unexpected(Error{name, "configure failed", "check the camera"});
+        }
+        side.stream = stream.stream();
+        side.stride = stream.stride;
+        side.allocator = std::make_unique<libcamera::FrameBufferAllocator>(cam);
+        if (side.allocator->allocate(side.stream) < 0) {
+            return Unexpected(Error{name, "cannot allocate frame buffers", "check the memory limits"});
+        }
+        for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : side.allocator->buffers(side.stream)) {
+            const libcamera::FrameBuffer::Plane& y = buffer->planes()[0];
+            const std::size_t length = y.offset + y.length;
+            void* address = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, y.fd.get(), 0);
+            if (address == MAP_FAILED) {
+                return Unexpected(Error{name, "cannot map a frame buffer", "check the memory limits"});
+            }
+            side.maps[buffer.get()] = Side::Mapping{address, length};
+            std::unique_ptr<libcamera::Request> request = cam->createRequest();
+            if (!request || request->addBuffer(side.stream, buffer.get()) != 0) {
+                return Unexpected(Error{name, "cannot create a capture request", "check the camera"});
+            }
+            side.requests.push_back(std::move(request));
+        }
+        cam->requestCompleted.connect(impl_.get(), handler);
+        libcamera::ControlList controls;
+        const auto frameUs = static_cast<std::int64_t>(std::llround(1e6 / options_.fps));
+        controls.set(libcamera::controls::FrameDurationLimits, {frameUs, frameUs});
+        if (cam->start(&controls) != 0) {
+            return Unexpected(Error{name, "start failed", "check the camera"});
+        }
+        side.started = true;
+        for (const std::unique_ptr<libcamera::Request>& request : side.requests) {
+            if (cam->queueRequest(request.get()) != 0) {
+                return Unexpected(Error{name, "cannot queue a capture request", "check the camera"});
+            }
+        }
+        return {};
+    };
+    if (auto left = setUp(impl_->left, pick(options_.leftId, 0), options_.leftId, &Impl::onLeft); !left) {
+        stop();
+        return left;
+    }
+    if (!options_.sideBySide) {
+        if (auto right = setUp(impl_->right, pick(options_.rightId, 1), options_.rightId, &Impl::onRight); !right) {
+            stop();
+            return right;
+        }
+    }
+    return {};
+}
+
+void LibcameraStereoCamera::stop() noexcept
+{
+    if (!impl_) {
+        return;
+    }
+    for (Side* side : {&impl_->left, &impl_->right}) {
+        if (side->started) {
+            side->camera->stop();
+            side->started = false;
+        }
+        if (side->camera) {
+            side->camera->requestCompleted.disconnect(impl_.get());
+        }
+        for (auto& [buffer, mapping] : side->maps) {
+            (void)buffer;
+            ::munmap(mapping.address, mapping.length);
+        }
+        side->maps.clear();
+        side->requests.clear();
+        if (side->allocator && side->stream != nullptr) {
+            side->allocator->free(side->stream);
+        }
+        side->allocator.reset();
+        if (side->acquired) {
+            side->camera->release();
+            side->acquired = false;
+        }
+        side->camera.reset();
+    }
+    if (impl_->manager) {
+        impl_->manager->stop();
+    }
+    impl_.reset();
+}
+
+namespace {
+
+void requeue(Side& side, libcamera::Request*& request) noexcept
+{
+    if (request != nullptr && side.started) {
+        request->reuse(libcamera::Request::ReuseBuffers);
+        (void)side.camera->queueRequest(request);
+    }
+    request = nullptr;
+}
+
+std::int64_t sensorStamp(const Side& side, const libcamera::Request* request) noexcept
+{
+    const libcamera::FrameBuffer* buffer = request->findBuffer(side.stream);
+    return buffer != nullptr ? static_cast<std::int64_t>(buffer->metadata().timestamp) : 0;
+}
+
+/// Copies the Y plane columns [x0, x0 + width) of the request's buffer into `out`.
+void copyY(const Side& side, const libcamera::Request* request, int x0, ImageViewU8 out) noexcept
+{
+    const libcamera::FrameBuffer* buffer = request->findBuffer(side.stream);
+    const auto it = side.maps.find(buffer);
+    if (it == side.maps.end()) {
+        return;
+    }
+    const auto* base = static_cast<const std::uint8_t*>(it->second.address) + buffer->planes()[0].offset;
+    for (int y = 0; y < out.height(); ++y) {
+        std::memcpy(out.row(y), base + static_cast<std::size_t>(y) * side.stride + x0,
+                    static_cast<std::size_t>(out.width()));
+    }
+}
+
+} // namespace
+
+GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept
+{
+    if (!impl_) {
+        return GrabStatus::Disconnected;
+    }
+    Impl& im = *impl_;
+    requeue(im.left, im.left.delivered);
+    requeue(im.right, im.right.delivered);
+    const std::int64_t deadline = monotonicNs() + timeout.count();
+    const bool stereo = !options_.sideBySide;
+    const auto skewNs = static_cast<std::int64_t>(options_.maxPairSkewMs * 1e6);
+    for (;;) {
+        if (im.left.failed.load() || (stereo && im.right.failed.load())) {
+            ++stats_.disconnects;
+            return GrabStatus::Disconnected;
+        }
+        if (im.left.pending == nullptr) {
+            (void)im.left.completed.tryPop(im.left.pending);
+        }
+        if (stereo && im.right.pending == nullptr) {
+            (void)im.right.completed.tryPop(im.right.pending);
+        }
+        const bool haveAll = im.left.pending != nullptr && (!stereo || im.right.pending != nullptr);
+        if (haveAll && stereo) {
+            const std::int64_t dt = sensorStamp(im.left, im.left.pending) - sensorStamp(im.right, im.right.pending);
+            if (std::llabs(dt) > skewNs) {
+                Side& older = dt < 0 ? im.left : im.right;
+                requeue(older, older.pending); // the older frame has no partner: drop it, wait for the next
+                continue;
+            }
+        }
+        if (haveAll) {
+            break;
+        }
+        const std::int64_t left = deadline - monotonicNs();
+        if (left <= 0) {
+            return GrabStatus::Timeout;
+        }
+        timespec until{};
+        ::clock_gettime(CLOCK_REALTIME, &until);
+        const std::int64_t ns = until.tv_nsec + left;
+        until.tv_sec += static_cast<time_t>(ns / 1'000'000'000);
+        until.tv_nsec = static_cast<long>(ns % 1'000'000'000);
+        (void)::sem_timedwait(&im.ready, &until);
+    }
+    const libcamera::FrameBuffer* leftBuffer = im.left.pending->findBuffer(im.left.stream);
+    const unsigned sequence = leftBuffer != nullptr ? leftBuffer->metadata().sequence : 0U;
+    if (im.left.haveSequence && sequence > im.left.lastSequence + 1) {
+        stats_.sequenceGaps += sequence - im.left.lastSequence - 1;
+    }
+    im.left.haveSequence = true;
+    im.left.lastSequence = sequence;
+    copyY(im.left, im.left.pending, 0, im.leftGrey.view());
+    if (stereo) {
+        copyY(im.right, im.right.pending, 0, im.rightGrey.view());
+        out.rightStampNs = sensorStamp(im.right, im.right.pending);
+    } else {
+        copyY(im.left, im.left.pending, options_.width, im.rightGrey.view());
+        out.rightStampNs = sensorStamp(im.left, im.left.pending);
+    }
+    out.leftStampNs = sensorStamp(im.left, im.left.pending);
+    out.sequence = sequence;
+    out.left = im.leftGrey.view();
+    out.right = im.rightGrey.view();
+    im.left.delivered = im.left.pending;
+    im.left.pending = nullptr;
+    im.right.delivered = im.right.pending;
+    im.right.pending = nullptr;
+    ++stats_.frames;
+    return GrabStatus::Frame;
+}
+
+bool LibcameraStereoCamera::reconnect() noexcept
+{
+    stop();
+    return static_cast<bool>(start());
+}
+
+} // namespace ugv::hal

@@ -1,0 +1,42 @@
+// The libcamera backend on a machine without cameras: a clear error, no crash, no hang. (With cameras present the
+// test skips: the streaming path is checked on the vehicle.)
+
+#include "ugv/hal/libcamera_camera.hpp"
+
+#include <gtest/gtest.h>
+
+namespace ugv::hal {
+namespace {
+
+TEST(LibcameraCamera, NoCameraIsAClearError)
+{
+    auto camera = LibcameraStereoCamera::open(LibcameraOptions{});
+    if (camera.has_value()) {
+        GTEST_SKIP() << "this machine has cameras (" << (*camera)->description()
+                     << "): the error path is not reachable";
+    }
+    const std::string message = camera.error().message();
+    EXPECT_NE(message.find("libcamera"), std::string::npos) << message;
+    EXPECT_NE(message.find("no camera found"), std::string::npos) << message;
+    EXPECT_NE(message.find("cam --list"), std::string::npos) << message;
+}
+
+TEST(LibcameraCamera, SideBySideWithoutACameraAndBadOptionsAreErrors)
+{
+    LibcameraOptions sbs;
+    sbs.sideBySide = true;
+    auto camera = LibcameraStereoCamera::open(sbs);
+    if (camera.has_value()) {
+        GTEST_SKIP() << "this machine has a camera";
+    }
+    EXPECT_NE(camera.error().message().find("no camera found"), std::string::npos) << camera.error().message();
+
+    LibcameraOptions bad;
+    bad.fps = 0.0;
+    auto refused = LibcameraStereoCamera::open(bad);
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_NE(refused.error().message().find("out of range"), std::string::npos);
+}
+
+} // namespace
+} // namespace ugv::hal
