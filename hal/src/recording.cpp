@@ -209,7 +209,7 @@ RecordingReader::RecordingReader(int fd, RecordingInfo info, std::uint64_t first
 RecordingReader::RecordingReader(RecordingReader&& other) noexcept
     : fd_(std::exchange(other.fd_, -1)), info_(std::move(other.info_)), firstRecord_(other.firstRecord_),
       fileBytes_(other.fileBytes_), offset_(other.offset_), frameBytes_(other.frameBytes_),
-      frame_(std::move(other.frame_)), current_(other.current_), framesRead_(other.framesRead_),
+      frame_(std::move(other.frame_)), current_(other.current_), peeked_(other.peeked_), framesRead_(other.framesRead_),
       corrupt_(other.corrupt_), trailing_(other.trailing_), lastError_(other.lastError_)
 {
 }
@@ -228,6 +228,7 @@ RecordingReader& RecordingReader::operator=(RecordingReader&& other) noexcept
         frameBytes_ = other.frameBytes_;
         frame_ = std::move(other.frame_);
         current_ = other.current_;
+        peeked_ = other.peeked_;
         framesRead_ = other.framesRead_;
         corrupt_ = other.corrupt_;
         trailing_ = other.trailing_;
@@ -364,6 +365,41 @@ ReadStatus RecordingReader::next() noexcept
         }
         current_ = frameHeader;
         ++framesRead_;
+        return ReadStatus::Frame;
+    }
+}
+
+ReadStatus RecordingReader::peek() noexcept
+{
+    trailing_ = 0;
+    for (;;) {
+        if (offset_ >= fileBytes_) {
+            return ReadStatus::End;
+        }
+        std::byte head[sizeof(RecordPrefix) + sizeof(FrameHeader)];
+        const long got = readFully(head, sizeof(head));
+        if (got < 0) {
+            return ReadStatus::IoError;
+        }
+        RecordPrefix prefix;
+        if (static_cast<std::size_t>(got) >= sizeof(prefix)) {
+            std::memcpy(&prefix, head, sizeof(prefix));
+            if (prefix.magic != kRecordMagic || prefix.frameBytes != frameBytes_) {
+                ++corrupt_;
+                if (!resync()) {
+                    trailing_ = fileBytes_ - offset_;
+                    offset_ = fileBytes_;
+                    return ReadStatus::Truncated;
+                }
+                continue;
+            }
+        }
+        if (static_cast<std::size_t>(got) < sizeof(head) || offset_ + sizeof(prefix) + frameBytes_ > fileBytes_) {
+            trailing_ = fileBytes_ - offset_;
+            offset_ = fileBytes_;
+            return ReadStatus::Truncated;
+        }
+        std::memcpy(&peeked_, head + sizeof(prefix), sizeof(peeked_));
         return ReadStatus::Frame;
     }
 }

@@ -83,10 +83,10 @@ Result<std::unique_ptr<ReplayCamera>, Error> ReplayCamera::open(const std::strin
                                                           scan->trailingBytes > 0, std::move(description)));
 }
 
-ReadStatus ReplayCamera::readNext() noexcept
+ReadStatus ReplayCamera::peekNext() noexcept
 {
     for (int attempt = 0; attempt < 2; ++attempt) {
-        const ReadStatus status = reader_.next();
+        const ReadStatus status = reader_.peek();
         if (status == ReadStatus::Frame || status == ReadStatus::IoError || !options_.loop) {
             return status;
         }
@@ -104,7 +104,7 @@ GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout
 {
     std::int64_t now = clock_.now(clock_.context);
     if (!pending_) {
-        const ReadStatus read = readNext();
+        const ReadStatus read = peekNext(); // the header only: the payload is read once the frame is due
         if (read == ReadStatus::IoError) {
             ++stats_.disconnects;
             return GrabStatus::Disconnected;
@@ -112,7 +112,7 @@ GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout
         if (read != ReadStatus::Frame) {
             return GrabStatus::End;
         }
-        const FrameHeader& h = reader_.header();
+        const FrameHeader& h = reader_.peekedHeader();
         if (loopStarted_) {
             sequenceOffset_ = lastSequence_ + 1 - h.sequence;
         }
@@ -143,6 +143,17 @@ GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout
         }
         clock_.sleepUntil(clock_.context, dueNs_);
     }
+    // The frame is due: read it (as a camera's readout follows its exposure). A corrupt record is skipped by the
+    // reader, which then returns the next complete one.
+    pending_ = false;
+    const ReadStatus read = reader_.next();
+    if (read == ReadStatus::IoError) {
+        ++stats_.disconnects;
+        return GrabStatus::Disconnected;
+    }
+    if (read != ReadStatus::Frame) {
+        return GrabStatus::End;
+    }
     const FrameHeader& h = reader_.header();
     const StereoViews views = reader_.views();
     out.sequence = h.sequence + sequenceOffset_;
@@ -158,7 +169,6 @@ GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout
     lastDeliveredDueNs_ = dueNs_;
     lastRecordedStampNs_ = h.leftStampNs;
     started_ = true;
-    pending_ = false;
     ++stats_.frames;
     stats_.badFrames = reader_.corruptFrames();
     return GrabStatus::Frame;

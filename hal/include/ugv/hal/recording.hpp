@@ -140,6 +140,11 @@ public:
 
     /// Reads the next complete, CRC-valid frame (skipping and counting corrupt ones). No allocation.
     ReadStatus next() noexcept;
+    /// Reads only the next record's prefix and frame header (72 bytes) without consuming it, so that a replay can
+    /// wait for the frame's due time before it reads the payload: Frame (peekedHeader() is valid; next() then
+    /// reads that record), End, Truncated or IoError. A damaged prefix is skipped (counted) as in next().
+    ReadStatus peek() noexcept;
+    [[nodiscard]] const FrameHeader& peekedHeader() const noexcept { return peeked_; }
     /// Goes back to the first frame (loops of a replay). Counters are kept.
     Result<void, SysError> rewind() noexcept;
 
@@ -168,6 +173,7 @@ private:
     std::size_t frameBytes_ = 0;
     std::vector<std::byte> frame_; ///< frame header + payload of the last frame
     FrameHeader current_{};
+    FrameHeader peeked_{};
     std::uint64_t framesRead_ = 0;
     std::uint64_t corrupt_ = 0;
     std::uint64_t trailing_ = 0;

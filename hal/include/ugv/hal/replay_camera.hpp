@@ -77,8 +77,8 @@ public:
 private:
     ReplayCamera(RecordingReader reader, const ReplayOptions& options, ReplayClock clock,
                  std::chrono::nanoseconds period, std::uint64_t frames, bool truncated, std::string description);
-    /// Reads the next frame into the reader (rewinding when looping): Frame, End (or Truncated) or IoError.
-    ReadStatus readNext() noexcept;
+    /// Peeks at the next frame's header (rewinding when looping): Frame, End (or Truncated) or IoError.
+    ReadStatus peekNext() noexcept;
 
     RecordingReader reader_;
     ReplayOptions options_;
