@@ -3,7 +3,11 @@
 // deadline misses, drops, CPU per task, allocations after warm-up (this tool links rt's allocation counter), the
 // threads and the locked memory. --sweep finds the highest rate without deadline misses.
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -112,6 +116,57 @@ Result<BenchRun, Error> benchOnce(const std::string& recording, const std::strin
     return out;
 }
 
+/// A number after `"key": ` in a JSON text (the bench's own), or -1.
+double jsonValue(const std::string& json, const std::string& key, std::size_t from = 0)
+{
+    const std::size_t at = json.find("\"" + key + "\": ", from);
+    return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + key.size() + 4);
+}
+
+/// --sweep: one child process per rate (iceoryx's runtime is one per process), each writing its JSON report.
+int sweep(const Args& args, std::uint64_t frames, bool oneCore)
+{
+    double best = 0.0;
+    std::printf("rate_fps  frames  misses  drops  degraded  e2e_p50_ms  e2e_p99_ms  e2e_max_ms\n");
+    const std::string json =
+        std::filesystem::temp_directory_path() / ("ugvsense-sweep-" + std::to_string(::getpid()) + ".json");
+    std::error_code ec;
+    const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string(); // this ugvsense binary
+    if (ec) {
+        return fail(Error{"/proc/self/exe", "cannot find this program: " + ec.message(), "run it from its path"});
+    }
+    for (const int r : {10, 15, 20, 25, 30}) {
+        std::string command = "'" + self + "' bench --recording '" + args.get("recording") + "' --rate " +
+                              std::to_string(r) + " --frames " + std::to_string(frames) + " --json '" + json + "'";
+        if (oneCore) {
+            command += " --one-core";
+        }
+        if (args.has("config")) {
+            command += " --config '" + args.get("config") + "'";
+        }
+        command += " >/dev/null 2>&1";
+        if (std::system(command.c_str()) != 0) { // NOLINT(cert-env33-c): our own binary, quoted arguments
+            return fail(Error{"ugvsense bench --sweep", "the run at " + std::to_string(r) + " fps failed",
+                              "run it alone: ugvsense bench --recording REC --rate " + std::to_string(r)});
+        }
+        std::ifstream in(json);
+        const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        const std::size_t e2e = text.find("\"end_to_end\"");
+        const double misses = jsonValue(text, "deadline_misses");
+        const double drops = jsonValue(text, "drops");
+        std::printf("%8d  %6.0f  %6.0f  %5.0f  %8.0f  %10.1f  %10.1f  %10.1f\n", r, jsonValue(text, "frames"), misses,
+                    drops, jsonValue(text, "degraded"), jsonValue(text, "p50_us", e2e) / 1000.0,
+                    jsonValue(text, "p99_us", e2e) / 1000.0, jsonValue(text, "max_us", e2e) / 1000.0);
+        if (misses == 0.0 && drops == 0.0) {
+            best = r;
+        }
+    }
+    std::filesystem::remove(json);
+    std::printf("highest rate without a deadline miss or a drop: %s\n",
+                best > 0.0 ? (std::to_string(static_cast<int>(best)) + " fps").c_str() : "none of the rates");
+    return 0;
+}
+
 } // namespace
 
 int runBench(int argc, char** argv)
@@ -147,29 +202,7 @@ int runBench(int argc, char** argv)
     }
     const bool oneCore = args.has("one-core");
     if (args.has("sweep")) {
-        double best = 0.0;
-        std::printf("rate_fps  frames  misses  drops  e2e_p50_ms  e2e_p99_ms  e2e_max_ms\n");
-        for (const double r : {10.0, 15.0, 20.0, 25.0, 30.0}) {
-            auto run =
-                benchOnce(args.get("recording"), args.get("config"), r, static_cast<std::uint64_t>(*frames), oneCore);
-            if (!run) {
-                return fail(run.error());
-            }
-            const service::ServiceReport& rep = run->result.report;
-            const auto& e2e = rep.stages[static_cast<std::size_t>(service::Stage::EndToEnd)];
-            std::printf("%8.0f  %6llu  %6llu  %5llu  %10.1f  %10.1f  %10.1f\n", r,
-                        static_cast<unsigned long long>(rep.framesPublished),
-                        static_cast<unsigned long long>(rep.deadlineMisses),
-                        static_cast<unsigned long long>(rep.framesDropped),
-                        static_cast<double>(e2e.p50().count()) * 1e-6, static_cast<double>(e2e.p99().count()) * 1e-6,
-                        static_cast<double>(e2e.max().count()) * 1e-6);
-            if (rep.deadlineMisses == 0 && rep.framesDropped == 0) {
-                best = r;
-            }
-        }
-        std::printf("highest rate without a deadline miss or a drop: %s\n",
-                    best > 0.0 ? (std::to_string(static_cast<int>(best)) + " fps").c_str() : "none of the rates");
-        return 0;
+        return sweep(args, static_cast<std::uint64_t>(*frames), oneCore);
     }
     auto run =
         benchOnce(args.get("recording"), args.get("config"), *rate, static_cast<std::uint64_t>(*frames), oneCore);

@@ -169,6 +169,26 @@ TEST_F(RecordingTest, DamagedRecordPrefixIsSkippedByFindingTheNextRecord)
     EXPECT_EQ(scan->lastSequence, 13U);
 }
 
+TEST_F(RecordingTest, PeekShowsTheNextHeaderWithoutConsumingIt)
+{
+    writeFrames(3);
+    corruptByte(recordOffset(1)); // record 1's prefix: peek skips to record 2 as next() would
+    std::filesystem::resize_file(path_, recordOffset(2) + kRecordBytes - 5);
+    auto reader = RecordingReader::open(path_);
+    ASSERT_TRUE(reader.has_value());
+
+    ASSERT_EQ(reader->peek(), ReadStatus::Frame);
+    EXPECT_EQ(reader->peekedHeader().sequence, 10U);
+    EXPECT_EQ(reader->peekedHeader().leftStampNs, 0);
+    ASSERT_EQ(reader->next(), ReadStatus::Frame);
+    EXPECT_EQ(reader->header().sequence, 10U);
+    // Record 1 is damaged, record 2 cut off: nothing complete is left.
+    EXPECT_EQ(reader->peek(), ReadStatus::Truncated);
+    EXPECT_EQ(reader->corruptFrames(), 1U);
+    EXPECT_GT(reader->trailingBytes(), 0U);
+    EXPECT_EQ(reader->next(), ReadStatus::End);
+}
+
 TEST_F(RecordingTest, CorruptHeadersGiveErrorsNamingTheFileAndWhat)
 {
     struct Case {
