@@ -20,6 +20,7 @@ namespace ugv::service {
 namespace {
 
 constexpr std::chrono::milliseconds kMonitorPoll{20};
+constexpr std::int64_t kRoudiCheckNs = 500'000'000; ///< how often the monitor checks that RouDi still answers
 
 void sleepMs(std::chrono::milliseconds d)
 {
@@ -165,6 +166,7 @@ Result<RunResult, Error> runService(const RunOptions& options)
     bool framesSincePing = false;
     PublishedFrame frame;
     std::uint64_t seen = 0;
+    std::int64_t lastRoudiCheckNs = 0;
     while (!(options.stop != nullptr && options.stop->load()) && !(*service)->finished()) {
         while ((*service)->nextPublished(frame)) {
             ++seen;
@@ -180,12 +182,25 @@ Result<RunResult, Error> runService(const RunOptions& options)
             lastPingNs = now;
             framesSincePing = false;
         }
+        // RouDi gone (crashed or restarted): iceoryx 2.0 cannot re-register a running process, so stop and say so;
+        // under systemd the unit's Restart= brings the service back once RouDi runs again.
+        if (!embedded && now - lastRoudiCheckNs >= kRoudiCheckNs) {
+            lastRoudiCheckNs = now;
+            if (!ipc::roudiReachable()) {
+                result.roudiLost = true;
+                break;
+            }
+        }
         sleepMs(kMonitorPoll);
     }
     systemd.stopping();
     (*service)->stop();
     result.report = (*service)->report();
-    service->reset(); // threads and iceoryx ports go before the runtime
+    if (!result.roudiLost) {
+        service->reset(); // threads and iceoryx ports go before the runtime
+    } else {
+        (void)service->release(); // without RouDi, tearing the ports down would wait for it: the process exits instead
+    }
     return result;
 }
 

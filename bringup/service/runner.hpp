@@ -40,6 +40,7 @@ struct RunOptions {
 struct RunResult {
     ServiceReport report;
     ReportExtras extras;
+    bool roudiLost = false; ///< RouDi went away during the run (its shared memory is stale: the run stopped)
 };
 
 /// Runs until the recording ends (without looping), maxFrames are published, or *stop is set.

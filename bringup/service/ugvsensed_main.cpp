@@ -111,5 +111,13 @@ int main(int argc, char** argv)
         return 1;
     }
     std::printf("%s", ugv::service::formatReport(run->report, run->extras).c_str());
+    if (run->roudiLost) {
+        std::fprintf(stderr,
+                     "ugvsensed: error: iceoryx: RouDi went away during the run (nothing answers on /tmp/roudi); "
+                     "the service stopped (fix: restart RouDi, then the service; under systemd the units do "
+                     "both)\n");
+        std::fflush(nullptr);
+        std::_Exit(1); // iceoryx's runtime would wait for the missing RouDi at exit
+    }
     return 0;
 }

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# RouDi crashing under a running ugvsensed: the service stops with a clear error and exit code 1 (systemd restarts
+# it), and once RouDi runs again a new service works. Usage: roudi_lost_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR
+set -u
+tool=$1 service=$2 config=$3 work=$4
+rm -rf "$work" && mkdir -p "$work"
+if pgrep -x iox-roudi >/dev/null; then echo "another iox-roudi runs: this test needs its own"; exit 1; fi
+"$tool" sim --course default --frames 6 --out "$work/drive.ugvrec" >/dev/null || exit 1
+start_roudi() {
+    iox-roudi -c "$config" -l warning >>"$work/roudi.log" 2>&1 &
+    roudi=$!
+    for _ in $(seq 50); do [ -S /tmp/roudi ] && sleep 0.3 && return; sleep 0.1; done
+}
+trap 'kill $roudi 2>/dev/null; wait $roudi 2>/dev/null' EXIT # TERM: RouDi cleans its shared memory up
+start_roudi
+"$service" --replay "$work/drive.ugvrec" --loop --print-every 0 >"$work/service.log" 2>&1 &
+svc=$!
+sleep 3
+kill -9 $roudi # a crash: RouDi cannot tell the service
+wait $roudi 2>/dev/null
+wait $svc
+rc=$?
+cat "$work/service.log" | grep -v "^  \|^capture\|^vision\|^publish"
+[ $rc -eq 1 ] || { echo "expected exit code 1, got $rc"; exit 1; }
+grep -q "RouDi went away during the run.*fix: restart RouDi" "$work/service.log" || { echo "no clear error"; exit 1; }
+start_roudi
+"$service" --replay "$work/drive.ugvrec" --frames 4 --print-every 0 >"$work/again.log" 2>&1 || { cat "$work/again.log"; exit 1; }
+grep -q "frames: [4-9] published" "$work/again.log" || { cat "$work/again.log"; exit 1; }
+echo "service stopped with a clear error when RouDi crashed, and ran again after RouDi restarted: OK"
