@@ -51,7 +51,8 @@ struct BandStats {
     int detected = 0;
     std::vector<double> errors; ///< [m] range errors of detected frames
     int withinTolerance = 0;
-    int spill = 0; ///< sectors reported Obstacle whose GT is not Obstacle (fattening, artefacts)
+    int spill = 0;      ///< sectors reported Obstacle whose GT is not Obstacle (fattening, artefacts)
+    int falseClear = 0; ///< sectors reported Clear whose GT has an obstacle within 10 m
     [[nodiscard]] double rate() const { return gtFrames > 0 ? double(detected) / gtFrames : 0.0; }
     [[nodiscard]] double withinRate() const { return detected > 0 ? double(withinTolerance) / detected : 0.0; }
 };
@@ -181,6 +182,7 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
                             BandStats& s = stats[type][static_cast<std::size_t>(b)];
                             ++s.frames;
                             s.spill += score.spillSectors;
+                            s.falseClear += score.falseClearSectors;
                             s.gtFrames += score.gtHasObstacle ? 1 : 0;
                             if (score.gtHasObstacle && score.detected) {
                                 ++s.detected;
@@ -248,8 +250,8 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     std::printf("\nsimulator suite: %d frames in %.1f s (default rig 640x480, level, 0.59 m; %zu texture(s), %zu "
                 "range(s) per band, %zu bearing(s) taking turns, %d seed(s))\n",
                 framesRun, seconds, o.textures.size(), o.rangesPerBand.size(), o.bearings.size(), o.seeds);
-    std::printf("%-12s %-8s %6s %6s %8s %10s %9s %11s\n", "type", "band", "frames", "gt", "det%", "p95err_m", "in_tol%",
-                "spill/frame");
+    std::printf("%-12s %-8s %6s %6s %8s %10s %9s %11s %11s\n", "type", "band", "frames", "gt", "det%", "p95err_m",
+                "in_tol%", "spill/frame", "fclear/frm");
     bool detectionOk = true;
     bool rangeOk = true;
     json << "  \"sim\": {\n    \"frames\": " << framesRun << ",\n    \"seconds\": " << jsonNumber(seconds)
@@ -266,15 +268,16 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             if (!s.errors.empty()) {
                 std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
             }
-            std::printf("%-12s %-8s %6d %6d %8.1f %10s %9.1f %11.2f\n", type.c_str(), band, s.frames, s.gtFrames,
+            std::printf("%-12s %-8s %6d %6d %8.1f %10s %9.1f %11.2f %11.2f\n", type.c_str(), band, s.frames, s.gtFrames,
                         100.0 * s.rate(), p95Text, 100.0 * s.withinRate(),
-                        s.frames > 0 ? double(s.spill) / s.frames : 0.0);
+                        s.frames > 0 ? double(s.spill) / s.frames : 0.0,
+                        s.frames > 0 ? double(s.falseClear) / s.frames : 0.0);
             json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << type << "\", \"band\": \"" << band
                  << "\", \"frames\": " << s.frames << ", \"gt_frames\": " << s.gtFrames
                  << ", \"detected\": " << s.detected << ", \"detection_rate\": " << jsonNumber(s.rate())
                  << ", \"range_error_p95_m\": " << jsonNumber(s.errors.empty() ? NAN : p95)
                  << ", \"within_tolerance_rate\": " << jsonNumber(s.withinRate()) << ", \"spill_sectors\": " << s.spill
-                 << "}";
+                 << ", \"false_clear_sectors\": " << s.falseClear << "}";
             firstRow = false;
             if (kBands[b].hi <= kVerdictMaxRangeM) {
                 within10.gtFrames += s.gtFrames;

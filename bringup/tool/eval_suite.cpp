@@ -6,6 +6,10 @@
 #include <limits>
 
 namespace ugv::tool {
+
+namespace {
+constexpr double kFalseClearRangeM = 10.0; ///< [m] GT obstacles this near reported Clear count as false Clear
+} // namespace
 namespace {
 
 constexpr double kMinToleranceM = 0.10; ///< [m]
@@ -49,6 +53,9 @@ ObstacleFrameScore scoreObstacleFrame(const ObstacleSectors& detected, const Obs
     double nearestInside = std::numeric_limits<double>::infinity();
     double nearestNext = std::numeric_limits<double>::infinity();
     for (int i = 0; i < count; ++i) {
+        if (at(detected, i).state == SectorState::Clear && isGtObstacle(i) && at(gt, i).rangeM <= kFalseClearRangeM) {
+            ++score.falseClearSectors; // the vehicle would be told it may drive where an obstacle stands
+        }
         if (at(detected, i).state != SectorState::Obstacle) {
             continue;
         }

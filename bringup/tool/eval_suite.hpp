@@ -22,6 +22,7 @@ struct ObstacleFrameScore {
     double detectedRangeM = 0.0; ///< [m] nearest range reported in the GT obstacle sectors (else next to them)
     double rangeErrorM = 0.0;    ///< [m] |detectedRangeM - gtRangeM|, when detected
     int spillSectors = 0;        ///< sectors reported Obstacle whose GT is not Obstacle
+    int falseClearSectors = 0;   ///< sectors reported Clear whose GT holds an obstacle within 10 m (unsafe)
 };
 
 /// Scores `detected` against `gt` (same sector layout).

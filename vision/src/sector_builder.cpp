@@ -55,7 +55,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     }
     if (!(config.minHeightM > 0.0F) || !(config.minDepthM > 0.0F) || !(config.rangeBinM > 0.0F) ||
         !(config.maxRangeM > config.rangeBinM) || config.minSupport < 1 || config.minDropSupport < 1 ||
-        !(config.dropSupportRangeM > 0.0F) || config.clusterWindowM < 0.0F || config.clusterFraction < 0.0F ||
+        config.maxStrayVotes < 1 || config.maxStrayDropVotes < 1 || !(config.dropSupportRangeM > 0.0F) ||
+        config.clusterWindowM < 0.0F || config.clusterFraction < 0.0F ||
         !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
         !(config.dropRangePercentile >= 0.0F && config.dropRangePercentile < 1.0F) ||
         !(config.clearGroundFraction > 0.0F && config.clearGroundFraction <= 1.0F) || config.labelWeight < 0 ||
@@ -345,8 +346,8 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         } else {
             // Stray votes that make no cluster still forbid Clear: a far drop seen over too few pixels is
             // Unknown, never Clear.
-            const bool stray = kindVotes_[slot0] >= static_cast<std::uint32_t>(config_.minSupport) ||
-                               kindVotes_[slot0 + 1] >= static_cast<std::uint32_t>(config_.minDropSupport);
+            const bool stray = kindVotes_[slot0] >= static_cast<std::uint32_t>(config_.maxStrayVotes) ||
+                               kindVotes_[slot0 + 1] >= static_cast<std::uint32_t>(config_.maxStrayDropVotes);
             const auto pixels = static_cast<float>(pixelsPerSector_[static_cast<std::size_t>(s)]);
             const float groundFraction =
                 pixels > 0.0F ? static_cast<float>(groundVotes_[static_cast<std::size_t>(s)]) / pixels : 0.0F;

@@ -257,6 +257,22 @@ TEST(EvalScoring, MissedWhenNeitherTheSectorNorItsNeighboursAreObstacle)
     EXPECT_FALSE(sut.detected);
 }
 
+TEST(EvalScoring, ClearWhereTheTruthHasANearObstacleIsCountedAsFalseClear)
+{
+    const auto gt = sectorsOf({{SectorState::Obstacle, 4.0F},
+                               {SectorState::Obstacle, 4.0F},
+                               {SectorState::Obstacle, 11.0F},
+                               {SectorState::Clear, kInf}});
+    const auto detected = sectorsOf({{SectorState::Obstacle, 4.0F},
+                                     {SectorState::Clear, kInf},   // false Clear: an obstacle at 4 m
+                                     {SectorState::Clear, kInf},   // beyond 10 m: not counted
+                                     {SectorState::Clear, kInf}}); // right
+
+    const ugv::tool::ObstacleFrameScore sut = ugv::tool::scoreObstacleFrame(detected, gt);
+
+    EXPECT_EQ(sut.falseClearSectors, 1);
+}
+
 TEST(EvalScoring, GapAndRedBlueCounts)
 {
     const auto gt = sectorsOf({{SectorState::Obstacle, 3.0F},

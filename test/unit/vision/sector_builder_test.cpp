@@ -275,15 +275,22 @@ TEST(SectorBuilder, IsolatedOutliersNeitherCreateNorMoveObstacles)
     const auto nearValue = static_cast<std::int16_t>(std::lround(kFb / 1.0 * 16.0)); // points at 1 m, high up
     for (int k = 0; k < 8; ++k) {
         d16.at<std::int16_t>(20 + 10 * k, 320) = nearValue; // in the obstacle's sector
-        d16.at<std::int16_t>(20 + 10 * k, 100) = nearValue; // in a clear sector
+    }
+    for (int k = 0; k < 4; ++k) {
+        d16.at<std::int16_t>(20 + 10 * k, 100) = nearValue; // a few in a clear sector
+    }
+    for (int k = 0; k < 8; ++k) {
+        d16.at<std::int16_t>(20 + 10 * k, 560) = nearValue; // maxStrayVotes in another one
     }
 
     ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
 
     const ObstacleSectors& s = sut.sectors();
     EXPECT_NEAR(s.sectors[static_cast<std::size_t>(sectorOf(s, 0.0))].rangeM, 4.0, 0.04);
-    const double bearing100 = std::atan2(kProjection.cx - 100.0, kProjection.fx) * 180.0 / 3.14159265358979;
-    EXPECT_EQ(s.sectors[static_cast<std::size_t>(sectorOf(s, bearing100))].state, SectorState::Clear);
+    const auto bearingOf = [](double u) { return std::atan2(kProjection.cx - u, kProjection.fx) * 180.0 / M_PI; };
+    EXPECT_EQ(s.sectors[static_cast<std::size_t>(sectorOf(s, bearingOf(100.0)))].state, SectorState::Clear);
+    // As many stray votes as a mesh fence's wires give: not an obstacle, but no longer Clear either.
+    EXPECT_EQ(s.sectors[static_cast<std::size_t>(sectorOf(s, bearingOf(560.0)))].state, SectorState::Unknown);
 }
 
 TEST(SectorBuilder, NoValidDisparityIsUnknownNeverClear)

@@ -21,7 +21,8 @@
 /// (robust to single outliers).
 /// Sector state: Obstacle (nearer kind wins) when a cluster exists; else Clear (range +inf) when the ground
 /// support is >= clearGroundFraction of the sector's analysed pixels, at least minClearFarVotes of those ground
-/// pixels lie at or beyond clearRangeM (the ground is seen to be free that far) and the stray votes are < minSupport;
+/// pixels lie at or beyond clearRangeM (the ground is seen to be free that far) and the stray votes (outside any
+/// cluster) are below maxStrayVotes (positive: a mesh fence's few wire pixels) and maxStrayDropVotes (negative);
 /// else Unknown (no texture, invalid disparity, too few measurements, obstacles beyond maxRangeM): never a
 /// false Clear. danger = classify(state, range, dangerDistanceM, cautionDistanceM).
 ///
@@ -42,21 +43,25 @@ namespace ugv::vision {
 
 struct SectorBuilderConfig {
     int sectorCount = 64;
-    float minHeightM = 0.10F;          ///< [m] positive obstacle points are higher than this
-    float minDepthM = 0.10F;           ///< [m] negative obstacle points are deeper than this
-    float minDropDepthM = 0.03F;       ///< [m] ... or deeper than this when the ground they hide is long:
-    float minDropGapM = 0.25F;         ///< [m] the ray to the point crosses the ground this far before it
-                                       ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
-                                       ///< view beyond 4 m, a few centimetres below the ground, behind a gap
-    float maxRangeM = 12.0F;           ///< [m] points farther away are ignored (disparity too coarse)
-    float rangeBinM = 0.02F;           ///< [m] histogram resolution
-    int minSupport = 40;               ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
-                                       ///< mismatch blobs on empty ground through: 23..33 votes measured)
-    float dropSupportRangeM = 5.0F;    ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
-    int minDropSupport = 20;           ///< ... but at least this many votes
-    float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
-    float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
-    float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
+    float minHeightM = 0.10F;       ///< [m] positive obstacle points are higher than this
+    float minDepthM = 0.10F;        ///< [m] negative obstacle points are deeper than this
+    float minDropDepthM = 0.03F;    ///< [m] ... or deeper than this when the ground they hide is long:
+    float minDropGapM = 0.25F;      ///< [m] the ray to the point crosses the ground this far before it
+                                    ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
+                                    ///< view beyond 4 m, a few centimetres below the ground, behind a gap
+    float maxRangeM = 12.0F;        ///< [m] points farther away are ignored (disparity too coarse)
+    float rangeBinM = 0.02F;        ///< [m] histogram resolution
+    int minSupport = 40;            ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
+                                    ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float dropSupportRangeM = 5.0F; ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
+    int minDropSupport = 20;        ///< ... but at least this many votes
+    int maxStrayVotes = 8;          ///< positive votes outside any cluster at or above which a sector cannot be Clear
+                                    ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
+    int maxStrayDropVotes = 20;     ///< the same for negative votes (far ground is noisier below the plane: 10 would
+                                    ///< turn 52 -> 38 sectors of empty ground Unknown)
+    float clusterWindowM = 0.15F;   ///< [m] cluster window, fixed part
+    float clusterFraction = 0.05F;  ///< cluster window, part proportional to the range
+    float rangePercentile = 0.20F;  ///< quantile of the cluster's votes reported as the range, [0, 1)
     float dropRangePercentile = 0.05F; ///< the same for negative votes: their rim ranges spread from the rim
                                        ///< to the far wall (only the nearest are the rim)
     float clearGroundFraction = 0.25F; ///< ground support (fraction of the sector's pixels) needed for Clear
