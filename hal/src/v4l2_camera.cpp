@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <utility>
 
 #include "ugv/hal/sys_call.hpp"
@@ -245,6 +246,14 @@ GrabStatus V4l2StereoCamera::dequeue(Device& device, int timeoutMs) noexcept
     }
     if (buf.index >= static_cast<std::uint32_t>(device.buffers)) {
         return GrabStatus::BadFrame; // a driver bug: nothing to give back
+    }
+    if ((buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) != V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC) {
+        // A driver without monotonic stamps (or with unknown ones): the dequeue time is the best we have, on the
+        // clock the rest of the service uses.
+        timespec now{};
+        ::clock_gettime(CLOCK_MONOTONIC, &now);
+        buf.timestamp.tv_sec = now.tv_sec;
+        buf.timestamp.tv_usec = now.tv_nsec / 1000;
     }
     device.held = static_cast<int>(buf.index);
     if (device.haveSequence && buf.sequence > device.lastSequence + 1) {

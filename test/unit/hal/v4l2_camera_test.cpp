@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <deque>
 #include <map>
 #include <string>
@@ -28,6 +29,7 @@ struct Pending {
     std::uint8_t value = 0;
     std::uint32_t sequence = 0;
     std::int64_t stampUs = 0;
+    bool monotonic = true; ///< the driver's V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
 };
 
 struct FakeDevice {
@@ -178,7 +180,7 @@ private:
             buf->timestamp.tv_sec = p.stampUs / 1'000'000;
             buf->timestamp.tv_usec = p.stampUs % 1'000'000;
             buf->bytesused = static_cast<std::uint32_t>(pixels.size());
-            buf->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+            buf->flags = p.monotonic ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC : V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN;
             return 0;
         }
         default:
@@ -246,6 +248,24 @@ TEST(V4l2Camera, TwoDevicesDeliverGreyPairsWithDriverStampsAndSequences)
     EXPECT_EQ(f.left.at(0, 0), 11);
     EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Timeout); // nothing more
     EXPECT_EQ((*camera)->stats().frames, 2U);
+}
+
+TEST(V4l2Camera, StampsThatAreNotMonotonicAreReplacedByTheDequeueTime)
+{
+    FakeV4l2 fake;
+    FakeDevice& d = fake.add("/dev/video0");
+    d.pending = {{1, 0, 42, false}}; // 42 us on an unknown clock
+    V4l2Options o = stereo(V4l2Format::Grey);
+    o.rightDevice.clear();
+    auto camera = V4l2StereoCamera::open(o, fake.ops());
+    ASSERT_TRUE(camera.has_value());
+    timespec before{};
+    ::clock_gettime(CLOCK_MONOTONIC, &before);
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    const std::int64_t beforeNs = static_cast<std::int64_t>(before.tv_sec) * 1'000'000'000 + before.tv_nsec;
+    EXPECT_GE(f.leftStampNs, beforeNs - 1000); // microsecond resolution
+    EXPECT_NE(f.leftStampNs, 42'000);
 }
 
 TEST(V4l2Camera, SideBySideDeviceIsSplitIntoLeftAndRight)
