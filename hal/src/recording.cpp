@@ -320,40 +320,20 @@ long RecordingReader::readFully(std::byte* out, std::size_t size) noexcept
 
 ReadStatus RecordingReader::next() noexcept
 {
-    trailing_ = 0;
     for (;;) {
-        if (offset_ >= fileBytes_) {
-            return ReadStatus::End;
+        // peek() handles the end, a cut-off tail and damaged prefixes; here the whole record is read and checked.
+        const ReadStatus status = peek();
+        if (status != ReadStatus::Frame) {
+            return status;
         }
         RecordPrefix prefix;
-        const long got = readFully(reinterpret_cast<std::byte*>(&prefix), sizeof(prefix));
-        if (got < 0) {
+        if (readFully(reinterpret_cast<std::byte*>(&prefix), sizeof(prefix)) != static_cast<long>(sizeof(prefix))) {
             return ReadStatus::IoError;
-        }
-        if (static_cast<std::size_t>(got) < sizeof(prefix)) {
-            trailing_ = fileBytes_ - offset_;
-            return ReadStatus::Truncated;
-        }
-        if (prefix.magic != kRecordMagic || prefix.frameBytes != frameBytes_) {
-            // A damaged prefix: look for the next record magic, one byte further on.
-            ++corrupt_;
-            if (!resync()) {
-                trailing_ = fileBytes_ - offset_;
-                offset_ = fileBytes_;
-                return ReadStatus::Truncated;
-            }
-            continue;
         }
         offset_ += sizeof(prefix);
-        const long body = readFully(frame_.data(), frameBytes_);
-        if (body < 0) {
+        if (readFully(frame_.data(), frameBytes_) != static_cast<long>(frameBytes_)) {
             offset_ -= sizeof(prefix);
-            return ReadStatus::IoError;
-        }
-        if (static_cast<std::size_t>(body) < frameBytes_) {
-            trailing_ = sizeof(prefix) + static_cast<std::uint64_t>(body);
-            offset_ = fileBytes_;
-            return ReadStatus::Truncated;
+            return ReadStatus::IoError; // peek() saw the whole record in the file
         }
         offset_ += frameBytes_;
         FrameHeader frameHeader;
