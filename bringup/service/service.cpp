@@ -172,11 +172,12 @@ bool Service::finished() const noexcept
     if (!cameraEnded_.load(std::memory_order_acquire)) {
         return false;
     }
-    // The last pair captured was processed (the queue of one always ends with it) and everything processed was
-    // published (or lost to a full hand-over ring, counted).
-    const std::uint64_t captured = captured_.load(std::memory_order_acquire);
-    const bool lastSeen = captured == 0 || lastProcessedSeq_.load(std::memory_order_acquire) ==
-                                               lastCapturedSeq_.load(std::memory_order_acquire);
+    // The last pair put into the ring was processed (the queue of one always ends with it) and everything
+    // processed was published (or lost to a full hand-over ring, counted). A pair the ring refused never
+    // reaches vision.
+    const std::uint64_t inRing = inRing_.load(std::memory_order_acquire);
+    const bool lastSeen = inRing == 0 || lastProcessedSeq_.load(std::memory_order_acquire) ==
+                                             lastCapturedSeq_.load(std::memory_order_acquire);
     return lastSeen &&
            published + handoverFull_.load(std::memory_order_acquire) >= processed_.load(std::memory_order_acquire);
 }
@@ -228,11 +229,13 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
             cameraGaps_.store(stats.sequenceGaps, std::memory_order_relaxed);
             // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written
             // before the frame becomes visible to the vision task.
-            if (!framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
-                                     &ringStampNs_[frame.sequence % kPublishSlots])) {
-                loanFailures_.store(framesOut_->loanFailures(), std::memory_order_relaxed);
+            if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
+                                    &ringStampNs_[frame.sequence % kPublishSlots])) {
+                lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
+                inRing_.fetch_add(1, std::memory_order_relaxed);
+            } else {
+                loanFailures_.store(framesOut_->loanFailures(), std::memory_order_relaxed); // e.g. a wrong size
             }
-            lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
             captured_.fetch_add(1, std::memory_order_release);
             probeSteady("capture", ++frames, steady);
             break;

@@ -177,7 +177,8 @@ private:
     std::atomic<std::uint64_t> loanFailures_{0};                 // capture
     std::atomic<std::uint8_t> cameraState_{0};                   // capture (ipc::CameraState)
     std::atomic<bool> cameraEnded_{false};                       // capture
-    std::atomic<std::uint64_t> lastCapturedSeq_{0};              // capture
+    std::atomic<std::uint64_t> lastCapturedSeq_{0};              // capture: the last pair published into the ring
+    std::atomic<std::uint64_t> inRing_{0};                       // capture: pairs published into the ring
     std::atomic<std::uint64_t> lastProcessedSeq_{0};             // vision
     std::atomic<std::uint64_t> processed_{0};                    // vision
     std::atomic<std::uint64_t> dropped_{0};                      // vision
