@@ -137,7 +137,7 @@ TEST_F(IceoryxRings, SteadyStateHandOverAllocatesNothing)
     ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
     vision->release(frame);
 
-    const ugv::test::AllocationScope scope;
+    const ugv::test::ThreadAllocationScope scope; // this thread: RouDi's own threads are not the frame path
     int frames = 0;
     for (int k = 1; k <= 300; ++k) {
         publisher->publish(static_cast<std::uint64_t>(k), k, k, left_.view(), right_.view());
