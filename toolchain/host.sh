@@ -19,6 +19,7 @@ packages=(
     libsystemd-dev         # sd_notify: READY and the watchdog of the service unit
     libcamera-dev          # the libcamera camera backend
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
+    procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
 )
 
 as_root() {

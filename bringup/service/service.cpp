@@ -324,13 +324,8 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             out.sectors.captureStampNs = h.leftStampNs;
             degraded_.fetch_add(1, std::memory_order_relaxed);
         }
-        out.stampNs = {h.leftStampNs,
-                       ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire),
-                       takenNs,
-                       rectifiedNs,
-                       detectedNs,
-                       0,
-                       0};
+        out.stampNs = {h.leftStampNs, ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire), takenNs,
+                       rectifiedNs, detectedNs};
         framesIn_->release(frame);
         if (toPublish_.tryPush(out)) {
             ::sem_post(&published_);

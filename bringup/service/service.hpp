@@ -150,7 +150,7 @@ private:
 
     struct Handover {
         ObstacleSectors sectors;
-        std::array<std::int64_t, kStageCount + 1> stampNs{}; ///< exposure, ring, taken, rectified, detected
+        std::array<std::int64_t, 5> stampNs{}; ///< exposure, ring publish, taken, rectified, detected [ns]
     };
     static constexpr std::size_t kPublishSlots = 64; ///< capture's ring-publish time per sequence % slots
 
