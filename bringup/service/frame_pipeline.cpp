@@ -19,6 +19,8 @@ std::int64_t nowNs() noexcept
 vision::MatcherMode matcherMode(bringup::MatcherMode mode)
 {
     switch (mode) {
+    case bringup::MatcherMode::CensusSgm:
+        return vision::MatcherMode::CensusSgm;
     case bringup::MatcherMode::Sgbm:
         return vision::MatcherMode::Sgbm;
     case bringup::MatcherMode::Sgbm3Way:
@@ -26,7 +28,7 @@ vision::MatcherMode matcherMode(bringup::MatcherMode mode)
     case bringup::MatcherMode::Hh4:
         return vision::MatcherMode::Hh4;
     }
-    return vision::MatcherMode::Sgbm3Way;
+    return vision::MatcherMode::CensusSgm;
 }
 
 } // namespace

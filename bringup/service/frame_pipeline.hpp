@@ -4,8 +4,9 @@
 /// The vision task's work on one stereo pair: ROI rectification then the obstacle detector, built once from the
 /// calibration and the service config. Shared by ugvsensed and `ugvsense bench`.
 ///
-/// Thread-safety: thread-bound. RT-safe: process() allocates nothing of ours (OpenCV's StereoSGBM::compute inside
-/// the detector allocates internally: see vision/roi_matcher.hpp); create() no.
+/// Thread-safety: thread-bound. RT-safe: process() allocates nothing with the default matcher (census SGM); with
+/// stereo.mode an OpenCV mode, StereoSGBM::compute inside the detector allocates (vision/roi_matcher.hpp);
+/// create() no.
 
 #include <cstdint>
 #include <memory>

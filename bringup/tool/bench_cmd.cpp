@@ -210,7 +210,8 @@ int runBench(int argc, char** argv)
         return fail(run.error());
     }
     std::printf("%s", service::formatReport(run->result.report, run->result.extras).c_str());
-    std::printf("allocations after warm-up by task: %s (vision: OpenCV's StereoSGBM::compute, see README)\n",
+    std::printf("allocations after warm-up by task: %s (0 expected; with stereo.mode an OpenCV mode, vision "
+                "counts StereoSGBM::compute's own, see vision/roi_matcher.hpp)\n",
                 run->allocationsByTask.c_str());
     if (args.has("json")) {
         std::ofstream out(args.get("json"));

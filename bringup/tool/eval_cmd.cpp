@@ -65,6 +65,7 @@ struct SimOptions {
     int emptySeeds = 10;
     std::vector<double> doorwayRanges;  ///< [m]
     std::vector<double> overhangRanges; ///< [m]
+    vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
 };
 
 const char* textureName(sim::GroundTexture t)
@@ -85,13 +86,14 @@ const char* textureName(sim::GroundTexture t)
 /// One detector for the default rig (level, 0.59 m), fed with rendered frames; the ground prior is the rig mount.
 class SimDetector {
 public:
-    static Result<SimDetector, Error> create()
+    static Result<SimDetector, Error> create(vision::MatcherMode matcher)
     {
         const sim::Rig rig;
         vision::StereoCalibration calib = vision::makeRectifiedCalibration(
             cv::Size(rig.width, rig.height), rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM);
         calib.mount = vision::Mount{rig.heightM, rig.pitchDeg, rig.rollDeg};
-        const vision::DetectorConfig config = detectorConfig(DetectionOptions{});
+        vision::DetectorConfig config = detectorConfig(DetectionOptions{});
+        config.matcher.mode = matcher;
         vision::RectifierConfig rectConfig;
         rectConfig.roiMarginRows = config.marginRows;
         auto rectifier = vision::Rectifier::create(calib, rectConfig);
@@ -142,7 +144,7 @@ bool honoursBearing(const std::string& type)
 /// @return 0 when everything ran, 1 on a render/detector failure.
 int runSimSuite(const SimOptions& o, std::ostringstream& json)
 {
-    auto detectorResult = SimDetector::create();
+    auto detectorResult = SimDetector::create(o.matcher);
     if (!detectorResult) {
         std::cerr << "ugvsense eval: error: " << detectorResult.error().message() << '\n';
         return 1;
@@ -347,8 +349,8 @@ constexpr StereoSet kAloe = {"aloe", "aloe", "aloeL.jpg", "aloeR.jpg", "aloeGT.p
 constexpr int kDisparityMultiple = 16;
 
 /// Scores both matchers on one pair; false (with a message) when files are missing or unreadable.
-bool evalPair(const std::filesystem::path& root, const StereoSet& set, DisparityScore& ours, DisparityScore& opencv,
-              int& numDisparities)
+bool evalPair(const std::filesystem::path& root, const StereoSet& set, vision::MatcherMode mode, DisparityScore& ours,
+              DisparityScore& opencv, int& numDisparities)
 {
     const std::filesystem::path dir = root / set.folder;
     cv::Mat left, right, gt8;
@@ -372,6 +374,7 @@ bool evalPair(const std::filesystem::path& root, const StereoSet& set, Disparity
 
     vision::RoiMatcherConfig config; // our tuned defaults, only the search range adapted to the data set
     config.numDisparities = numDisparities;
+    config.mode = mode;
     auto matcher = vision::RoiMatcher::create(config, left.size());
     if (!matcher || matcher->match(viewOf(left), viewOf(right)) != vision::MatchStatus::Ok) {
         std::cerr << "ugvsense eval: error: our matcher failed on " << set.name << '\n';
@@ -395,7 +398,7 @@ bool evalPair(const std::filesystem::path& root, const StereoSet& set, Disparity
     return true;
 }
 
-int runMiddlebury(const std::filesystem::path& root, std::ostringstream& json)
+int runMiddlebury(const std::filesystem::path& root, vision::MatcherMode matcher, std::ostringstream& json)
 {
     std::vector<StereoSet> sets(std::begin(kMiddlebury), std::end(kMiddlebury));
     std::error_code ec;
@@ -413,7 +416,7 @@ int runMiddlebury(const std::filesystem::path& root, std::ostringstream& json)
         DisparityScore ours;
         DisparityScore opencv;
         int nd = 0;
-        if (!evalPair(root, sets[i], ours, opencv, nd)) {
+        if (!evalPair(root, sets[i], matcher, ours, opencv, nd)) {
             return 1;
         }
         const bool ok = ours.bad2All <= opencv.bad2All;
@@ -442,12 +445,13 @@ int runEval(int argc, char** argv)
 {
     Args args(
         "eval",
-        "[--sim] [--middlebury] [--quick] [--frames-per-case N] [--json OUT] [--data DIR] "
+        "[--sim] [--middlebury] [--quick] [--frames-per-case N] [--matcher MODE] [--json OUT] [--data DIR] "
         "[--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
          {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
          {"quick", "", "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0)", false},
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
+         {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
          {"json", "OUT", "write all figures as JSON", false},
          {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
          {"skip-missing", "", "exit 77 (skipped) when the Middlebury data are missing", false}});
@@ -470,6 +474,20 @@ int runEval(int argc, char** argv)
     if (!seeds || *seeds != std::floor(*seeds)) {
         return reportUsageError("eval", seeds ? Error{"ugvsense eval --frames-per-case", "not a whole number", ""}
                                               : seeds.error());
+    }
+    vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
+    if (args.has("matcher")) {
+        const std::string name = args.get("matcher");
+        if (name == "sgbm_3way") {
+            matcher = vision::MatcherMode::Sgbm3Way;
+        } else if (name == "sgbm") {
+            matcher = vision::MatcherMode::Sgbm;
+        } else if (name == "hh4") {
+            matcher = vision::MatcherMode::Hh4;
+        } else if (name != "census_sgm") {
+            return reportUsageError("eval", Error{"ugvsense eval --matcher", "unknown mode '" + name + "'",
+                                                  "use census_sgm, sgbm_3way, sgbm or hh4"});
+        }
     }
     std::filesystem::path root = "../shared/data";
     if (args.has("data")) {
@@ -507,13 +525,14 @@ int runEval(int argc, char** argv)
             o.overhangRanges = {2.0, 3.0, 4.0};
         }
         o.seeds = static_cast<int>(*seeds);
+        o.matcher = matcher;
         if (const int rc = runSimSuite(o, json); rc != 0) {
             return rc;
         }
     }
     if (args.has("middlebury")) {
         json << (args.has("sim") ? ",\n" : "");
-        if (const int rc = runMiddlebury(root, json); rc != 0) {
+        if (const int rc = runMiddlebury(root, matcher, json); rc != 0) {
             return rc;
         }
     }

@@ -1,43 +1,16 @@
 #pragma once
 
-// Universal-intrinsics kernel of the ground warp (included by ground_warp.cpp only).
-//
-// OpenCV 4.6 (Debian 12) predates the function-style API (v_add, v_mul, VTraits<T>::vlanes(),
-// CV_SIMD_SCALABLE) that STYLE.md asks for; the small shim below provides exactly those names on top of the
-// 4.6 operators so that the kernel is written in the new style and compiles unchanged on OpenCV >= 4.7.
+// Universal-intrinsics kernel of the ground warp (included by ground_warp.cpp only), in the function style
+// of OpenCV >= 4.7 through simd_shim.hpp.
 
 #include <cstdint>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/hal/intrin.hpp>
 
-#ifndef CV_SIMD_SCALABLE
-#define CV_SIMD_SCALABLE 0
-#endif
+#include "simd_shim.hpp"
 
 namespace ugv::vision::simd {
-
-#if (CV_VERSION_MAJOR == 4 && CV_VERSION_MINOR < 7)
-template <class V>
-struct VTraits {
-    static constexpr int vlanes() noexcept { return V::nlanes; }
-    static constexpr int max_nlanes = V::nlanes; // NOLINT(readability-identifier-naming): OpenCV's name
-};
-template <class V>
-inline V v_add(const V& a, const V& b) { return a + b; }
-template <class V>
-inline V v_sub(const V& a, const V& b) { return a - b; }
-template <class V>
-inline V v_mul(const V& a, const V& b) { return a * b; }
-template <class V>
-inline V v_and(const V& a, const V& b) { return a & b; }
-#else
-using cv::v_add;
-using cv::v_and;
-using cv::v_mul;
-using cv::v_sub;
-using cv::VTraits;
-#endif
 
 #if (CV_SIMD || CV_SIMD_SCALABLE)
 

@@ -17,6 +17,7 @@ Error configError(const std::string& what)
 int toOpenCvMode(MatcherMode mode) noexcept
 {
     switch (mode) {
+    case MatcherMode::CensusSgm:
     case MatcherMode::Sgbm:
         return cv::StereoSGBM::MODE_SGBM;
     case MatcherMode::Sgbm3Way:
@@ -63,14 +64,28 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
     sut.pad_ = config.padLeft ? config.numDisparities : 0;
     const int area = config.blockSize * config.blockSize;
     try {
-        sut.sgbm_ = cv::StereoSGBM::create(0, config.numDisparities, config.blockSize, 8 * area, 32 * area,
-                                           config.disp12MaxDiff, config.preFilterCap, config.uniquenessRatio,
-                                           config.speckleWindowSize, config.speckleRange, toOpenCvMode(config.mode));
         const cv::Size padded(roiSize.width + sut.pad_, roiSize.height);
         sut.padLeft_ = cv::Mat::zeros(padded, CV_8UC1);
         sut.padRight_ = cv::Mat::zeros(padded, CV_8UC1);
         sut.disp16Padded_ = cv::Mat(padded, CV_16SC1, cv::Scalar(-kScale));
         sut.disp16_ = sut.disp16Padded_(cv::Rect(sut.pad_, 0, roiSize.width, roiSize.height));
+        if (config.mode == MatcherMode::CensusSgm) {
+            CensusSgmConfig census = config.census;
+            census.numDisparities = config.numDisparities;
+            census.uniquenessRatio = config.uniquenessRatio;
+            census.disp12MaxDiff = config.disp12MaxDiff;
+            census.speckleWindowSize = config.speckleWindowSize;
+            census.speckleRange = config.speckleRange;
+            auto matcher = CensusSgm::create(census, padded);
+            if (!matcher) {
+                return Unexpected(matcher.error());
+            }
+            sut.census_.emplace(std::move(matcher).value());
+            return sut;
+        }
+        sut.sgbm_ = cv::StereoSGBM::create(0, config.numDisparities, config.blockSize, 8 * area, 32 * area,
+                                           config.disp12MaxDiff, config.preFilterCap, config.uniquenessRatio,
+                                           config.speckleWindowSize, config.speckleRange, toOpenCvMode(config.mode));
         // Warm-up: the first compute() sizes OpenCV's internal buffers.
         sut.sgbm_->compute(sut.padLeft_, sut.padRight_, sut.disp16Padded_);
     } catch (const cv::Exception& e) {
@@ -95,6 +110,16 @@ MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right) noe
         cv::Mat rightDst = padRight_(image);
         header(left).copyTo(leftDst);
         header(right).copyTo(rightDst);
+        if (census_) {
+            const auto view = [](const cv::Mat& m) {
+                return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+            };
+            if (!census_->match(view(padLeft_), view(padRight_), disp16Padded_)) {
+                disp16Padded_.setTo(-kScale);
+                return MatchStatus::MatcherFailed;
+            }
+            return MatchStatus::Ok;
+        }
         sgbm_->compute(padLeft_, padRight_, disp16Padded_);
     } catch (...) {
         disp16Padded_.setTo(-kScale);

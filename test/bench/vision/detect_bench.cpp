@@ -1,6 +1,7 @@
-// bench-detect: the per-frame obstacle pipeline (ObstacleDetector::process) against OpenCV StereoSGBM on the full
-// 640x480 frame (the baselines, same settings, MODE_SGBM and MODE_SGBM_3WAY, measured in the same run), the ROI matcher
-// alone and the sector builder alone. Input: one ugvsense sim pair (pole at 4 m, asphalt, seed 0), 128 disparities,
+// bench-detect: the per-frame obstacle pipeline (ObstacleDetector::process, with our census SGM and with OpenCV's
+// SGBM_3WAY) against OpenCV StereoSGBM on the full 640x480 frame (the baselines, same settings, MODE_SGBM and
+// MODE_SGBM_3WAY, measured in the same run), our census SGM on the full frame, the ROI matcher alone (each mode)
+// and the sector builder alone. Input: one ugvsense sim pair (pole at 4 m, asphalt, seed 0), 128 disparities,
 // block 5. Report ratios against BM_FullFrameSgbmBaseline (shared, noisy machines).
 #include <algorithm>
 #include <chrono>
@@ -15,6 +16,7 @@
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
 #include "ugv/rt/latency_histogram.hpp"
+#include "ugv/vision/census_sgm.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/obstacle_verifier.hpp"
 #include "ugv/vision/roi_matcher.hpp"
@@ -80,11 +82,31 @@ void BM_FullFrameSgbmBaseline(benchmark::State& state)
     state.SetBytesProcessed(state.iterations() * 2 * 640 * 480);
 }
 
+/// Our census SGM on the full frame: the matcher-for-matcher comparison with BM_FullFrameSgbmBaseline.
+void BM_FullFrameCensusSgm(benchmark::State& state)
+{
+    auto sut = CensusSgm::create(CensusSgmConfig{}, cv::Size(640, 480)).value();
+    cv::Mat disparity(480, 640, CV_16SC1);
+    const auto view = [](const cv::Mat& m) {
+        return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+    };
+    FrameTimes times;
+    for (auto _ : state) {
+        times.start();
+        benchmark::DoNotOptimize(sut.match(view(frame().left), view(frame().right), disparity));
+        times.stop();
+    }
+    times.report(state);
+    state.SetBytesProcessed(state.iterations() * 2 * 640 * 480);
+}
+
+/// state.range(0): the MatcherMode (0 census SGM, the default; 2 OpenCV SGBM_3WAY).
 void BM_DetectorPipeline(benchmark::State& state)
 {
+    DetectorConfig config;
+    config.matcher.mode = static_cast<MatcherMode>(state.range(0));
     auto sut =
-        ObstacleDetector::create(DetectorConfig{}, kProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0}))
-            .value();
+        ObstacleDetector::create(config, kProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0})).value();
     std::uint64_t sequence = 0;
     FrameTimes times;
     for (auto _ : state) {
@@ -97,9 +119,12 @@ void BM_DetectorPipeline(benchmark::State& state)
     state.SetBytesProcessed(state.iterations() * 2 * kRoi.width * kRoi.height);
 }
 
+/// state.range(0): the MatcherMode.
 void BM_RoiMatcher(benchmark::State& state)
 {
-    auto sut = RoiMatcher::create(RoiMatcherConfig{}, cv::Size(kRoi.width, kRoi.height)).value();
+    RoiMatcherConfig config;
+    config.mode = static_cast<MatcherMode>(state.range(0));
+    auto sut = RoiMatcher::create(config, cv::Size(kRoi.width, kRoi.height)).value();
     for (auto _ : state) {
         benchmark::DoNotOptimize(sut.match(roiView(frame().left), roiView(frame().right)));
     }
@@ -138,11 +163,19 @@ BENCHMARK(BM_FullFrameSgbmBaseline)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3)
     ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
+BENCHMARK(BM_FullFrameCensusSgm)->Unit(benchmark::kMillisecond)->Repetitions(3);
 BENCHMARK(BM_DetectorPipeline)
+    ->Arg(static_cast<int>(MatcherMode::CensusSgm))
+    ->Arg(static_cast<int>(MatcherMode::Sgbm3Way))
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3)
     ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
-BENCHMARK(BM_RoiMatcher)->Unit(benchmark::kMillisecond)->Repetitions(3);
+BENCHMARK(BM_RoiMatcher)
+    ->Arg(static_cast<int>(MatcherMode::CensusSgm))
+    ->Arg(static_cast<int>(MatcherMode::Sgbm))
+    ->Arg(static_cast<int>(MatcherMode::Sgbm3Way))
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(3);
 BENCHMARK(BM_SectorBuilder)->Unit(benchmark::kMillisecond)->Repetitions(3);
 BENCHMARK(BM_ObstacleVerifier)->Unit(benchmark::kMillisecond)->Repetitions(3);
 

@@ -228,41 +228,47 @@ TEST(ObstacleDetector, WrongSizeGivesErrorStatusAndAllUnknown)
     EXPECT_EQ(sut.status(), DetectorStatus::WrongInputSize);
 }
 
-/// 300 frames: everything but cv::StereoSGBM::compute() is allocation-free. The detector's count per frame must
-/// equal the bare StereoSGBM count measured on the same frames (documented in roi_matcher.hpp).
-TEST(ObstacleDetector, ThreeHundredFramesAllocateOnlyInsideStereoSgbm)
+/// 300 frames through the default detector (census SGM): zero allocations. With an OpenCV mode, everything
+/// but cv::StereoSGBM::compute() is allocation-free: the detector's count equals the bare StereoSGBM count on
+/// the same frames (documented in roi_matcher.hpp).
+TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
 {
     const auto a = renderScene("pole", 3.0, 5.0);
     const auto b = renderScene("box", 4.0, -8.0);
-    auto sut = makeDetector();
-    auto matcher = RoiMatcher::create(DetectorConfig{}.matcher, cv::Size(kRoi.width, kRoi.height)).value();
-    (void)sut.process(roiView(a.left), roiView(a.right), 0U, 0);
-    (void)matcher.match(roiView(a.left), roiView(a.right));
     constexpr int kFrames = 300;
-
-    std::size_t detectorAllocations = 0;
-    std::size_t matcherAllocations = 0;
-    {
+    const auto countFrames = [&](auto&& step) {
         const test::AllocationScope scope;
         for (int i = 0; i < kFrames; ++i) {
             const auto& frame = i % 2 == 0 ? a : b;
+            step(frame, i);
+        }
+        return scope.count();
+    };
+    for (const MatcherMode mode : {MatcherMode::CensusSgm, MatcherMode::Sgbm3Way}) {
+        DetectorConfig config;
+        config.matcher.mode = mode;
+        auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
+        auto matcher = RoiMatcher::create(config.matcher, cv::Size(kRoi.width, kRoi.height)).value();
+        (void)sut.process(roiView(a.left), roiView(a.right), 0U, 0);
+        (void)matcher.match(roiView(a.left), roiView(a.right));
+
+        const std::size_t detectorAllocations = countFrames([&](const sim::RenderResult& frame, int i) {
             (void)sut.process(roiView(frame.left), roiView(frame.right), static_cast<std::uint64_t>(i), i);
-        }
-        detectorAllocations = scope.count();
-    }
-    {
-        const test::AllocationScope scope;
-        for (int i = 0; i < kFrames; ++i) {
-            const auto& frame = i % 2 == 0 ? a : b;
+        });
+        const std::size_t matcherAllocations = countFrames([&](const sim::RenderResult& frame, int) {
             (void)matcher.match(roiView(frame.left), roiView(frame.right));
-        }
-        matcherAllocations = scope.count();
-    }
+        });
 
-    std::printf("[ MEASURED ] %d frames: detector %zu allocations (%.1f per frame), bare StereoSGBM %zu\n", kFrames,
-                detectorAllocations, static_cast<double>(detectorAllocations) / kFrames, matcherAllocations);
-    EXPECT_EQ(sut.status(), DetectorStatus::Ok);
-    EXPECT_EQ(detectorAllocations, matcherAllocations);
+        std::printf("[ MEASURED ] matcher mode %d, %d frames: detector %zu allocations (%.1f per frame), bare "
+                    "matcher %zu\n",
+                    static_cast<int>(mode), kFrames, detectorAllocations,
+                    static_cast<double>(detectorAllocations) / kFrames, matcherAllocations);
+        EXPECT_EQ(sut.status(), DetectorStatus::Ok);
+        EXPECT_EQ(detectorAllocations, matcherAllocations);
+        if (mode == MatcherMode::CensusSgm) {
+            EXPECT_EQ(detectorAllocations, 0U);
+        }
+    }
 }
 
 } // namespace

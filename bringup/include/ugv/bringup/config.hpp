@@ -26,7 +26,7 @@ enum class ReplayPace { Recorded, Fixed, Fastest };
 enum class PixelFormatChoice { Yuyv, Grey };
 enum class OverloadChoice { Degrade, Drop };
 enum class DetectorMode { Stereo, Colour, Both };
-enum class MatcherMode { Sgbm, Sgbm3Way, Hh4 };
+enum class MatcherMode { CensusSgm, Sgbm, Sgbm3Way, Hh4 };
 
 struct CameraConfig {
     CameraBackend backend = CameraBackend::Replay;
@@ -48,9 +48,9 @@ struct RoiConfig {
 };
 
 struct StereoConfig {
-    MatcherMode mode = MatcherMode::Sgbm3Way; ///< the detector's default (vision/roi_matcher.hpp)
-    int numDisparities = 128;                 ///< [px] multiple of 16
-    int blockSize = 5;                        ///< [px] odd
+    MatcherMode mode = MatcherMode::CensusSgm; ///< the detector's default (vision/roi_matcher.hpp)
+    int numDisparities = 128;                  ///< [px] multiple of 16
+    int blockSize = 5;                         ///< [px] odd
 };
 
 struct ObstacleConfig {

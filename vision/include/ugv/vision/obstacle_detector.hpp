@@ -2,7 +2,7 @@
 
 /// @file
 /// The per-frame stereo obstacle pipeline on the rectified ROI:
-/// RoiMatcher (StereoSGBM on the ROI) -> GroundEstimator (per-frame ground from that disparity, falling back to
+/// RoiMatcher (census SGM or StereoSGBM on the ROI) -> GroundEstimator (per-frame ground from that disparity, falling back to
 /// the configured plane) -> warpGround + GroundMismatch (edge pixels where the left image warped through the
 /// ground plane disagrees with the right one, with the sign of the residual disparity) -> ObstacleVerifier (every
 /// off-ground disparity must explain the images better than the ground does, else it is invalidated) ->
@@ -61,12 +61,13 @@ struct DetectorConfig {
 enum class DetectorStatus : std::uint8_t {
     Ok,
     WrongInputSize, ///< a frame is empty or not the ROI size: all Unknown, degraded
-    MatcherFailed,  ///< OpenCV failed inside the matcher: all Unknown, degraded
+    MatcherFailed,  ///< the matcher failed (OpenCV threw, or census SGM refused its buffers): all Unknown, degraded
     BuildFailed,    ///< the sector builder rejected its inputs (a bug): all Unknown, degraded
 };
 
-/// Thread-safety: thread-bound (process() writes the internal buffers). RT-safe: process() no allocation of
-/// ours and no exception; StereoSGBM::compute() allocates internally (see roi_matcher.hpp); create() no.
+/// Thread-safety: thread-bound (process() writes the internal buffers). RT-safe: process() no allocation and no
+/// exception with the census SGM; with an OpenCV matcher mode StereoSGBM::compute() allocates internally (see
+/// roi_matcher.hpp); create() no.
 class ObstacleDetector {
 public:
     /// @param[in] projection       rectified projection (full-frame coordinates)

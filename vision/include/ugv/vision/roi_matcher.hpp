@@ -2,16 +2,18 @@
 
 /// @file
 /// Dense disparity of the rectified region of interest (the ROI rows, which include a margin of rows above
-/// for the block) with OpenCV's StereoSGBM, created once at configure.
+/// for the block), created once at configure: our census SGM (census_sgm.hpp, the default) or OpenCV's
+/// StereoSGBM in one of its modes.
 ///
-/// Allocation: cv::StereoSGBM::compute() in OpenCV 4.6 allocates internally on every call (its cost/path
-/// buffers, and in SGBM_3WAY/HH4 per-stripe buffers) although our output Mats are preallocated and reused.
-/// The count is measured by unit-vision-detect test `RoiMatcher.ReportsAllocationsPerMatch` and printed; it
-/// is the only allocation on our frame path. Mitigation: preallocated, reused outputs and padded inputs;
-/// one thread (`cv::setNumThreads(1)`, called by create()); glibc keeps the freed blocks (the service sets
+/// Allocation: the census SGM allocates nothing per frame. cv::StereoSGBM::compute() in OpenCV 4.6
+/// allocates internally on every call (its cost/path buffers, and in SGBM_3WAY/HH4 per-stripe buffers)
+/// although our output Mats are preallocated and reused; the count is measured by unit-vision-detect test
+/// `RoiMatcher.AllocationsPerMatch` and printed. With an OpenCV mode, mitigation: one thread
+/// (`cv::setNumThreads(1)`, called by create()); glibc keeps the freed blocks (the service sets
 /// M_TRIM_THRESHOLD/M_MMAP_MAX at start), so after warm-up the calls reuse the same heap memory.
 
 #include <cstdint>
+#include <optional>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -19,20 +21,22 @@
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/result.hpp"
+#include "ugv/vision/census_sgm.hpp"
 
 namespace ugv::vision {
 
-/// OpenCV StereoSGBM modes (config stereo.mode).
+/// The matcher (config stereo.mode): ours, or an OpenCV StereoSGBM mode.
 enum class MatcherMode : std::uint8_t {
-    Sgbm,     ///< MODE_SGBM: 5 paths, single pass
-    Sgbm3Way, ///< MODE_SGBM_3WAY: 3 paths, faster (measured 28 vs 37 ms on 640x242)
-    Hh4,      ///< MODE_HH4: 8 paths with 4-way full-image passes, slowest
+    CensusSgm, ///< census 9x7 + 5-path SGM (census_sgm.hpp): no allocation per frame
+    Sgbm,      ///< MODE_SGBM: 5 paths, single pass
+    Sgbm3Way,  ///< MODE_SGBM_3WAY: 3 paths, faster (measured 28 vs 37 ms on 640x242)
+    Hh4,       ///< MODE_HH4: 8 paths with 4-way full-image passes, slowest
 };
 
 struct RoiMatcherConfig {
-    MatcherMode mode = MatcherMode::Sgbm3Way;
+    MatcherMode mode = MatcherMode::CensusSgm;
     int numDisparities = 128;    ///< [px] search range, multiple of 16
-    int blockSize = 5;           ///< [px] odd, 1..11; P1 = 8 bs^2, P2 = 32 bs^2 (OpenCV's recommendation, 1 channel)
+    int blockSize = 5;           ///< [px] OpenCV modes: odd, 1..11; P1 = 8 bs^2, P2 = 32 bs^2 (OpenCV's advice)
     int uniquenessRatio = 10;    ///< [%] best cost must beat the second best by this margin, else invalid
     int speckleWindowSize = 100; ///< [px] connected regions smaller than this are invalidated; 0 disables
     int speckleRange = 2;        ///< [px] maximum disparity step within a speckle region
@@ -44,6 +48,9 @@ struct RoiMatcherConfig {
     /// the padded columns are biased (mean error over the ROI -0.12 -> -0.5 px, bad-1px +1 %), which would
     /// show as false negative obstacles; it also costs (width + numDisparities) / width of the matching time.
     bool padLeft = false;
+    /// Census SGM settings (penalties, paths, intensity term); its numDisparities, uniquenessRatio,
+    /// disp12MaxDiff and speckle fields are taken from the fields above.
+    CensusSgmConfig census;
 };
 
 /// Outcome of RoiMatcher::match; no strings on the frame path.
@@ -51,12 +58,14 @@ enum class MatchStatus : std::uint8_t {
     Ok,
     WrongInputSize, ///< an input view is empty or not roiSize (disparity set to invalid)
     OpenCvFailed,   ///< StereoSGBM threw despite the checked preconditions (disparity set to invalid)
+    MatcherFailed,  ///< the census SGM refused its buffers (not reachable after create; disparity invalid)
 };
 
 /// Semi-global matching of the ROI of a rectified pair into a preallocated CV_16S disparity (x16 fixed point,
 /// kScale; invalid pixels < 0).
-/// Thread-safety: thread-bound (match() writes the internal buffers). RT-safe: match() no allocation of ours
-/// and no exception, but OpenCV allocates inside compute() (see the file comment); create() no.
+/// Thread-safety: thread-bound (match() writes the internal buffers). RT-safe: match() no allocation and no
+/// exception with the census SGM; with an OpenCV mode, OpenCV allocates inside compute() (see the file
+/// comment); create() no.
 class RoiMatcher {
 public:
     static constexpr int kScale = 16; ///< fixed-point scale of disparity16()
@@ -87,11 +96,12 @@ private:
 
     RoiMatcherConfig config_;
     cv::Size roiSize_;
-    int pad_ = 0; ///< [px] left padding columns
-    cv::Ptr<cv::StereoSGBM> sgbm_;
-    cv::Mat padLeft_, padRight_; ///< CV_8U (width + pad) x height; pad columns stay 0
-    cv::Mat disp16Padded_;       ///< CV_16S (width + pad) x height, compute() output
-    cv::Mat disp16_;             ///< header view of the unpadded columns
+    int pad_ = 0;                     ///< [px] left padding columns
+    cv::Ptr<cv::StereoSGBM> sgbm_;    ///< OpenCV modes
+    std::optional<CensusSgm> census_; ///< MatcherMode::CensusSgm
+    cv::Mat padLeft_, padRight_;      ///< CV_8U (width + pad) x height; pad columns stay 0
+    cv::Mat disp16Padded_;            ///< CV_16S (width + pad) x height, compute() output
+    cv::Mat disp16_;                  ///< header view of the unpadded columns
 };
 
 } // namespace ugv::vision

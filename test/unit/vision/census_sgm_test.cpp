@@ -1,0 +1,163 @@
+#include "ugv/vision/census_sgm.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "alloc_counter.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+
+namespace ugv::vision {
+namespace {
+
+constexpr int kWidth = 320;
+constexpr int kHeight = 96;
+
+ConstImageViewU8 viewOf(const cv::Mat& m)
+{
+    return {m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+}
+
+/// Smoothed uniform noise: texture everywhere, so every pixel has a unique match.
+cv::Mat texture(cv::Size size, int seed)
+{
+    cv::Mat noise(size, CV_8UC1);
+    cv::RNG rng(static_cast<std::uint64_t>(seed));
+    rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+    cv::GaussianBlur(noise, noise, cv::Size(3, 3), 0.8);
+    return noise;
+}
+
+/// right(x) = left(x + shift): every left pixel has disparity `shift`.
+cv::Mat shifted(const cv::Mat& left, int shift)
+{
+    cv::Mat right(left.size(), CV_8UC1, cv::Scalar(0));
+    left(cv::Rect(shift, 0, left.cols - shift, left.rows)).copyTo(right(cv::Rect(0, 0, left.cols - shift, left.rows)));
+    return right;
+}
+
+CensusSgm makeSut(const CensusSgmConfig& config, cv::Size size = {kWidth, kHeight})
+{
+    auto result = CensusSgm::create(config, size);
+    EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
+    return std::move(result).value();
+}
+
+TEST(CensusSgm, CreateRejectsInvalidConfig)
+{
+    const auto rejects = [](auto change, cv::Size size = {kWidth, kHeight}) {
+        CensusSgmConfig config;
+        config.numDisparities = 64;
+        change(config);
+        return !CensusSgm::create(config, size).has_value();
+    };
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.numDisparities = 40; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.numDisparities = 272; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.p2 = c.p1; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.p2 = 224; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.p1 = 0; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.uniquenessRatio = 100; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.speckleRange = -1; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig&) {}, cv::Size(64, kHeight))); // not wider than the search range
+    const auto error = CensusSgm::create(CensusSgmConfig{.p2 = 5}, cv::Size(kWidth, kHeight)).error();
+    EXPECT_NE(error.message().find("p2"), std::string::npos) << error.message();
+}
+
+TEST(CensusSgm, ConstantShiftIsExactInTheInterior)
+{
+    CensusSgmConfig config;
+    config.numDisparities = 64;
+    for (const int shift : {0, 7, 23, 63}) {
+        const cv::Mat left = texture({kWidth, kHeight}, 3);
+        const cv::Mat right = shifted(left, shift);
+        auto sut = makeSut(config);
+        cv::Mat disp(left.size(), CV_16SC1, cv::Scalar(0));
+
+        ASSERT_TRUE(sut.match(viewOf(left), viewOf(right), disp));
+
+        int good = 0;
+        int total = 0;
+        for (int y = 4; y < kHeight - 4; ++y) {
+            for (int x = config.numDisparities; x < kWidth - shift - 5; ++x) {
+                ++total;
+                const int d = disp.at<std::int16_t>(y, x);
+                good += (d >= 0 && std::abs(d - shift * CensusSgm::kScale) <= CensusSgm::kScale / 4) ? 1 : 0;
+            }
+        }
+        EXPECT_GT(good, total * 99 / 100) << "shift " << shift;
+        // Columns without a full search range are invalid, as in OpenCV.
+        EXPECT_EQ(disp.at<std::int16_t>(kHeight / 2, config.numDisparities - 2), CensusSgm::kInvalid);
+    }
+}
+
+TEST(CensusSgm, TexturelessIsInvalidNotZero)
+{
+    const cv::Mat flat(kHeight, kWidth, CV_8UC1, cv::Scalar(128));
+    auto sut = makeSut(CensusSgmConfig{.numDisparities = 64});
+    cv::Mat disp(flat.size(), CV_16SC1, cv::Scalar(0));
+
+    ASSERT_TRUE(sut.match(viewOf(flat), viewOf(flat), disp));
+
+    EXPECT_EQ(cv::countNonZero(disp != CensusSgm::kInvalid), 0);
+}
+
+TEST(CensusSgm, RejectsWrongSizes)
+{
+    auto sut = makeSut(CensusSgmConfig{.numDisparities = 64});
+    const cv::Mat image = texture({kWidth, kHeight}, 1);
+    const cv::Mat small = texture({kWidth - 16, kHeight}, 1);
+    cv::Mat disp(image.size(), CV_16SC1, cv::Scalar(7));
+    cv::Mat wrongType(image.size(), CV_32FC1);
+
+    EXPECT_FALSE(sut.match(viewOf(small), viewOf(image), disp));
+    EXPECT_FALSE(sut.match(viewOf(image), viewOf(small), disp));
+    EXPECT_FALSE(sut.match(viewOf(image), viewOf(image), wrongType));
+    EXPECT_EQ(disp.at<std::int16_t>(0, 0), 7); // untouched
+}
+
+TEST(CensusSgm, SimdMatchesScalar)
+{
+    auto scene = sim::makeScene("box", 4.0, 5.0, sim::GroundTexture::Gravel, 11);
+    ASSERT_TRUE(scene.has_value());
+    auto frame = sim::render(scene.value());
+    ASSERT_TRUE(frame.has_value());
+    const cv::Rect roi(0, 232, 640, 248);
+    const cv::Mat left = frame->left(roi).clone();
+    const cv::Mat right = frame->right(roi).clone();
+    CensusSgmConfig simdConfig;
+    CensusSgmConfig scalarConfig;
+    scalarConfig.simd = false;
+    auto simd = makeSut(simdConfig, roi.size());
+    auto scalar = makeSut(scalarConfig, roi.size());
+    cv::Mat a(roi.size(), CV_16SC1);
+    cv::Mat b(roi.size(), CV_16SC1);
+
+    ASSERT_TRUE(simd.match(viewOf(left), viewOf(right), a));
+    ASSERT_TRUE(scalar.match(viewOf(left), viewOf(right), b));
+
+    EXPECT_EQ(cv::countNonZero(a != b), 0);
+    EXPECT_GT(cv::countNonZero(a >= 0), roi.area() / 2); // a real disparity map, not two empty ones
+}
+
+TEST(CensusSgm, NoAllocationPerMatch)
+{
+    const cv::Mat left = texture({640, 248}, 5);
+    const cv::Mat right = shifted(left, 30);
+    auto sut = makeSut(CensusSgmConfig{}, left.size());
+    cv::Mat disp(left.size(), CV_16SC1);
+    ASSERT_TRUE(sut.match(viewOf(left), viewOf(right), disp));
+
+    const test::AllocationScope scope;
+    for (int i = 0; i < 20; ++i) {
+        ASSERT_TRUE(sut.match(viewOf(left), viewOf(right), disp));
+    }
+
+    EXPECT_EQ(scope.count(), 0U);
+}
+
+} // namespace
+} // namespace ugv::vision

@@ -1,0 +1,438 @@
+#include "ugv/vision/census_sgm.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include <opencv2/calib3d.hpp>
+
+#include "census_sgm.simd.hpp"
+
+namespace ugv::vision {
+namespace {
+
+constexpr int kBorderX = 4;             ///< census window 9 wide
+constexpr int kBorderY = 3;             ///< and 7 high
+constexpr int kPlanes = 4;              ///< census bytes per pixel (31 bits used)
+constexpr int kRowPlanes = kPlanes + 1; ///< and the intensity >> kIntensityShift
+constexpr int kIntensityShift = 2;
+constexpr int kPad = 16; ///< 255 bytes before and after each path entry
+constexpr int kMaxCensusCost = CensusSgm::kCensusBits;
+constexpr int kMaxIntensityClip = 31;
+constexpr int kMaxDisparities = 256;
+constexpr int kPaths = 3; ///< rows kept for the top, top-left and top-right paths
+constexpr std::uint16_t kNoCost = 0xFFFF;
+
+Error configError(const std::string& what)
+{
+    return Error{"CensusSgmConfig", what, "see vision/include/ugv/vision/census_sgm.hpp for the valid ranges"};
+}
+
+// ---- scalar references of the kernels in census_sgm.simd.hpp (same saturating arithmetic) ----
+
+std::uint8_t saturate(int v) noexcept
+{
+    return static_cast<std::uint8_t>(std::min(v, 255));
+}
+
+void censusRowScalar(const std::uint8_t* centre, std::ptrdiff_t step, int begin, int width, std::uint8_t* planes,
+                     int planeStride) noexcept
+{
+    for (int x = begin; x < width; ++x) {
+        std::uint8_t acc[kPlanes] = {0, 0, 0, 0};
+        int bit = 0;
+        for (int dy = 0; dy <= kBorderY; ++dy) {
+            for (int dx = (dy == 0 ? 1 : -kBorderX); dx <= kBorderX; ++dx, ++bit) {
+                const bool greater = centre[dy * step + x + dx] > centre[-dy * step + x - dx];
+                std::uint8_t& plane = acc[bit >> 3];
+                plane = static_cast<std::uint8_t>((plane << 1) | (greater ? 1 : 0));
+            }
+        }
+        for (int p = 0; p < kPlanes; ++p) {
+            planes[p * planeStride + x] = acc[p];
+        }
+    }
+}
+
+void costPixelScalar(const std::uint8_t left[kRowPlanes], const std::uint8_t* right, int planeStride, int d, int clip,
+                     std::uint8_t* cost) noexcept
+{
+    for (int k = 0; k < d; ++k) {
+        int c = std::min(std::abs(left[kPlanes] - right[kPlanes * planeStride + k]), clip);
+        for (int p = 0; p < kPlanes; ++p) {
+            c += std::popcount(static_cast<unsigned>(left[p] ^ right[p * planeStride + k]));
+        }
+        cost[k] = static_cast<std::uint8_t>(c);
+    }
+}
+
+std::uint8_t pathStepScalar(const std::uint8_t* prev, int minPrev, const std::uint8_t* cost, std::uint8_t* out, int d,
+                            int p1, int p2) noexcept
+{
+    const int bound = std::min(255, minPrev + p2);
+    int acc = 255;
+    for (int k = 0; k < d; ++k) {
+        const int step = saturate(std::min(prev[k - 1], prev[k + 1]) + p1);
+        const int best = std::min({static_cast<int>(prev[k]), step, bound});
+        const std::uint8_t l = saturate(best - minPrev + cost[k]);
+        out[k] = l;
+        acc = std::min(acc, static_cast<int>(l));
+    }
+    return static_cast<std::uint8_t>(acc);
+}
+
+void sumFourScalar(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c, const std::uint8_t* e,
+                   std::uint16_t* sum, int d) noexcept
+{
+    for (int k = 0; k < d; ++k) {
+        sum[k] = static_cast<std::uint16_t>(a[k] + b[k] + c[k] + e[k]);
+    }
+}
+
+std::uint16_t addAndMinScalar(const std::uint8_t* a, std::uint16_t* sum, int d) noexcept
+{
+    std::uint16_t acc = kNoCost;
+    for (int k = 0; k < d; ++k) {
+        sum[k] = static_cast<std::uint16_t>(sum[k] + a[k]);
+        acc = std::min(acc, sum[k]);
+    }
+    return acc;
+}
+
+std::uint16_t minOf(const std::uint16_t* sum, int d, bool useSimd) noexcept
+{
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+    if (useSimd) {
+        using namespace cv; // NOLINT(google-build-using-namespace)
+        const int lanes = simd::VTraits<v_uint16>::vlanes();
+        v_uint16 acc = vx_setall_u16(kNoCost);
+        for (int k = 0; k < d; k += lanes) {
+            acc = v_min(acc, vx_load(sum + k));
+        }
+        return v_reduce_min(acc);
+    }
+#endif
+    return *std::min_element(sum, sum + d);
+}
+
+int firstIndexOf(const std::uint16_t* sum, int d, std::uint16_t value, bool useSimd) noexcept
+{
+    int k = 0;
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+    if (useSimd) {
+        using namespace cv; // NOLINT(google-build-using-namespace)
+        const int lanes = simd::VTraits<v_uint16>::vlanes();
+        const v_uint16 target = vx_setall_u16(value);
+        while (k + lanes <= d && !v_check_any(simd::v_eq(vx_load(sum + k), target))) {
+            k += lanes;
+        }
+    }
+#endif
+    while (k < d && sum[k] != value) {
+        ++k;
+    }
+    return k;
+}
+
+} // namespace
+
+Result<CensusSgm, Error> CensusSgm::create(const CensusSgmConfig& config, cv::Size size)
+{
+    const int d = config.numDisparities;
+    if (d < 16 || d > kMaxDisparities || d % 16 != 0) {
+        return Unexpected(configError("numDisparities " + std::to_string(d) + " is not a multiple of 16 in 16..256"));
+    }
+    if (config.intensityClip < 0 || config.intensityClip > kMaxIntensityClip) {
+        return Unexpected(configError("intensityClip " + std::to_string(config.intensityClip) + " is not in 0..31"));
+    }
+    // A path cost is at most maxCost + p2 and must stay below 255 (8-bit paths): minPrev <= maxCost.
+    const int maxP2 = 254 - kMaxCensusCost - config.intensityClip;
+    if (config.p1 < 1 || config.p2 <= config.p1 || config.p2 > maxP2) {
+        return Unexpected(configError("p1 " + std::to_string(config.p1) + ", p2 " + std::to_string(config.p2) +
+                                      ": need 1 <= p1 < p2 <= " + std::to_string(maxP2) +
+                                      " (254 - 31 - intensityClip)"));
+    }
+    if (config.uniquenessRatio < 0 || config.uniquenessRatio > 99 || config.speckleWindowSize < 0 ||
+        config.speckleRange < 0) {
+        return Unexpected(configError("uniquenessRatio (0..99) or speckle settings (>= 0) out of range"));
+    }
+    if (config.paths != 2 && config.paths != 3 && config.paths != 5) {
+        return Unexpected(configError("paths " + std::to_string(config.paths) + " is not 2, 3 or 5"));
+    }
+    if (size.width <= d || size.height < 1) {
+        return Unexpected(configError("image " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                                      " is not wider than numDisparities " + std::to_string(d)));
+    }
+    CensusSgm sut;
+    sut.config_ = config;
+    sut.width_ = size.width;
+    sut.height_ = size.height;
+    sut.d_ = d;
+    sut.x0_ = d - 1;
+    sut.cols_ = size.width - sut.x0_;
+    sut.stride_ = d + 2 * kPad;
+    const auto w = static_cast<std::size_t>(size.width);
+    const auto h = static_cast<std::size_t>(size.height);
+    const auto cols = static_cast<std::size_t>(sut.cols_);
+    const auto du = static_cast<std::size_t>(d);
+    sut.padded_.assign((h + 2 * kBorderY) * (w + 2 * kBorderX), 0);
+    sut.censusRow_.assign(kRowPlanes * w, 0);
+    sut.leftCensus_.assign(h * kRowPlanes * w, 0);
+    sut.rightCensus_.assign(h * kRowPlanes * w, 0);
+    sut.cost_.assign(cols * du, 0);
+    sut.paths_.assign(2 * kPaths * (cols + 2) * static_cast<std::size_t>(sut.stride_), 255);
+    sut.pathMin_.assign(2 * kPaths * (cols + 2), 255);
+    sut.horizontal_.assign(3 * static_cast<std::size_t>(sut.stride_), 255);
+    sut.zeros_.assign(du, 0);
+    sut.sum_.assign(cols * du, 0);
+    sut.disp2Cost_.assign(w, kNoCost);
+    sut.disp2_.assign(w, kInvalid);
+    // cv::filterSpeckles reuses a continuous buffer of at least width * height * (4 + 4 + 1) bytes.
+    sut.speckleBuffer_.create(1, static_cast<int>(w * h * 9), CV_8UC1);
+    return sut;
+}
+
+std::uint8_t* CensusSgm::pathEntry(int half, int path, int entry) noexcept
+{
+    const auto index = static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
+    return paths_.data() + index * static_cast<std::size_t>(stride_) + kPad;
+}
+
+void CensusSgm::census(ConstImageViewU8 image, std::uint8_t* planes, bool reversed) noexcept
+{
+    const int paddedStride = width_ + 2 * kBorderX;
+    for (int r = -kBorderY; r < height_ + kBorderY; ++r) {
+        const std::uint8_t* src = image.row(std::clamp(r, 0, height_ - 1));
+        std::uint8_t* dst = padded_.data() + static_cast<std::ptrdiff_t>(r + kBorderY) * paddedStride;
+        std::memset(dst, src[0], kBorderX);
+        std::memcpy(dst + kBorderX, src, static_cast<std::size_t>(width_));
+        std::memset(dst + kBorderX + width_, src[width_ - 1], kBorderX);
+    }
+    for (int y = 0; y < height_; ++y) {
+        const std::uint8_t* centre =
+            padded_.data() + static_cast<std::ptrdiff_t>(y + kBorderY) * paddedStride + kBorderX;
+        int x = 0;
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+        if (config_.simd) {
+            x = simd::censusRowSimd(centre, paddedStride, width_, censusRow_.data(), width_);
+        }
+#endif
+        censusRowScalar(centre, paddedStride, x, width_, censusRow_.data(), width_);
+        std::uint8_t* intensity = censusRow_.data() + static_cast<std::ptrdiff_t>(kPlanes) * width_;
+        for (int i = 0; i < width_; ++i) {
+            intensity[i] = static_cast<std::uint8_t>(centre[i] >> kIntensityShift);
+        }
+        std::uint8_t* out = planes + static_cast<std::ptrdiff_t>(y) * kRowPlanes * width_;
+        if (!reversed) {
+            std::memcpy(out, censusRow_.data(), censusRow_.size());
+            continue;
+        }
+        for (int p = 0; p < kRowPlanes; ++p) {
+            const std::uint8_t* in = censusRow_.data() + static_cast<std::ptrdiff_t>(p) * width_;
+            std::reverse_copy(in, in + width_, out + static_cast<std::ptrdiff_t>(p) * width_);
+        }
+    }
+}
+
+void CensusSgm::costRow(int y) noexcept
+{
+    const std::uint8_t* left = leftCensus_.data() + static_cast<std::ptrdiff_t>(y) * kRowPlanes * width_;
+    const std::uint8_t* right = rightCensus_.data() + static_cast<std::ptrdiff_t>(y) * kRowPlanes * width_;
+    for (int i = 0; i < cols_; ++i) {
+        const int x = x0_ + i;
+        const std::uint8_t bytes[kRowPlanes] = {left[x], left[width_ + x], left[2 * width_ + x], left[3 * width_ + x],
+                                                left[4 * width_ + x]};
+        // Right column x - k is reversed index width - 1 - x + k: ascending in k.
+        const std::uint8_t* r = right + (width_ - 1 - x);
+        std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+        if (config_.simd) {
+            simd::costPixelSimd(bytes, r, width_, d_, config_.intensityClip, cost);
+            continue;
+        }
+#endif
+        costPixelScalar(bytes, r, width_, d_, config_.intensityClip, cost);
+    }
+}
+
+void CensusSgm::aggregateRow(std::int16_t* disp) noexcept
+{
+    const bool useSimd = config_.simd;
+    const bool vertical = config_.paths >= 3;
+    const bool diagonals = config_.paths == 5;
+    const auto step = [&](const std::uint8_t* prev, int minPrev, const std::uint8_t* cost, std::uint8_t* out) {
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+        if (useSimd) {
+            return simd::pathStepSimd(prev, minPrev, cost, out, d_, config_.p1, config_.p2);
+        }
+#endif
+        return pathStepScalar(prev, minPrev, cost, out, d_, config_.p1, config_.p2);
+    };
+    const int prev = parity_;
+    const int cur = 1 - parity_;
+    const auto minIndex = [this](int half, int path, int entry) {
+        return static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
+    };
+    std::uint8_t* border = horizontal_.data() + kPad; // never written: all 255
+    const auto horizontal = [this](int i) { return horizontal_.data() + (1 + (i & 1)) * stride_ + kPad; };
+
+    // Forward: left-to-right, top, top-left and top-right; their sum into sum_.
+    const std::uint8_t* hPrev = border;
+    int hMin = 255;
+    for (int i = 0; i < cols_; ++i) {
+        const int e = i + 1;
+        const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        std::uint8_t* h = horizontal(i);
+        hMin = step(hPrev, hMin, cost, h);
+        hPrev = h;
+        const std::uint8_t* top = zeros_.data();
+        if (vertical) {
+            std::uint8_t* t = pathEntry(cur, 0, e);
+            pathMin_[minIndex(cur, 0, e)] = step(pathEntry(prev, 0, e), pathMin_[minIndex(prev, 0, e)], cost, t);
+            top = t;
+        }
+        const std::uint8_t* topLeft = zeros_.data();
+        const std::uint8_t* topRight = zeros_.data();
+        if (diagonals) {
+            std::uint8_t* tl = pathEntry(cur, 1, e);
+            std::uint8_t* tr = pathEntry(cur, 2, e);
+            pathMin_[minIndex(cur, 1, e)] =
+                step(pathEntry(prev, 1, e - 1), pathMin_[minIndex(prev, 1, e - 1)], cost, tl);
+            pathMin_[minIndex(cur, 2, e)] =
+                step(pathEntry(prev, 2, e + 1), pathMin_[minIndex(prev, 2, e + 1)], cost, tr);
+            topLeft = tl;
+            topRight = tr;
+        }
+        std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+        if (useSimd) {
+            simd::sumFourSimd(h, top, topLeft, topRight, sum, d_);
+            continue;
+        }
+#endif
+        sumFourScalar(h, top, topLeft, topRight, sum, d_);
+    }
+
+    // Backward: right-to-left completes each column's sum, then the winner of that column.
+    std::fill(disp2Cost_.begin(), disp2Cost_.end(), kNoCost);
+    std::fill(disp2_.begin(), disp2_.end(), kInvalid);
+    hPrev = border;
+    hMin = 255;
+    for (int i = cols_ - 1; i >= 0; --i) {
+        const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        std::uint8_t* h = horizontal(i);
+        hMin = step(hPrev, hMin, cost, h);
+        hPrev = h;
+        std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        std::uint16_t minSum = 0;
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+        if (useSimd) {
+            minSum = simd::addAndMinSimd(h, sum, d_);
+        } else {
+            minSum = addAndMinScalar(h, sum, d_);
+        }
+#else
+        minSum = addAndMinScalar(h, sum, d_);
+#endif
+        winner(i, minSum, disp);
+    }
+    parity_ = cur;
+}
+
+void CensusSgm::winner(int i, std::uint16_t minSum, std::int16_t* disp) noexcept
+{
+    std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+    const int x = x0_ + i;
+    const int best = firstIndexOf(sum, d_, minSum, config_.simd);
+    // Second best outside best +- 1: mask the three, take the minimum, restore.
+    const int lo = std::max(0, best - 1);
+    const int hi = std::min(d_ - 1, best + 1);
+    std::uint16_t saved[3] = {0, 0, 0};
+    for (int k = lo; k <= hi; ++k) {
+        saved[k - lo] = sum[k];
+        sum[k] = kNoCost;
+    }
+    const std::uint16_t second = minOf(sum, d_, config_.simd);
+    for (int k = lo; k <= hi; ++k) {
+        sum[k] = saved[k - lo];
+    }
+    if (static_cast<int>(second) * (100 - config_.uniquenessRatio) <= static_cast<int>(minSum) * 100) {
+        disp[x] = kInvalid;
+        return;
+    }
+    const int x2 = x - best;
+    if (disp2Cost_[static_cast<std::size_t>(x2)] > minSum) {
+        disp2Cost_[static_cast<std::size_t>(x2)] = minSum;
+        disp2_[static_cast<std::size_t>(x2)] = static_cast<std::int16_t>(best);
+    }
+    int value = best * kScale;
+    if (best > 0 && best < d_ - 1) {
+        const int before = sum[best - 1];
+        const int after = sum[best + 1];
+        const int denom = std::max(before + after - 2 * static_cast<int>(minSum), 1);
+        value += ((before - after) * kScale + denom) / (denom * 2);
+    }
+    disp[x] = static_cast<std::int16_t>(value);
+}
+
+void CensusSgm::leftRightCheck(std::int16_t* disp) const noexcept
+{
+    const int maxDiff = config_.disp12MaxDiff;
+    if (maxDiff < 0) {
+        return;
+    }
+    const auto inconsistent = [&](int x2, int d) {
+        if (x2 < 0 || x2 >= width_) {
+            return false;
+        }
+        const int d2 = disp2_[static_cast<std::size_t>(x2)];
+        return d2 >= 0 && std::abs(d2 - d) > maxDiff;
+    };
+    for (int x = x0_; x < width_; ++x) {
+        const int d1 = disp[x];
+        if (d1 == kInvalid) {
+            continue;
+        }
+        const int dFloor = d1 >> 4;
+        const int dCeil = (d1 + kScale - 1) >> 4;
+        if (inconsistent(x - dFloor, dFloor) && inconsistent(x - dCeil, dCeil)) {
+            disp[x] = kInvalid;
+        }
+    }
+}
+
+bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& disp16) noexcept
+{
+    const auto sizeOk = [this](ConstImageViewU8 v) {
+        return v.data() != nullptr && v.width() == width_ && v.height() == height_;
+    };
+    if (!sizeOk(left) || !sizeOk(right) || disp16.type() != CV_16SC1 || disp16.cols != width_ ||
+        disp16.rows != height_) {
+        return false;
+    }
+    census(left, leftCensus_.data(), false);
+    census(right, rightCensus_.data(), true);
+    std::fill(paths_.begin(), paths_.end(), std::uint8_t{255});
+    std::fill(pathMin_.begin(), pathMin_.end(), std::uint8_t{255});
+    parity_ = 0;
+    for (int y = 0; y < height_; ++y) {
+        auto* disp = disp16.ptr<std::int16_t>(y);
+        std::fill(disp, disp + x0_, kInvalid);
+        costRow(y);
+        aggregateRow(disp);
+        leftRightCheck(disp);
+    }
+    if (config_.speckleWindowSize > 0) {
+        try {
+            cv::filterSpeckles(disp16, kInvalid, config_.speckleWindowSize, kScale * config_.speckleRange,
+                               speckleBuffer_);
+        } catch (...) {
+            disp16.setTo(kInvalid); // not reachable with the checked sizes; never a half-filtered output
+        }
+    }
+    return true;
+}
+
+} // namespace ugv::vision
