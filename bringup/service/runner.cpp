@@ -146,6 +146,7 @@ Result<RunResult, Error> runService(const RunOptions& options)
         serviceOptions.overload =
             config.overload.policy == bringup::OverloadChoice::Drop ? OverloadPolicy::Drop : OverloadPolicy::Degrade;
         serviceOptions.deadlineFactor = config.overload.deadlineFactor;
+        serviceOptions.spinBeforeFrame = std::chrono::microseconds(config.handover.spinUs);
     }
     auto service = Service::create(config, *calibration, std::move(*camera), serviceOptions);
     if (!service) {

@@ -270,8 +270,32 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
     cpuSeconds_[0].store(threadCpuSeconds(), std::memory_order_relaxed);
 }
 
+void Service::spinUntilFrame(std::int64_t lastRingNs, const std::atomic<bool>& stop) noexcept
+{
+    const std::int64_t spinNs = std::chrono::nanoseconds(options_.spinBeforeFrame).count();
+    if (spinNs <= 0 || lastRingNs <= 0) {
+        return;
+    }
+    const std::int64_t dueNs = lastRingNs + period_.count();
+    std::int64_t now = MonotonicClock::nowNs();
+    if (now > dueNs + spinNs) {
+        return; // overdue beyond the window (a stalled camera): wait in the kernel, do not burn the core
+    }
+    // Sleep (in slices, to see the stop flag) until the spin window opens.
+    while (now < dueNs - spinNs && !stop.load(std::memory_order_relaxed)) {
+        const std::int64_t sleepNs = std::min<std::int64_t>(dueNs - spinNs - now, kWaitSlice.count() * 1'000'000);
+        const timespec t{static_cast<time_t>(sleepNs / 1'000'000'000), static_cast<long>(sleepNs % 1'000'000'000)};
+        ::clock_nanosleep(CLOCK_MONOTONIC, 0, &t, nullptr);
+        now = MonotonicClock::nowNs();
+    }
+    const std::int64_t endNs = std::max(now, dueNs) + spinNs;
+    while (!framesIn_->hasData() && MonotonicClock::nowNs() < endNs && !stop.load(std::memory_order_relaxed)) {
+    }
+}
+
 void Service::visionLoop(const std::atomic<bool>& stop) noexcept
 {
+    std::int64_t lastRingNs = 0;
     ipc::TakenFrame frame;
     Handover out;
     bool haveLast = false;
@@ -281,6 +305,7 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
     double fullMeanNs = 0.0; // running mean of the full pipeline's time (rectified -> detected) [ns]
     int degradedInARow = 0;
     while (!stop.load(std::memory_order_relaxed)) {
+        spinUntilFrame(lastRingNs, stop);
         const ipc::TakeStatus status = framesIn_->take(frame, kWaitSlice);
         if (status == ipc::TakeStatus::Timeout) {
             continue;
@@ -324,8 +349,8 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             out.sectors.captureStampNs = h.leftStampNs;
             degraded_.fetch_add(1, std::memory_order_relaxed);
         }
-        out.stampNs = {h.leftStampNs, ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire), takenNs,
-                       rectifiedNs, detectedNs};
+        lastRingNs = ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire);
+        out.stampNs = {h.leftStampNs, lastRingNs, takenNs, rectifiedNs, detectedNs};
         framesIn_->release(frame);
         if (toPublish_.tryPush(out)) {
             ::sem_post(&published_);

@@ -147,6 +147,10 @@ std::vector<KeySpec> baseKeys()
                   UGV_REF(overload.deadlineFactor)),
         numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
                   UGV_REF(obstacles.minDepthM)),
+        numberKey("handover.spin_us", Kind::Int, 0, 10000,
+                  "the vision task polls the frame ring this long before and after each frame is due, instead of "
+                  "sleeping (faster wake-up across cores, about this much CPU per frame) [us]; 0 = off",
+                  UGV_REF(handover.spinUs)),
     };
     return keys;
 }

@@ -281,6 +281,11 @@ TakeStatus FrameSubscriber::takeOldest(TakenFrame& out, std::chrono::nanoseconds
     return takeFrame(out, timeout, false);
 }
 
+bool FrameSubscriber::hasData() const noexcept
+{
+    return impl_->subscriber.hasData();
+}
+
 TakeStatus FrameSubscriber::takeFrame(TakenFrame& out, std::chrono::nanoseconds timeout, bool newest) noexcept
 {
     const void* payload = impl_->take(timeout);

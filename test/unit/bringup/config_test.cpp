@@ -41,6 +41,8 @@ TEST(Config, MinimalFileGivesDefaultsAndResolvesRelativePaths)
     EXPECT_EQ(sut->stereo.numDisparities, 128);
     EXPECT_EQ(sut->obstacles.sectorCount, 64);
     EXPECT_DOUBLE_EQ(sut->obstacles.minHeightM, 0.10);
+    EXPECT_EQ(sut->stereo.mode, MatcherMode::CensusSgm);
+    EXPECT_EQ(sut->handover.spinUs, 2000);
 }
 
 TEST(Config, EveryKeyIsParsed)
@@ -52,7 +54,9 @@ TEST(Config, EveryKeyIsParsed)
         "roi:\n  top_fraction: 0.4\n  matcher_margin_rows: 4\n"
         "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n"
         "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
-        "  min_height_m: 0.2\n  min_depth_m: 0.15\n";
+        "  min_height_m: 0.2\n  min_depth_m: 0.15\n"
+        "overload:\n  policy: drop\n  deadline_factor: 2\n"
+        "handover:\n  spin_us: 0\n";
 
     const auto sut = parseConfig(yaml, "test.yaml", "/");
 
@@ -78,6 +82,9 @@ TEST(Config, EveryKeyIsParsed)
     EXPECT_DOUBLE_EQ(sut->obstacles.cautionDistanceM, 4.0);
     EXPECT_DOUBLE_EQ(sut->obstacles.minHeightM, 0.2);
     EXPECT_DOUBLE_EQ(sut->obstacles.minDepthM, 0.15);
+    EXPECT_EQ(sut->overload.policy, OverloadChoice::Drop);
+    EXPECT_DOUBLE_EQ(sut->overload.deadlineFactor, 2.0);
+    EXPECT_EQ(sut->handover.spinUs, 0);
 }
 
 TEST(Config, UnknownKeyIsAnErrorWithLineAndSuggestion)

@@ -23,3 +23,10 @@ cat "$work/record.log"
 info=$("$tool" recording info "$work/recorded.ugvrec") || { echo "$info"; exit 1; }
 echo "$info"
 grep -q "frames: 8 complete (sequence 0..7, 0 missing" <<<"$info" || { echo "expected 8 frames in sequence"; exit 1; }
+# No service publishing: the recorder gives up after --seconds, says why, exits 1 and leaves no file behind.
+out=$("$tool" record --out "$work/empty.ugvrec" --calib "$work/f0/calibration.yaml" --seconds 1 2>&1)
+rc=$?
+echo "$out"
+[ $rc -eq 1 ] || { echo "record without frames: exit $rc, expected 1"; exit 1; }
+grep -q "no frame arrived; nothing written (is ugvsensed running?)" <<<"$out" || { echo "missing message"; exit 1; }
+[ ! -e "$work/empty.ugvrec" ] || { echo "an empty recording was left behind"; exit 1; }

@@ -273,6 +273,7 @@ TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEv
     ServiceOptions options;
     options.maxFrames = 60;
     options.deadlineFactor = 0.1;
+    options.spinBeforeFrame = std::chrono::microseconds(0); // the sleeping hand-over (the others poll)
     auto service = makeService(course, replay, options);
     ASSERT_NE(service, nullptr);
     service->start();

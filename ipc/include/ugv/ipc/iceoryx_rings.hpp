@@ -133,6 +133,8 @@ public:
     TakeStatus take(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept;
     /// As take(), but the oldest queued frame (a recorder keeps every pair its queue holds).
     TakeStatus takeOldest(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept;
+    /// True when a frame is queued (no wait, no system call: a poll of the shared-memory queue).
+    [[nodiscard]] bool hasData() const noexcept;
     /// Gives the chunk back to the pool.
     void release(TakenFrame& frame) noexcept;
     [[nodiscard]] std::uint64_t malformed() const noexcept { return malformed_; }
