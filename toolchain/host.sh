@@ -18,6 +18,8 @@ packages=(
     iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev   # shared-memory frame and sector rings (RouDi + posh)
     libsystemd-dev         # sd_notify: READY and the watchdog of the service unit
     libcamera-dev          # the libcamera camera backend
+    libgeographiclib-dev   # WGS84 <-> local tangent plane (correlator)
+    nlohmann-json3-dev     # JSON lines of the correlator's offline tools
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
 )

@@ -118,4 +118,21 @@ int reportUsageError(const std::string& command, const Error& error)
     return 2;
 }
 
+std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command)
+{
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError(command, parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    if (!args.positional().empty()) {
+        return reportUsageError(command,
+                                Error{"ugvsense " + command, "unexpected argument '" + args.positional().front() + "'",
+                                      "see 'ugvsense " + command + " --help'"});
+    }
+    return std::nullopt;
+}
+
 } // namespace ugv::tool

@@ -15,5 +15,8 @@ int runEval(int argc, char** argv);
 int runRecording(int argc, char** argv);
 int runBench(int argc, char** argv);
 int runRecord(int argc, char** argv);
+int runCorrelate(int argc, char** argv);
+int runCorrelateSim(int argc, char** argv);
+int runCorrelateEval(int argc, char** argv);
 
 } // namespace ugv::tool

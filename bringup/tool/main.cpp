@@ -23,6 +23,12 @@ constexpr Subcommand kSubcommands[] = {
     {"eval", "evaluate detection on simulator scenes and matching on Middlebury data", ugv::tool::runEval},
     {"recording", "inspect, import (PNG pairs) and export recordings", ugv::tool::runRecording},
     {"record", "record the frames the running service publishes (low priority, crash-safe)", ugv::tool::runRecord},
+    {"correlate", "fuse OOI observations of many UGVs into one object list (JSON lines in and out)",
+     ugv::tool::runCorrelate},
+    {"correlate-sim", "simulate UGVs reporting OOIs (correlator input) and write the ground truth",
+     ugv::tool::runCorrelateSim},
+    {"correlate-eval", "score correlator snapshots against correlate-sim truth (GOSPA, ID changes)",
+     ugv::tool::runCorrelateEval},
     {"bench", "latency budget: replay a recording through the real service and report p50..max", ugv::tool::runBench},
 };
 

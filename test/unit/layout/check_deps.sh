@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Dependency direction (../shared/STYLE.md): platform includes nothing of ours; hal, rt, vision and ipc include
+# Dependency direction (../shared/STYLE.md): platform includes nothing of ours; hal, rt, vision, ipc and correlator include
 # only platform and themselves; bringup may include everything. The service modules never include
 # OpenCV's imgcodecs/highgui (the service links only core, imgproc, calib3d), and vision/ includes no
 # transport, camera or OS-device headers (it must build and test on any host).
@@ -36,6 +36,7 @@ check_folder hal "platform hal"
 check_folder rt "platform rt"
 check_folder vision "platform vision"
 check_folder ipc "platform ipc"
+check_folder correlator "platform correlator"
 
 if [ -d "$root/vision" ]; then
     while IFS= read -r hit; do
@@ -43,6 +44,14 @@ if [ -d "$root/vision" ]; then
             "vision/ is pure computation; put device, shared-memory and DDS code in hal/ or ipc/"
     done < <(grep -rnE '#include *[<"](iceoryx|iox/|fastdds|fastrtps|libcamera|linux/videodev2|sys/ioctl|yaml-cpp)' "$root/vision" \
                  --include='*.hpp' --include='*.cpp' 2>/dev/null)
+fi
+
+if [ -d "$root/correlator" ]; then
+    while IFS= read -r hit; do
+        violation "${hit%%:*}:$(cut -d: -f2 <<<"$hit"): correlator/ includes an I/O, clock or thread header" \
+            "the correlator is pure computation (time comes with the messages); do I/O in bringup/"
+    done < <(grep -rnE '#include *<(fstream|iostream|chrono|thread|mutex)>|#include *[<"](iceoryx|iox/|fastdds|fastrtps|nlohmann|opencv2)' \
+                 "$root/correlator" --include='*.hpp' --include='*.cpp' 2>/dev/null)
 fi
 
 [ $status -eq 0 ] && echo "dependency direction OK under $root"

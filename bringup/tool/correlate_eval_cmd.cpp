@@ -1,0 +1,490 @@
+// ugvsense correlate-eval: scores the correlator's snapshots (JSON lines of correlate_io, as `ugvsense correlate`
+// writes them) against the ground truth of `ugvsense correlate-sim` (format in correlate_sim_cmd.cpp):
+// - GOSPA (c = 5 m, p = 2, alpha = 2) of the static objects at the last snapshot, split into localisation, missed
+//   and false parts;
+// - the mean GOSPA over the snapshots of the mobile objects and of the non-combatants, each snapshot's objects of
+//   that class against the truth sample nearest in time (within half the truth period) of every such object;
+// - the static ID changes: per static truth object, the id of the snapshot object GOSPA assigns to it; a change
+//   counts between consecutive snapshots in which it is assigned both times.
+// Distances are in metres in the tangent plane at the truth's origin.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <iterator>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "correlate_io.hpp"
+#include "ugv/correlator/geodesy.hpp"
+#include "ugv/correlator/gospa.hpp"
+#include "ugv/correlator/messages.hpp"
+
+namespace ugv::tool {
+namespace {
+
+using correlator::GospaResult;
+using correlator::OoiClass;
+using correlator::Snapshot;
+using Eigen::Vector2d;
+using nlohmann::json;
+using nlohmann::ordered_json;
+
+constexpr const char* kCommand = "correlate-eval";
+constexpr correlator::GospaParams kGospa{5.0, 2.0}; ///< c = 5 m, p = 2 (alpha = 2 is built in)
+constexpr int kAlpha = 2;
+constexpr double kTimeSlackS = 1e-6;
+
+// ---- truth ---------------------------------------------------------------------------------------------------
+
+struct TimedPosition {
+    double t = 0.0;
+    Vector2d position = Vector2d::Zero();
+};
+
+struct MovingTrack {
+    OoiClass cls = OoiClass::Mobile;
+    std::vector<TimedPosition> samples; ///< by t
+};
+
+struct Truth {
+    double originLat = 0.0;
+    double originLon = 0.0;
+    double durationS = 0.0;
+    double periodS = 0.0;
+    std::vector<std::string> staticIds;
+    std::vector<Vector2d> statics;             ///< [m] local east, north
+    std::map<std::string, MovingTrack> moving; ///< by id
+};
+
+Result<double, Error> number(const json& j, const char* key)
+{
+    const auto it = j.find(key);
+    if (it == j.end() || !it->is_number() || !std::isfinite(it->get<double>())) {
+        return Unexpected(Error{"", std::string("missing or non-numeric field '") + key + "'", ""});
+    }
+    return it->get<double>();
+}
+
+Result<std::string, Error> text(const json& j, const char* key)
+{
+    const auto it = j.find(key);
+    if (it == j.end() || !it->is_string()) {
+        return Unexpected(Error{"", std::string("missing or non-string field '") + key + "'", ""});
+    }
+    return it->get<std::string>();
+}
+
+Result<void, Error> parseHeader(const json& j, Truth& truth)
+{
+    const auto lat = number(j, "origin_lat");
+    const auto lon = number(j, "origin_lon");
+    const auto duration = number(j, "duration_s");
+    const auto period = number(j, "period_s");
+    for (const auto* field : {&lat, &lon, &duration, &period}) {
+        if (!*field) {
+            return Unexpected(field->error());
+        }
+    }
+    if (*period <= 0.0) {
+        return Unexpected(Error{"", "period_s is not positive", ""});
+    }
+    truth.originLat = *lat;
+    truth.originLon = *lon;
+    truth.durationS = *duration;
+    truth.periodS = *period;
+    return {};
+}
+
+Result<void, Error> parseStatic(const json& j, const correlator::LocalFrame& frame, Truth& truth)
+{
+    const auto id = text(j, "id");
+    const auto lat = number(j, "lat");
+    const auto lon = number(j, "lon");
+    if (!id) {
+        return Unexpected(id.error());
+    }
+    for (const auto* field : {&lat, &lon}) {
+        if (!*field) {
+            return Unexpected(field->error());
+        }
+    }
+    truth.staticIds.push_back(*id);
+    truth.statics.push_back(frame.toLocal(*lat, *lon));
+    return {};
+}
+
+Result<void, Error> parseMoving(const json& j, const correlator::LocalFrame& frame, Truth& truth)
+{
+    const auto id = text(j, "id");
+    const auto cls = text(j, "class");
+    const auto t = number(j, "t");
+    const auto lat = number(j, "lat");
+    const auto lon = number(j, "lon");
+    for (const auto* field : {&id, &cls}) {
+        if (!*field) {
+            return Unexpected(field->error());
+        }
+    }
+    for (const auto* field : {&t, &lat, &lon}) {
+        if (!*field) {
+            return Unexpected(field->error());
+        }
+    }
+    if (*cls != "mobile" && *cls != "noncombatant") {
+        return Unexpected(Error{"", "class '" + *cls + "' of a moving object", "use mobile or noncombatant"});
+    }
+    MovingTrack& track = truth.moving[*id];
+    track.cls = *cls == "mobile" ? OoiClass::Mobile : OoiClass::NonCombatant;
+    track.samples.push_back({*t, frame.toLocal(*lat, *lon)});
+    return {};
+}
+
+/// One truth line; the header (kind "scenario") must come first because it holds the plane's origin.
+Result<void, Error> parseTruthLine(const std::string& line, Truth& truth, std::optional<correlator::LocalFrame>& frame)
+{
+    const json j = json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) {
+        return Unexpected(Error{"", "not a JSON object", ""});
+    }
+    const auto kind = text(j, "kind");
+    if (!kind) {
+        return Unexpected(kind.error());
+    }
+    if (*kind == "scenario") {
+        if (frame) {
+            return Unexpected(Error{"", "a second scenario line", "give one truth file of correlate-sim"});
+        }
+        if (auto header = parseHeader(j, truth); !header) {
+            return header;
+        }
+        frame.emplace(truth.originLat, truth.originLon);
+        return {};
+    }
+    if (!frame) {
+        return Unexpected(Error{"", "the first line is not the scenario line", "give a truth file of correlate-sim"});
+    }
+    if (*kind == "static") {
+        return parseStatic(j, *frame, truth);
+    }
+    if (*kind == "moving") {
+        return parseMoving(j, *frame, truth);
+    }
+    if (*kind == "ugv") {
+        return {}; // the UGVs' pose errors: not scored
+    }
+    return Unexpected(Error{"", "unknown kind '" + *kind + "'", "use scenario, ugv, static or moving"});
+}
+
+Result<Truth, Error> readTruth(const std::string& path)
+{
+    std::ifstream in(path);
+    if (!in) {
+        return Unexpected(Error{path, "cannot open the truth file", "give the file correlate-sim wrote (--truth)"});
+    }
+    Truth truth;
+    std::optional<correlator::LocalFrame> frame;
+    std::string line;
+    for (std::size_t number = 1; std::getline(in, line); ++number) {
+        if (line.empty()) {
+            continue;
+        }
+        if (auto parsed = parseTruthLine(line, truth, frame); !parsed) {
+            Error error = parsed.error();
+            error.where = path + ":" + std::to_string(number);
+            return Unexpected(error);
+        }
+    }
+    if (!frame) {
+        return Unexpected(Error{path, "no scenario line", "give the truth file correlate-sim wrote"});
+    }
+    for (auto& [id, track] : truth.moving) {
+        std::sort(track.samples.begin(), track.samples.end(),
+                  [](const TimedPosition& a, const TimedPosition& b) { return a.t < b.t; });
+    }
+    return truth;
+}
+
+Result<std::vector<Snapshot>, Error> readSnapshots(const std::string& path)
+{
+    std::ifstream in(path);
+    if (!in) {
+        return Unexpected(Error{path, "cannot open the snapshot file", "give the --output of 'ugvsense correlate'"});
+    }
+    std::vector<Snapshot> snapshots;
+    std::string line;
+    for (std::size_t number = 1; std::getline(in, line); ++number) {
+        if (line.empty()) {
+            continue;
+        }
+        auto snapshot = parseSnapshotLine(line);
+        const std::string where = path + ":" + std::to_string(number);
+        if (!snapshot) {
+            return Unexpected(Error{where, snapshot.error().message(), ""});
+        }
+        if (!snapshots.empty() && snapshot->t < snapshots.back().t) {
+            return Unexpected(
+                Error{where, "snapshot at t = " + std::to_string(snapshot->t) + " s is older than the one before",
+                      "give the snapshots in time order"});
+        }
+        snapshots.push_back(std::move(snapshot).value());
+    }
+    if (snapshots.empty()) {
+        return Unexpected(Error{path, "no snapshots", "run 'ugvsense correlate' on the scenario first"});
+    }
+    return snapshots;
+}
+
+// ---- scoring -------------------------------------------------------------------------------------------------
+
+/// The snapshot's objects of class `cls`: positions in the plane and their ids.
+struct ClassObjects {
+    std::vector<Vector2d> positions;
+    std::vector<std::string> ids;
+};
+
+ClassObjects objectsOf(const Snapshot& snapshot, OoiClass cls, const correlator::LocalFrame& frame)
+{
+    ClassObjects objects;
+    for (const auto& object : snapshot.objects) {
+        if (object.cls == cls) {
+            objects.positions.push_back(frame.toLocal(object.lat, object.lon));
+            objects.ids.push_back(object.id);
+        }
+    }
+    return objects;
+}
+
+/// Every moving object of `cls` with a sample within half a period of t, at that (nearest) sample.
+std::vector<Vector2d> movingTruthAt(const Truth& truth, OoiClass cls, double t)
+{
+    std::vector<Vector2d> positions;
+    for (const auto& [id, track] : truth.moving) {
+        if (track.cls != cls || track.samples.empty()) {
+            continue;
+        }
+        const auto& samples = track.samples;
+        auto it = std::lower_bound(samples.begin(), samples.end(), t,
+                                   [](const TimedPosition& s, double time) { return s.t < time; });
+        if (it == samples.end() || (it != samples.begin() && t - std::prev(it)->t < it->t - t)) {
+            it = std::prev(it);
+        }
+        if (std::abs(it->t - t) <= truth.periodS / 2.0 + kTimeSlackS) {
+            positions.push_back(it->position);
+        }
+    }
+    return positions;
+}
+
+/// Sums of GOSPA figures over snapshots, for their means.
+struct GospaMean {
+    std::size_t snapshots = 0;
+    double total = 0.0;
+    double localisationPart = 0.0;
+    double missedPart = 0.0;
+    double falsePart = 0.0;
+
+    void add(const GospaResult& r)
+    {
+        ++snapshots;
+        total += r.total;
+        localisationPart += r.localisationPart;
+        missedPart += r.missedPart;
+        falsePart += r.falsePart;
+    }
+    [[nodiscard]] double mean(double sum) const { return snapshots > 0 ? sum / static_cast<double>(snapshots) : 0.0; }
+};
+
+struct Figures {
+    std::size_t snapshots = 0;
+    double firstT = 0.0;
+    double lastT = 0.0;
+    GospaResult staticLast;
+    std::size_t staticEstimates = 0; ///< static objects in the last snapshot
+    GospaMean mobile;
+    GospaMean nonCombatant;
+    std::size_t staticIdChanges = 0;
+};
+
+/// Adds one snapshot's static ID changes to `changes`. `previous` holds, per static truth object, the id assigned
+/// to it in the previous snapshot (empty: none); it is updated to this snapshot's.
+void countIdChanges(const GospaResult& result, const ClassObjects& objects, std::vector<std::string>& previous,
+                    std::size_t& changes)
+{
+    for (std::size_t i = 0; i < previous.size(); ++i) {
+        const int j = result.truthToEstimate[i];
+        const std::string current = j >= 0 ? objects.ids[static_cast<std::size_t>(j)] : std::string();
+        if (!previous[i].empty() && !current.empty() && current != previous[i]) {
+            ++changes;
+        }
+        previous[i] = current;
+    }
+}
+
+Figures score(const std::vector<Snapshot>& snapshots, const Truth& truth)
+{
+    const correlator::LocalFrame frame(truth.originLat, truth.originLon);
+    Figures figures;
+    figures.snapshots = snapshots.size();
+    figures.firstT = snapshots.front().t;
+    figures.lastT = snapshots.back().t;
+    std::vector<std::string> previousIds(truth.statics.size());
+    for (const Snapshot& snapshot : snapshots) {
+        const ClassObjects statics = objectsOf(snapshot, OoiClass::Static, frame);
+        const GospaResult staticResult = correlator::gospa(truth.statics, statics.positions, kGospa);
+        countIdChanges(staticResult, statics, previousIds, figures.staticIdChanges);
+        figures.staticLast = staticResult;
+        figures.staticEstimates = statics.positions.size();
+        const bool covered =
+            snapshot.t >= -truth.periodS / 2.0 && snapshot.t <= truth.durationS + truth.periodS / 2.0 + kTimeSlackS;
+        if (!covered) {
+            continue; // outside the truth's time span: the moving objects' positions are unknown
+        }
+        for (auto [cls, mean] :
+             {std::pair{OoiClass::Mobile, &figures.mobile}, std::pair{OoiClass::NonCombatant, &figures.nonCombatant}}) {
+            mean->add(correlator::gospa(movingTruthAt(truth, cls, snapshot.t),
+                                        objectsOf(snapshot, cls, frame).positions, kGospa));
+        }
+    }
+    return figures;
+}
+
+// ---- output --------------------------------------------------------------------------------------------------
+
+std::size_t movingCount(const Truth& truth, OoiClass cls)
+{
+    return static_cast<std::size_t>(std::count_if(truth.moving.begin(), truth.moving.end(),
+                                                  [cls](const auto& entry) { return entry.second.cls == cls; }));
+}
+
+void printRow(const char* name, double total, double localisation, double missed, double falsePart)
+{
+    std::cout << std::left << std::setw(30) << name << std::right << std::fixed << std::setprecision(3) << std::setw(10)
+              << total << std::setw(14) << localisation << std::setw(12) << missed << std::setw(12) << falsePart;
+}
+
+void printTable(const Figures& f, const Truth& truth)
+{
+    std::cout << "snapshots: " << f.snapshots << " (t " << std::fixed << std::setprecision(1) << f.firstT << " .. "
+              << f.lastT << " s); truth: " << truth.statics.size() << " static, "
+              << movingCount(truth, OoiClass::Mobile) << " mobile, " << movingCount(truth, OoiClass::NonCombatant)
+              << " non-combatant objects\n";
+    std::cout << std::defaultfloat << "GOSPA c = " << kGospa.cutoffM << " m, p = " << kGospa.order
+              << ", alpha = " << kAlpha << " (parts in m^2: localisation + missed + false = GOSPA^2)\n";
+    std::cout << std::left << std::setw(30) << "" << std::right << std::setw(10) << "GOSPA [m]" << std::setw(14)
+              << "localisation" << std::setw(12) << "missed" << std::setw(12) << "false"
+              << "   counts\n";
+    const GospaResult& s = f.staticLast;
+    char staticName[64];
+    std::snprintf(staticName, sizeof(staticName), "static at t = %.1f s", f.lastT);
+    printRow(staticName, s.total, s.localisationPart, s.missedPart, s.falsePart);
+    std::cout << "   " << s.assigned << " assigned, " << s.missed << " missed, " << s.falseCount << " false (of "
+              << f.staticEstimates << ")\n";
+    for (const auto& [name, m] :
+         {std::pair{"mobile, mean", &f.mobile}, std::pair{"non-combatant, mean", &f.nonCombatant}}) {
+        printRow(name, m->mean(m->total), m->mean(m->localisationPart), m->mean(m->missedPart), m->mean(m->falsePart));
+        std::cout << "   over " << m->snapshots << " snapshots\n";
+    }
+    std::cout << "static ID changes: " << f.staticIdChanges << '\n';
+}
+
+ordered_json meanJson(const GospaMean& m)
+{
+    return ordered_json{{"snapshots", m.snapshots},
+                        {"mean_gospa_m", m.mean(m.total)},
+                        {"mean_localisation_m2", m.mean(m.localisationPart)},
+                        {"mean_missed_m2", m.mean(m.missedPart)},
+                        {"mean_false_m2", m.mean(m.falsePart)}};
+}
+
+ordered_json figuresJson(const Figures& f, const Truth& truth)
+{
+    const GospaResult& s = f.staticLast;
+    return ordered_json{{"snapshots", f.snapshots},
+                        {"first_t", f.firstT},
+                        {"last_t", f.lastT},
+                        {"cutoff_m", kGospa.cutoffM},
+                        {"order", kGospa.order},
+                        {"alpha", kAlpha},
+                        {"static",
+                         {{"t", f.lastT},
+                          {"truth", truth.statics.size()},
+                          {"estimates", f.staticEstimates},
+                          {"gospa_m", s.total},
+                          {"localisation_m2", s.localisationPart},
+                          {"missed_m2", s.missedPart},
+                          {"false_m2", s.falsePart},
+                          {"assigned", s.assigned},
+                          {"missed", s.missed},
+                          {"false", s.falseCount}}},
+                        {"mobile", meanJson(f.mobile)},
+                        {"noncombatant", meanJson(f.nonCombatant)},
+                        {"static_id_changes", f.staticIdChanges}};
+}
+
+Result<void, Error> writeJson(const std::string& path, const ordered_json& figures)
+{
+    std::ofstream out(path);
+    out << figures.dump(2) << '\n';
+    out.flush();
+    if (!out) {
+        return Unexpected(Error{path, "cannot write the file", "check that the folder exists and is writable"});
+    }
+    return {};
+}
+
+int reportFailure(const Error& error)
+{
+    std::cerr << "ugvsense " << kCommand << ": error: " << error.message() << '\n';
+    return 1;
+}
+
+} // namespace
+
+int runCorrelateEval(int argc, char** argv)
+{
+    Args args(kCommand,
+              "--snapshots SNAPSHOTS.jsonl --truth TRUTH.jsonl [--json OUT]\n"
+              "  Scores correlator snapshots (the output of 'ugvsense correlate') against the truth of\n"
+              "  'ugvsense correlate-sim' with GOSPA (c = 5 m, p = 2, alpha = 2; parts in m^2):\n"
+              "  static objects at the last snapshot; mobile objects and non-combatants: the mean over the\n"
+              "  snapshots, against the truth sample nearest in time (within half its period); static ID changes:\n"
+              "  per true static object, changes of the id assigned to it between consecutive snapshots in which\n"
+              "  it is assigned.",
+              {{"snapshots", "SNAPSHOTS.jsonl", "snapshot lines of 'ugvsense correlate'", true},
+               {"truth", "TRUTH.jsonl", "truth file of 'ugvsense correlate-sim'", true},
+               {"json", "OUT", "also write the figures as JSON to OUT", false}});
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+        return *exit;
+    }
+    const auto truth = readTruth(args.get("truth"));
+    if (!truth) {
+        return reportFailure(truth.error());
+    }
+    const auto snapshots = readSnapshots(args.get("snapshots"));
+    if (!snapshots) {
+        return reportFailure(snapshots.error());
+    }
+    const Figures figures = score(*snapshots, *truth);
+    printTable(figures, *truth);
+    if (args.has("json")) {
+        if (auto written = writeJson(args.get("json"), figuresJson(figures, *truth)); !written) {
+            return reportFailure(written.error());
+        }
+    }
+    return 0;
+}
+
+} // namespace ugv::tool

@@ -1,0 +1,366 @@
+#include "correlate_io.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+namespace ugv::tool {
+namespace {
+
+using nlohmann::json;
+using namespace correlator;
+
+Error lineError(const std::string& what, const std::string& fix = "")
+{
+    return Error{"", what, fix};
+}
+
+/// The number `key` of `j`: present, a number, finite.
+Result<double, Error> number(const json& j, const char* key)
+{
+    const auto it = j.find(key);
+    if (it == j.end()) {
+        return Unexpected(lineError(std::string("missing field '") + key + "'"));
+    }
+    if (!it->is_number()) {
+        return Unexpected(lineError(std::string("field '") + key + "' is not a number"));
+    }
+    const double v = it->get<double>();
+    if (!std::isfinite(v)) {
+        return Unexpected(lineError(std::string("field '") + key + "' is not finite"));
+    }
+    return v;
+}
+
+Result<std::string, Error> text(const json& j, const char* key)
+{
+    const auto it = j.find(key);
+    if (it == j.end()) {
+        return Unexpected(lineError(std::string("missing field '") + key + "'"));
+    }
+    if (!it->is_string() || it->get_ref<const std::string&>().empty()) {
+        return Unexpected(lineError(std::string("field '") + key + "' is not a non-empty string"));
+    }
+    return it->get<std::string>();
+}
+
+Result<OoiClass, Error> ooiClass(const std::string& s)
+{
+    if (s == "static") {
+        return OoiClass::Static;
+    }
+    if (s == "mobile") {
+        return OoiClass::Mobile;
+    }
+    if (s == "noncombatant") {
+        return OoiClass::NonCombatant;
+    }
+    if (s == "unknown") {
+        return OoiClass::Unknown;
+    }
+    return Unexpected(lineError("unknown class '" + s + "'", "use static, mobile, noncombatant or unknown"));
+}
+
+Result<Confirmation, Error> confirmation(const std::string& s)
+{
+    if (s == "unknown") {
+        return Confirmation::Unknown;
+    }
+    if (s == "confirmed_positive") {
+        return Confirmation::ConfirmedPositive;
+    }
+    if (s == "confirmed_negative") {
+        return Confirmation::ConfirmedNegative;
+    }
+    return Unexpected(lineError("unknown state '" + s + "'", "use unknown, confirmed_positive or confirmed_negative"));
+}
+
+Result<void, Error> latLon(double lat, double lon, const char* what)
+{
+    if (lat < -90.0 || lat > 90.0) {
+        return Unexpected(lineError(std::string(what) + " latitude " + std::to_string(lat) + " is outside -90..90"));
+    }
+    if (lon < -180.0 || lon > 180.0) {
+        return Unexpected(lineError(std::string(what) + " longitude " + std::to_string(lon) + " is outside -180..180"));
+    }
+    return {};
+}
+
+/// Collects the first error of several field reads.
+class Fields {
+public:
+    explicit Fields(const json& j) : j_(j) {}
+    double num(const char* key)
+    {
+        auto v = number(j_, key);
+        if (!v) {
+            keep(v.error());
+            return 0.0;
+        }
+        return *v;
+    }
+    std::string str(const char* key)
+    {
+        auto v = text(j_, key);
+        if (!v) {
+            keep(v.error());
+            return {};
+        }
+        return *v;
+    }
+    void keep(Error e)
+    {
+        if (!error_) {
+            error_ = std::move(e);
+        }
+    }
+    [[nodiscard]] const std::optional<Error>& error() const { return error_; }
+
+private:
+    const json& j_;
+    std::optional<Error> error_;
+};
+
+Result<Message, Error> observation(const json& j)
+{
+    Fields f(j);
+    Observation o;
+    o.t = f.num("t");
+    o.ugv = f.str("ugv");
+    o.track = f.str("track");
+    const std::string cls = f.str("class");
+    o.ugvLat = f.num("ugv_lat");
+    o.ugvLon = f.num("ugv_lon");
+    o.ugvHeadingDeg = f.num("ugv_heading_deg");
+    o.rangeM = f.num("range_m");
+    o.bearingDeg = f.num("bearing_deg");
+    if (f.error()) {
+        return Unexpected(*f.error());
+    }
+    auto c = ooiClass(cls);
+    if (!c) {
+        return Unexpected(c.error());
+    }
+    o.cls = *c;
+    if (auto ok = latLon(o.ugvLat, o.ugvLon, "ugv"); !ok) {
+        return Unexpected(ok.error());
+    }
+    if (o.rangeM < 0.0) {
+        return Unexpected(lineError("range_m " + std::to_string(o.rangeM) + " is negative"));
+    }
+    return Message{o};
+}
+
+Result<Message, Error> uav(const json& j)
+{
+    Fields f(j);
+    UavFix u;
+    u.t = f.num("t");
+    const std::string cls = f.str("class");
+    u.lat = f.num("lat");
+    u.lon = f.num("lon");
+    if (f.error()) {
+        return Unexpected(*f.error());
+    }
+    auto c = ooiClass(cls);
+    if (!c) {
+        return Unexpected(c.error());
+    }
+    u.cls = *c;
+    if (auto ok = latLon(u.lat, u.lon, "uav"); !ok) {
+        return Unexpected(ok.error());
+    }
+    return Message{u};
+}
+
+Result<Message, Error> confirm(const json& j)
+{
+    Fields f(j);
+    Confirm c;
+    c.t = f.num("t");
+    c.id = f.str("id");
+    const std::string state = f.str("state");
+    if (f.error()) {
+        return Unexpected(*f.error());
+    }
+    auto s = confirmation(state);
+    if (!s) {
+        return Unexpected(s.error());
+    }
+    c.state = *s;
+    return Message{c};
+}
+
+Result<Message, Error> poseCorrection(const json& j)
+{
+    Fields f(j);
+    PoseCorrection p;
+    p.t = f.num("t");
+    p.ugv = f.str("ugv");
+    p.sinceT = f.num("since_t");
+    p.untilT = f.num("until_t");
+    p.dEastM = f.num("d_east_m");
+    p.dNorthM = f.num("d_north_m");
+    p.dHeadingDeg = f.num("d_heading_deg");
+    if (f.error()) {
+        return Unexpected(*f.error());
+    }
+    if (p.untilT < p.sinceT) {
+        return Unexpected(lineError("until_t is before since_t"));
+    }
+    return Message{p};
+}
+
+json objectJson(const ObjectEstimate& o)
+{
+    return json{{"id", o.id},
+                {"class", toString(o.cls)},
+                {"lat", o.lat},
+                {"lon", o.lon},
+                {"sigma_major_m", o.sigmaMajorM},
+                {"sigma_minor_m", o.sigmaMinorM},
+                {"major_axis_deg", o.majorAxisDeg},
+                {"state", toString(o.state)},
+                {"observations", o.observations},
+                {"ugvs", o.ugvs},
+                {"zone_diameter_m", o.zoneDiameterM}};
+}
+
+} // namespace
+
+Result<Message, Error> parseMessageLine(std::string_view line)
+{
+    const json j = json::parse(line, nullptr, false);
+    if (j.is_discarded()) {
+        return Unexpected(lineError("not valid JSON", "one JSON object per line"));
+    }
+    if (!j.is_object()) {
+        return Unexpected(lineError("not a JSON object", "one JSON object per line"));
+    }
+    auto kind = text(j, "kind");
+    if (!kind) {
+        return Unexpected(kind.error());
+    }
+    if (*kind == "observation") {
+        return observation(j);
+    }
+    if (*kind == "uav") {
+        return uav(j);
+    }
+    if (*kind == "confirm") {
+        return confirm(j);
+    }
+    if (*kind == "pose_correction") {
+        return poseCorrection(j);
+    }
+    return Unexpected(lineError("unknown kind '" + *kind + "'", "use observation, uav, confirm or pose_correction"));
+}
+
+std::string toJsonLine(const Message& message)
+{
+    json j;
+    if (const auto* o = std::get_if<Observation>(&message)) {
+        j = json{{"t", o->t},
+                 {"kind", "observation"},
+                 {"ugv", o->ugv},
+                 {"track", o->track},
+                 {"class", toString(o->cls)},
+                 {"ugv_lat", o->ugvLat},
+                 {"ugv_lon", o->ugvLon},
+                 {"ugv_heading_deg", o->ugvHeadingDeg},
+                 {"range_m", o->rangeM},
+                 {"bearing_deg", o->bearingDeg}};
+    } else if (const auto* u = std::get_if<UavFix>(&message)) {
+        j = json{{"t", u->t}, {"kind", "uav"}, {"class", toString(u->cls)}, {"lat", u->lat}, {"lon", u->lon}};
+    } else if (const auto* c = std::get_if<Confirm>(&message)) {
+        j = json{{"t", c->t}, {"kind", "confirm"}, {"id", c->id}, {"state", toString(c->state)}};
+    } else if (const auto* p = std::get_if<PoseCorrection>(&message)) {
+        j = json{{"t", p->t},
+                 {"kind", "pose_correction"},
+                 {"ugv", p->ugv},
+                 {"since_t", p->sinceT},
+                 {"until_t", p->untilT},
+                 {"d_east_m", p->dEastM},
+                 {"d_north_m", p->dNorthM},
+                 {"d_heading_deg", p->dHeadingDeg}};
+    }
+    return j.dump();
+}
+
+std::string toJsonLine(const Snapshot& snapshot)
+{
+    json objects = json::array();
+    for (const ObjectEstimate& o : snapshot.objects) {
+        objects.push_back(objectJson(o));
+    }
+    json alerts = json::array();
+    for (const Alert& a : snapshot.alerts) {
+        alerts.push_back(json{{"noncombatant", a.nonCombatantId}, {"object", a.objectId}, {"distance_m", a.distanceM}});
+    }
+    return json{{"t", snapshot.t}, {"objects", objects}, {"alerts", alerts}}.dump();
+}
+
+Result<Snapshot, Error> parseSnapshotLine(std::string_view line)
+{
+    const json j = json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) {
+        return Unexpected(lineError("not a JSON object", "one snapshot per line, as `ugvsense correlate` writes"));
+    }
+    auto t = number(j, "t");
+    if (!t) {
+        return Unexpected(t.error());
+    }
+    const auto objects = j.find("objects");
+    if (objects == j.end() || !objects->is_array()) {
+        return Unexpected(lineError("missing array 'objects'"));
+    }
+    Snapshot s;
+    s.t = *t;
+    for (const json& o : *objects) {
+        if (!o.is_object()) {
+            return Unexpected(lineError("an entry of 'objects' is not an object"));
+        }
+        Fields f(o);
+        ObjectEstimate e;
+        e.id = f.str("id");
+        const std::string cls = f.str("class");
+        e.lat = f.num("lat");
+        e.lon = f.num("lon");
+        e.sigmaMajorM = f.num("sigma_major_m");
+        e.sigmaMinorM = f.num("sigma_minor_m");
+        e.majorAxisDeg = f.num("major_axis_deg");
+        const std::string state = f.str("state");
+        e.observations = static_cast<int>(f.num("observations"));
+        e.zoneDiameterM = f.num("zone_diameter_m");
+        if (f.error()) {
+            return Unexpected(*f.error());
+        }
+        auto c = ooiClass(cls);
+        auto st = confirmation(state);
+        if (!c || !st) {
+            return Unexpected(!c ? c.error() : st.error());
+        }
+        e.cls = *c;
+        e.state = *st;
+        if (const auto u = o.find("ugvs"); u != o.end() && u->is_array()) {
+            for (const json& name : *u) {
+                if (name.is_string()) {
+                    e.ugvs.push_back(name.get<std::string>());
+                }
+            }
+        }
+        s.objects.push_back(std::move(e));
+    }
+    if (const auto alerts = j.find("alerts"); alerts != j.end() && alerts->is_array()) {
+        for (const json& a : *alerts) {
+            Fields f(a);
+            Alert alert{f.str("noncombatant"), f.str("object"), f.num("distance_m")};
+            if (!f.error()) {
+                s.alerts.push_back(std::move(alert));
+            }
+        }
+    }
+    return s;
+}
+
+} // namespace ugv::tool

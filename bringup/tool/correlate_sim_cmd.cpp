@@ -1,0 +1,263 @@
+// ugvsense correlate-sim: a simulated multi-UGV OOI scenario (correlator/scenario.hpp) written as the correlator's
+// input messages (JSON lines of correlate_io, as `ugvsense correlate` reads them) and its ground truth, a JSON-lines
+// file that `ugvsense correlate-eval` reads (format in kTruthFormat below, printed by --help).
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "correlate_io.hpp"
+#include "ugv/correlator/scenario.hpp"
+
+namespace ugv::tool {
+namespace {
+
+using correlator::ScenarioConfig;
+using correlator::ScenarioSetting;
+using correlator::ScenarioTruth;
+using nlohmann::ordered_json;
+
+constexpr const char* kCommand = "correlate-sim";
+constexpr double kMaxUgvs = 100.0;
+constexpr double kMaxDurationS = 7.0 * 24.0 * 3600.0;
+constexpr double kMaxSeed = 1e15; ///< exact in a double (and in the truth file's JSON number)
+constexpr double kMaxPeriodS = 3600.0;
+constexpr std::string_view kJsonLinesExtension = ".jsonl";
+
+constexpr const char* kTruthFormat =
+    "truth file (JSON lines; default OBS.truth.jsonl beside OBS.jsonl):\n"
+    "  {\"kind\":\"scenario\",\"setting\":\"clean|bias|drift\",\"seed\":N,\"ugvs\":N,\"duration_s\":S,\"period_s\":S,\n"
+    "   \"origin_lat\":DEG,\"origin_lon\":DEG,\"max_heading_bias_deg\":DEG,\"max_offset_m\":M,\n"
+    "   \"drift_sigma_m_per_sqrt_s\":SIGMA,\"pose_corrections\":BOOL}       first line, once\n"
+    "  {\"kind\":\"ugv\",\"ugv\":\"ugv-1\",\"heading_bias_deg\":DEG,\"offset_east_m\":M,\"offset_north_m\":M}\n"
+    "                                                one per UGV: its constant pose errors (drift not listed)\n"
+    "  {\"kind\":\"static\",\"id\":\"static-01\",\"class\":\"static\",\"lat\":DEG,\"lon\":DEG}   one per static OOI\n"
+    "  {\"kind\":\"moving\",\"id\":\"mobile-01\",\"class\":\"mobile|noncombatant\",\"t\":S,\"lat\":DEG,\"lon\":DEG}\n"
+    "                                                every moving object at t = 0, period_s, ... <= duration_s";
+
+/// Prints an error of the job (not of the command line) and returns exit code 1.
+int reportFailure(const Error& error)
+{
+    std::cerr << "ugvsense " << kCommand << ": error: " << error.message() << '\n';
+    return 1;
+}
+
+/// OBS.jsonl -> OBS.truth.jsonl; any other name gets ".truth.jsonl" appended.
+std::string defaultTruthPath(const std::string& out)
+{
+    if (out.size() > kJsonLinesExtension.size() && out.ends_with(kJsonLinesExtension)) {
+        return out.substr(0, out.size() - kJsonLinesExtension.size()) + ".truth.jsonl";
+    }
+    return out + ".truth.jsonl";
+}
+
+/// The option as a whole number within [min, max].
+Result<double, Error> wholeNumber(const Args& args, const std::string& name, double fallback, double min, double max)
+{
+    auto value = args.number(name, fallback, min, max);
+    if (value && std::floor(*value) != *value) {
+        return Unexpected(Error{"ugvsense " + std::string(kCommand) + " --" + name,
+                                "bad value '" + args.get(name) + "'", "give a whole number"});
+    }
+    return value;
+}
+
+/// The scenario config from the command line; usage errors name the option.
+Result<ScenarioConfig, Error> configFrom(const Args& args)
+{
+    const std::string settingName = args.get("setting", "clean");
+    const auto setting = correlator::parseScenarioSetting(settingName);
+    if (!setting) {
+        return Unexpected(Error{"ugvsense " + std::string(kCommand) + " --setting",
+                                "unknown setting '" + settingName + "'", "use clean, bias or drift"});
+    }
+    ScenarioConfig config = correlator::scenarioPreset(*setting);
+    const auto ugvs = wholeNumber(args, "ugvs", config.ugvCount, 1, kMaxUgvs);
+    const auto seed = wholeNumber(args, "seed", static_cast<double>(config.seed), 0, kMaxSeed);
+    const auto duration = args.number("duration", config.durationS, 1, kMaxDurationS);
+    const auto period = args.number("period", config.truthPeriodS, 0.01, kMaxPeriodS);
+    for (const auto* number : {&ugvs, &seed, &duration, &period}) {
+        if (!*number) {
+            return Unexpected(number->error());
+        }
+    }
+    config.ugvCount = static_cast<int>(*ugvs);
+    config.seed = static_cast<std::uint64_t>(*seed);
+    config.durationS = *duration;
+    config.truthPeriodS = *period;
+    config.poseCorrections = args.has("pose-corrections");
+    if (auto valid = correlator::validateScenarioConfig(config); !valid) {
+        return Unexpected(valid.error());
+    }
+    return config;
+}
+
+Result<void, Error> writeMessages(const std::string& path, const std::vector<correlator::Message>& messages)
+{
+    std::ofstream out(path);
+    if (!out) {
+        return Unexpected(
+            Error{path, "cannot open the file for writing", "check that the folder exists and is writable"});
+    }
+    for (const auto& message : messages) {
+        out << toJsonLine(message) << '\n';
+    }
+    out.flush();
+    if (!out) {
+        return Unexpected(Error{path, "cannot write the file", "check the free space"});
+    }
+    return {};
+}
+
+ordered_json headerLine(const ScenarioConfig& config, ScenarioSetting setting, const ScenarioTruth& truth)
+{
+    return ordered_json{{"kind", "scenario"},
+                        {"setting", correlator::toString(setting)},
+                        {"seed", config.seed},
+                        {"ugvs", config.ugvCount},
+                        {"duration_s", truth.durationS},
+                        {"period_s", truth.periodS},
+                        {"origin_lat", truth.originLat},
+                        {"origin_lon", truth.originLon},
+                        {"max_heading_bias_deg", config.maxHeadingBiasDeg},
+                        {"max_offset_m", config.maxOffsetM},
+                        {"drift_sigma_m_per_sqrt_s", config.driftSigmaMPerSqrtS},
+                        {"pose_corrections", config.poseCorrections}};
+}
+
+/// The truth as JSON lines (kTruthFormat): header, UGVs, static objects, moving samples.
+std::vector<ordered_json> truthLines(const ScenarioConfig& config, ScenarioSetting setting, const ScenarioTruth& truth)
+{
+    std::vector<ordered_json> lines{headerLine(config, setting, truth)};
+    for (const auto& ugv : truth.ugvs) {
+        lines.push_back({{"kind", "ugv"},
+                         {"ugv", ugv.name},
+                         {"heading_bias_deg", ugv.headingBiasDeg},
+                         {"offset_east_m", ugv.offsetEastM},
+                         {"offset_north_m", ugv.offsetNorthM}});
+    }
+    for (const auto& object : truth.statics) {
+        lines.push_back(
+            {{"kind", "static"}, {"id", object.id}, {"class", "static"}, {"lat", object.lat}, {"lon", object.lon}});
+    }
+    for (const auto& sample : truth.moving) {
+        lines.push_back({{"kind", "moving"},
+                         {"id", sample.id},
+                         {"class", correlator::toString(sample.cls)},
+                         {"t", sample.t},
+                         {"lat", sample.lat},
+                         {"lon", sample.lon}});
+    }
+    return lines;
+}
+
+Result<void, Error> writeTruth(const std::string& path, const std::vector<ordered_json>& lines)
+{
+    std::ofstream out(path);
+    if (!out) {
+        return Unexpected(
+            Error{path, "cannot open the file for writing", "check that the folder exists and is writable"});
+    }
+    for (const auto& line : lines) {
+        out << line.dump() << '\n';
+    }
+    out.flush();
+    if (!out) {
+        return Unexpected(Error{path, "cannot write the file", "check the free space"});
+    }
+    return {};
+}
+
+/// Messages per kind, in the order of the Message variant (observation, UAV fix, confirm, pose correction).
+std::vector<std::size_t> countByKind(const std::vector<correlator::Message>& messages)
+{
+    std::vector<std::size_t> counts(std::variant_size_v<correlator::Message>, 0);
+    for (const auto& message : messages) {
+        ++counts[message.index()];
+    }
+    return counts;
+}
+
+/// Number of distinct moving objects of class `cls`.
+std::size_t countClass(const ScenarioTruth& truth, correlator::OoiClass cls)
+{
+    std::set<std::string> ids;
+    for (const auto& sample : truth.moving) {
+        if (sample.cls == cls) {
+            ids.insert(sample.id);
+        }
+    }
+    return ids.size();
+}
+
+void printSummary(const ScenarioConfig& config, ScenarioSetting setting, const correlator::Scenario& scenario,
+                  const std::string& out, const std::string& truthPath)
+{
+    const auto counts = countByKind(scenario.messages);
+    const ScenarioTruth& truth = scenario.truth;
+    std::cout << "wrote " << scenario.messages.size() << " messages (" << counts[0] << " observations, " << counts[1]
+              << " UAV fixes, " << counts[3] << " pose corrections) of " << config.ugvCount << " UGVs over "
+              << config.durationS << " s (setting " << correlator::toString(setting) << ", seed " << config.seed
+              << ") to " << out << "\nwrote the truth (" << truth.statics.size() << " static, "
+              << countClass(truth, correlator::OoiClass::Mobile) << " mobile, "
+              << countClass(truth, correlator::OoiClass::NonCombatant) << " non-combatant objects; "
+              << truth.moving.size() << " moving samples every " << truth.periodS << " s) to " << truthPath << '\n';
+}
+
+} // namespace
+
+int runCorrelateSim(int argc, char** argv)
+{
+    Args args(kCommand,
+              "--out OBS.jsonl [--truth TRUTH.jsonl] [--setting clean|bias|drift] [--ugvs N] [--duration S] "
+              "[--seed N] [--period S] [--pose-corrections]\n"
+              "  Simulates UGVs patrolling loops and reporting objects of interest (static, mobile, non-combatant)\n"
+              "  with range/bearing noise, misses, clutter and track UUID changes, a UAV fixing mobile objects, and\n"
+              "  per-UGV pose errors by setting: clean (none), bias (heading bias up to 8 deg, offset up to 1 m),\n"
+              "  drift (random walk 0.05 m per sqrt(s)). Writes the correlator's input messages (JSON lines, the\n"
+              "  format of 'ugvsense correlate') and the ground truth for 'ugvsense correlate-eval'.\n\n" +
+                  std::string(kTruthFormat),
+              {{"out", "OBS.jsonl", "input messages to write (observation, uav, pose_correction lines)", true},
+               {"truth", "TRUTH.jsonl", "truth file to write, default OBS.truth.jsonl", false},
+               {"setting", "NAME", "pose errors: clean, bias or drift, default clean", false},
+               {"ugvs", "N", "number of UGVs, default 5", false},
+               {"duration", "S", "scenario length in seconds, default 600", false},
+               {"seed", "N", "random seed, default 1 (the settings of one seed share layout and noise)", false},
+               {"period", "S", "truth sampling of moving objects (the snapshot period), default 1", false},
+               {"pose-corrections", "", "emit the map builder's exact pose corrections every 60 s per UGV", false}});
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+        return *exit;
+    }
+    const auto config = configFrom(args);
+    if (!config) {
+        return reportUsageError(kCommand, config.error());
+    }
+    const ScenarioSetting setting = *correlator::parseScenarioSetting(args.get("setting", "clean"));
+    auto scenario = correlator::generateScenario(*config);
+    if (!scenario) {
+        return reportUsageError(kCommand, scenario.error());
+    }
+    const std::string out = args.get("out");
+    const std::string truthPath = args.get("truth", defaultTruthPath(out));
+    if (auto written = writeMessages(out, scenario->messages); !written) {
+        return reportFailure(written.error());
+    }
+    if (auto written = writeTruth(truthPath, truthLines(*config, setting, scenario->truth)); !written) {
+        return reportFailure(written.error());
+    }
+    printSummary(*config, setting, *scenario, out, truthPath);
+    return 0;
+}
+
+} // namespace ugv::tool
