@@ -10,6 +10,7 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <variant>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -19,6 +20,7 @@
 #include "commands.hpp"
 #include "correlate_io.hpp"
 #include "ugv/correlator/geodesy.hpp"
+#include "ugv/correlator/improved_correlator.hpp"
 #include "ugv/correlator/original_correlator.hpp"
 
 namespace ugv::tool {
@@ -124,11 +126,15 @@ Result<void, Error> drawMap(const std::string& path, const Snapshot& s, const st
 
 int runCorrelate(int argc, char** argv)
 {
-    Args args(kCommand, "--input OBS.jsonl --output SNAPSHOTS.jsonl [--period S] [--mode original] [--map MAP.png]",
+    Args args(kCommand,
+              "--input OBS.jsonl --output SNAPSHOTS.jsonl [--period S] [--mode improved|original] [--map MAP.png]",
               {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", true},
                {"output", "SNAPSHOTS.jsonl", "one snapshot of the correlated objects per period", true},
                {"period", "S", "snapshot period, default 1 s", false},
-               {"mode", "MODE", "original (the published algorithm); improved is not built yet", false},
+               {"mode", "MODE",
+                "improved (default: pose errors estimated, statistical gates, Kalman mobiles) or original (the "
+                "published algorithm)",
+                false},
                {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
@@ -137,10 +143,9 @@ int runCorrelate(int argc, char** argv)
     if (!period) {
         return reportUsageError(kCommand, period.error());
     }
-    const std::string mode = args.get("mode", "original");
-    if (mode != "original") {
-        return reportUsageError(kCommand, Error{"--mode " + mode, "not available in this version",
-                                                "use --mode original (mode improved is issue 5's next part)"});
+    const std::string mode = args.get("mode", "improved");
+    if (mode != "original" && mode != "improved") {
+        return reportUsageError(kCommand, Error{"--mode " + mode, "unknown mode", "use original or improved"});
     }
     std::ifstream in(args.get("input"));
     if (!in) {
@@ -151,7 +156,10 @@ int runCorrelate(int argc, char** argv)
         return fail(Error{args.get("output"), "cannot create the output", "check the folder"});
     }
 
-    OriginalCorrelator correlator;
+    std::variant<OriginalCorrelator, ImprovedCorrelator> correlator;
+    if (mode == "improved") {
+        correlator.emplace<ImprovedCorrelator>();
+    }
     std::map<std::string, UgvPose> ugvs;
     std::string line;
     std::size_t lineNumber = 0;
@@ -171,7 +179,7 @@ int runCorrelate(int argc, char** argv)
     };
     const auto emit = [&](double t) {
         const auto t0 = std::chrono::steady_clock::now();
-        last = correlator.snapshot(t);
+        last = std::visit([t](auto& c) { return c.snapshot(t); }, correlator);
         snapshotBusy += std::chrono::steady_clock::now() - t0;
         out << toJsonLine(last) << '\n';
         ++snapshots;
@@ -201,7 +209,7 @@ int runCorrelate(int argc, char** argv)
             nextSnapshotT += *period;
         }
         const auto t0 = std::chrono::steady_clock::now();
-        auto applied = correlator.add(*message);
+        auto applied = std::visit([&message](auto& c) { return c.add(*message); }, correlator);
         busy += std::chrono::steady_clock::now() - t0;
         if (!applied) {
             report(applied.error());
@@ -226,11 +234,11 @@ int runCorrelate(int argc, char** argv)
     const double snapshotSeconds = std::chrono::duration<double>(snapshotBusy).count();
     std::printf("correlated %zu message(s), %zu bad line(s) skipped, %zu snapshot(s) to %s; %zu object(s) at t %.1f\n"
                 "correlator: %.3f s in add() (%.0f messages/s), %.3f s in snapshot() (%.1f us each); "
-                "%zu pose correction(s) ignored by mode original; %zu observation points held\n",
+                "mode %s; %zu observation points held\n",
                 messages, bad, snapshots, args.get("output").c_str(), last.objects.size(), last.t, seconds,
                 seconds > 0.0 ? static_cast<double>(messages) / seconds : 0.0, snapshotSeconds,
-                snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0,
-                correlator.ignoredPoseCorrections(), correlator.storedPoints());
+                snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0, mode.c_str(),
+                std::visit([](const auto& c) { return c.storedPoints(); }, correlator));
     if (args.has("map")) {
         if (auto drawn = drawMap(args.get("map"), last, ugvs); !drawn) {
             return fail(drawn.error());

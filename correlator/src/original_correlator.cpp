@@ -6,39 +6,18 @@
 
 #include <Eigen/LU>
 
+#include "rules.hpp"
+
 namespace ugv::correlator {
 namespace {
 
-constexpr double kNonCombatantStaticAlertM = 5.0;
-constexpr double kNonCombatantMobileAlertM = 20.0;
 constexpr std::uint64_t kAlwaysRefitUpTo = 16;
 constexpr std::array<double, 3> kMobileWeights{0.5, 0.3, 0.2}; ///< newest, previous, the one before
-
-bool isMobileClass(OoiClass c) noexcept
-{
-    return c == OoiClass::Mobile || c == OoiClass::NonCombatant;
-}
-
-Confirmation initialState(OoiClass c) noexcept
-{
-    return c == OoiClass::NonCombatant ? Confirmation::ConfirmedNegative : Confirmation::Unknown;
-}
-
-/// A confirmed state wins over unknown; otherwise the kept object's state stays.
-Confirmation inherit(Confirmation kept, Confirmation absorbed) noexcept
-{
-    return kept == Confirmation::Unknown ? absorbed : kept;
-}
 
 /// Standard deviation of `g` along the unit direction `u`.
 double sigmaAlong(const Gaussian2& g, const Eigen::Vector2d& u)
 {
     return std::sqrt(std::max(u.dot(g.cov * u), 0.0));
-}
-
-std::string trackKey(const std::string& ugv, const std::string& track)
-{
-    return ugv + '\x1f' + track;
 }
 
 /// The slot of `key` in `slots`: its own, a freed one reused, or a new one; `created` tells which.
@@ -84,7 +63,7 @@ Result<void, Error> OriginalCorrelator::add(const Message& message)
         ensureFrame(o->ugvLat, o->ugvLon);
         const Eigen::Vector2d ugv = frame_->toLocal(o->ugvLat, o->ugvLon);
         const Eigen::Vector2d p = project(ugv, o->ugvHeadingDeg + o->bearingDeg, o->rangeM);
-        if (isMobileClass(o->cls)) {
+        if (rules::isMobileClass(o->cls)) {
             addMobile(*o, p);
         } else {
             addStatic(*o, p);
@@ -110,7 +89,8 @@ Result<void, Error> OriginalCorrelator::add(const Message& message)
 void OriginalCorrelator::addStatic(const Observation& o, const Eigen::Vector2d& p)
 {
     bool created = false;
-    const int index = slotFor(staticTrackIndex_, trackKey(o.ugv, o.track), staticTracks_, freeStaticTracks_, created);
+    const int index =
+        slotFor(staticTrackIndex_, rules::trackKey(o.ugv, o.track), staticTracks_, freeStaticTracks_, created);
     if (created) {
         staticTracks_[static_cast<std::size_t>(index)].ugv = o.ugv;
         staticTracks_[static_cast<std::size_t>(index)].cls = o.cls;
@@ -179,7 +159,7 @@ int OriginalCorrelator::createStatic(OoiClass cls)
     created.id = newId();
     created.order = nextId_;
     created.cls = cls;
-    created.state = initialState(cls);
+    created.state = rules::initialState(cls);
     const int index = static_cast<int>(staticObjects_.size());
     idIndex_[created.id] = {true, index};
     staticObjects_.push_back(std::move(created));
@@ -288,7 +268,7 @@ void OriginalCorrelator::mergeStatic(int object)
         const int drop = keep == object ? i : object;
         StaticObject& kept = staticObjects_[static_cast<std::size_t>(keep)];
         StaticObject& gone = staticObjects_[static_cast<std::size_t>(drop)];
-        kept.state = inherit(kept.state, gone.state);
+        kept.state = rules::inherit(kept.state, gone.state);
         gone.alive = false;
         mergedInto_[gone.id] = kept.id;
         for (const auto& [t, c] : gone.members) {
@@ -318,7 +298,7 @@ void OriginalCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& 
 {
     bool created = false;
     MobileTrack& track = mobileTracks_[static_cast<std::size_t>(
-        slotFor(mobileTrackIndex_, trackKey(o.ugv, o.track), mobileTracks_, freeMobileTracks_, created))];
+        slotFor(mobileTrackIndex_, rules::trackKey(o.ugv, o.track), mobileTracks_, freeMobileTracks_, created))];
     // The weighted average of the newest and the last two observations (renormalised while fewer exist).
     Eigen::Vector2d estimate = kMobileWeights[0] * p;
     double weight = kMobileWeights[0];
@@ -364,7 +344,7 @@ int OriginalCorrelator::createMobile(OoiClass cls)
     created.id = newId();
     created.order = nextId_;
     created.cls = cls;
-    created.state = initialState(cls);
+    created.state = rules::initialState(cls);
     const int index = static_cast<int>(mobileObjects_.size());
     idIndex_[created.id] = {false, index};
     mobileObjects_.push_back(std::move(created));
@@ -384,7 +364,7 @@ void OriginalCorrelator::mergeMobile(int object)
         const int drop = keep == object ? i : object;
         MobileObject& kept = mobileObjects_[static_cast<std::size_t>(keep)];
         MobileObject& gone = mobileObjects_[static_cast<std::size_t>(drop)];
-        kept.state = inherit(kept.state, gone.state);
+        kept.state = rules::inherit(kept.state, gone.state);
         kept.observations += gone.observations;
         for (const std::string& u : gone.ugvs) {
             if (std::find(kept.ugvs.begin(), kept.ugvs.end(), u) == kept.ugvs.end()) {
@@ -499,7 +479,7 @@ Snapshot OriginalCorrelator::snapshot(double t)
     if (!frame_) {
         return s;
     }
-    std::vector<std::pair<Eigen::Vector2d, std::size_t>> threats; // (position, index in s.objects)
+    rules::Placed threats; // (position, index in s.objects)
     for (const StaticObject& so : staticObjects_) {
         if (!so.alive) {
             continue;
@@ -523,7 +503,7 @@ Snapshot OriginalCorrelator::snapshot(double t)
         threats.emplace_back(so.estimate.mean, s.objects.size());
         s.objects.push_back(std::move(e));
     }
-    std::vector<std::pair<Eigen::Vector2d, std::size_t>> civilians;
+    rules::Placed civilians;
     for (const MobileObject& mo : mobileObjects_) {
         if (!mo.alive) {
             continue;
@@ -542,16 +522,7 @@ Snapshot OriginalCorrelator::snapshot(double t)
         (mo.cls == OoiClass::NonCombatant ? civilians : threats).emplace_back(mo.pos, s.objects.size());
         s.objects.push_back(std::move(e));
     }
-    for (const auto& [pc, ci] : civilians) {
-        for (const auto& [pt, ti] : threats) {
-            const double limit =
-                s.objects[ti].cls == OoiClass::Mobile ? kNonCombatantMobileAlertM : kNonCombatantStaticAlertM;
-            const double d = (pc - pt).norm();
-            if (d <= limit) {
-                s.alerts.push_back(Alert{s.objects[ci].id, s.objects[ti].id, d});
-            }
-        }
-    }
+    rules::appendAlerts(s, civilians, threats);
     return s;
 }
 

@@ -24,7 +24,7 @@ obs() { # t ugv track class range bearing
     obs 0.1 ugv-2 b static 10 0                                                               # 12: time order
     obs 2.5 ugv-2 m mobile 20 10                                                              # 13: good
 } >"$work/obs.jsonl"
-out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap.jsonl" --map "$work/map.png" 2>&1)
+out=$("$tool" correlate --mode original --input "$work/obs.jsonl" --output "$work/snap.jsonl" --map "$work/map.png" 2>&1)
 rc=$?
 echo "$out"
 [ $rc -eq 0 ] || { echo "exit $rc, expected 0"; exit 1; }
@@ -41,4 +41,10 @@ grep -q '"id":"ooi-1"' <<<"$last" && grep -q '"state":"confirmed_positive"' <<<"
     grep -q '"class":"mobile"' <<<"$last" || { echo "last snapshot lacks the confirmed static or the mobile object"; exit 1; }
 [ "$(wc -l <"$work/snap.jsonl")" -ge 3 ] || { echo "expected a snapshot per second"; exit 1; }
 [ -s "$work/map.png" ] || { echo "no map written"; exit 1; }
+# The default mode (improved) reads the same lines the same way.
+out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap-improved.jsonl" 2>&1) || { echo "$out"; exit 1; }
+echo "$out"
+grep -qF "correlated 5 message(s), 8 bad line(s) skipped" <<<"$out" && grep -q "mode improved" <<<"$out" ||
+    { echo "improved mode: unexpected summary"; exit 1; }
+grep -q '"id":"ooi-1"' "$work/snap-improved.jsonl" || { echo "improved mode: no static object"; exit 1; }
 echo "OK"

@@ -10,39 +10,12 @@
 
 #include <gtest/gtest.h>
 
+#include "scene.hpp"
+
 namespace ugv::correlator {
 namespace {
 
-constexpr double kLat0 = -34.9;
-constexpr double kLon0 = 138.6;
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-
-/// Observations of local points (east, north) [m] from UGVs at local positions, through the real geodesy.
-class Scene {
-public:
-    Scene() : frame_(kLat0, kLon0) {}
-
-    Observation see(double t, const std::string& ugv, const std::string& track, OoiClass cls,
-                    const Eigen::Vector2d& ugvAt, const Eigen::Vector2d& object, double headingDeg = 30.0) const
-    {
-        Observation o;
-        o.t = t;
-        o.ugv = ugv;
-        o.track = track;
-        o.cls = cls;
-        frame_.toLatLon(ugvAt, o.ugvLat, o.ugvLon);
-        o.ugvHeadingDeg = headingDeg;
-        const Eigen::Vector2d d = object - ugvAt;
-        o.rangeM = d.norm();
-        o.bearingDeg = std::atan2(d.x(), d.y()) * kRadToDeg - headingDeg;
-        return o;
-    }
-    [[nodiscard]] Eigen::Vector2d local(const ObjectEstimate& e) const { return frame_.toLocal(e.lat, e.lon); }
-    void latLon(const Eigen::Vector2d& en, double& lat, double& lon) const { frame_.toLatLon(en, lat, lon); }
-
-private:
-    LocalFrame frame_;
-};
+using test::Scene;
 
 const ObjectEstimate* findId(const Snapshot& s, const std::string& id)
 {

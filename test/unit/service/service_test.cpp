@@ -440,7 +440,9 @@ TEST_F(ServiceTest, ARecordingWhoseLastPairIsRefusedStillFinishes)
     (*service)->stop();
     const ServiceReport report = (*service)->report();
     EXPECT_EQ(report.framesCaptured, 4U);
-    EXPECT_EQ(report.framesPublished, 3U);
+    // Three pairs went into the ring; a slow build (sanitizers) may drop one by latest-frame-wins.
+    EXPECT_EQ(report.framesPublished + report.framesDropped, 3U);
+    EXPECT_GE(report.framesPublished, 1U);
     EXPECT_EQ(report.loanFailures, 1U);
 }
 

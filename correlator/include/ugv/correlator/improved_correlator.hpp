@@ -1,0 +1,181 @@
+#pragma once
+
+/// @file
+/// Mode `improved`: the original's weakness is disagreement between the UGVs' poses (a few degrees of heading
+/// error puts one object in two places; a drifting UGV doubles every shared object) and a fixed 2.5 m gate that
+/// merges distinct objects standing close together. This mode:
+/// - keeps every static observation in the UGV's frame (reported pose, range, bearing; a bounded reservoir per
+///   track and offset window) so that pose corrections and estimated pose errors re-project it exactly;
+/// - models each observation's error: range sigma a + b r, bearing sigma, plus the UGV's remaining pose
+///   uncertainty; associates by Mahalanobis distance (chi-square gate) instead of a fixed radius;
+/// - estimates, every solvePeriodS, each UGV's heading bias (constant) and position offset (per offsetWindowS
+///   window, a random walk between windows) jointly with the static objects, by sparse Gauss-Newton least
+///   squares with Eigen (zero-mean priors fix the gauge: the fleet on average is unbiased);
+/// - tracks mobile objects with a constant-velocity Kalman filter, predicted through gaps, published after
+///   minMobileObservations; UAV fixes are precise measurements that confirm;
+/// - never changes a published id: merges keep the earliest; a track stays with its object, unless the object's
+///   tracks form two groups far apart (associated while the pose errors were unknown): then it splits, and
+///   the group with more observations keeps the id.
+///
+/// Thread-safety: thread-bound. RT-safe: no (the lowest-priority task).
+
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ugv/correlator/geodesy.hpp"
+#include "ugv/correlator/messages.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+
+namespace ugv::correlator {
+
+struct ImprovedConfig {
+    // Observation error model.
+    double rangeSigmaM = 0.1;
+    double rangeSigmaFraction = 0.01;
+    double bearingSigmaDeg = 1.0;
+    // Pose error priors and the drift model.
+    double headingBiasSigmaDeg = 5.0;
+    double offsetSigmaM = 1.0;
+    double driftSigmaMPerSqrtS = 0.05;
+    double offsetWindowS = 60.0;
+    double solvePeriodS = 120.0;
+    int solveIterations = 2;
+    // Association.
+    double gateChi2 = 11.8; ///< 2 degrees of freedom, 99.7 %
+    int minStaticObservations = 3;
+    double tentativeTimeoutS = 60.0;       ///< an object with fewer observations this long after its first is dropped
+    std::size_t samplesPerTrackWindow = 4; ///< reservoir per track and offset window
+    double horizonS = 1800.0;              ///< windows older than this are frozen and their samples dropped
+    // Mobile objects.
+    double mobileAccelSigma = 0.5; ///< [m/s^2] white-acceleration process noise
+    double mobileTimeoutS = 60.0;
+    int minMobileObservations = 3;
+    double uavSigmaM = 0.5;
+};
+
+class ImprovedCorrelator {
+public:
+    explicit ImprovedCorrelator(const ImprovedConfig& config = {});
+
+    /// Applies one message (time-ordered). Errors (the message is skipped): a confirm of an unknown id.
+    Result<void, Error> add(const Message& message);
+    [[nodiscard]] Snapshot snapshot(double t);
+    [[nodiscard]] std::size_t storedPoints() const noexcept;
+
+    /// The current estimate of a UGV's heading bias [deg] and offset at time t [m] (tests, diagnostics).
+    struct PoseError {
+        double headingBiasDeg = 0.0;
+        Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+    };
+    [[nodiscard]] std::optional<PoseError> poseError(const std::string& ugv, double t) const;
+
+private:
+    struct Sample {
+        double t = 0.0;
+        Eigen::Vector2d ugvPos = Eigen::Vector2d::Zero(); ///< reported, local frame
+        double headingRad = 0.0;                          ///< reported
+        double rangeM = 0.0;
+        double bearingRad = 0.0;
+    };
+    struct TrackWindow {
+        int window = 0;
+        std::uint64_t seen = 0;
+        std::vector<Sample> samples;
+    };
+    struct Track {
+        int ugv = -1;
+        int object = -1;
+        OoiClass cls = OoiClass::Static;
+        std::vector<TrackWindow> windows;
+        std::string key; ///< in trackIndex_
+        std::uint64_t seen = 0;
+        double lastT = 0.0;
+    };
+    struct StaticObject {
+        std::string id;
+        std::uint64_t order = 0;
+        OoiClass cls = OoiClass::Static;
+        Confirmation state = Confirmation::Unknown;
+        bool alive = true;
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d info = Eigen::Matrix2d::Zero(); ///< sum of inverse covariances
+        Eigen::Vector2d infoMean = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d measurementInfo = Eigen::Matrix2d::Zero(); ///< the same without the pose uncertainty
+        std::uint64_t observations = 0;
+        double firstT = 0.0;
+        std::vector<int> tracks;
+        Eigen::Matrix2d priorInfo = Eigen::Matrix2d::Zero(); ///< from samples dropped beyond the horizon
+        Eigen::Vector2d priorMean = Eigen::Vector2d::Zero();
+    };
+    struct Ugv {
+        std::string name;
+        double headingBias = 0.0;                ///< [rad] estimated
+        std::vector<Eigen::Vector2d> offsets;    ///< estimated, per window
+        std::vector<PoseCorrection> corrections; ///< explicit, from the map builder
+        bool solved = false;
+    };
+    struct Mobile {
+        std::string id;
+        std::uint64_t order = 0;
+        OoiClass cls = OoiClass::Mobile;
+        Confirmation state = Confirmation::Unknown;
+        bool alive = true;
+        Eigen::Vector4d x = Eigen::Vector4d::Zero(); ///< east, north, v_east, v_north
+        Eigen::Matrix4d p = Eigen::Matrix4d::Identity();
+        double t = 0.0;
+        int observations = 0;
+        std::vector<std::string> ugvs;
+    };
+
+    int ugvIndex(const std::string& name);
+    [[nodiscard]] int window(double t) const;
+    /// The object position an observation implies under the current pose model, and its covariance.
+    void projectSample(int ugv, const Sample& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov, bool withPose = true) const;
+    [[nodiscard]] Eigen::Vector2d offsetAt(int ugv, double t) const;
+    /// @return true when a pose correction covers time t (dPos, dHeading set from it).
+    bool explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos, double& dHeading) const;
+    void addStatic(const Observation& o, int ugv);
+    void addMobile(const Observation& o, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov);
+    void addUav(const UavFix& u);
+    [[nodiscard]] int nearestMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const;
+    int createMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t);
+    Result<void, Error> confirm(const Confirm& c);
+    void fuse(StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+              const Eigen::Matrix2d& measurementCov, double weight = 1.0) const;
+    void refit(StaticObject& object) const;
+    void solve();
+    void rebuildObjects();
+    void mergeStatics();
+    void dropTentative(double t);
+    void splitStatics();
+    [[nodiscard]] Eigen::Vector2d trackMean(int trackIndex, double& weight) const;
+    void predict(Mobile& m, double t) const;
+    void predictState(Eigen::Vector4d& x, Eigen::Matrix4d& p, double dt) const;
+    void updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const;
+    std::string newId();
+
+    ImprovedConfig config_;
+    std::optional<LocalFrame> frame_;
+    std::vector<Ugv> ugvs_;
+    std::unordered_map<std::string, int> ugvIndex_;
+    std::vector<Track> tracks_;
+    std::unordered_map<std::string, int> trackIndex_;
+    std::vector<StaticObject> statics_;
+    std::vector<Mobile> mobiles_;
+    std::unordered_map<std::string, int> mobileTrackObject_; ///< (ugv, track) -> mobile index
+    std::unordered_map<std::string, std::string> mergedInto_;
+    std::unordered_map<std::string, std::pair<bool, int>> idIndex_; ///< id -> (static?, index)
+    std::mt19937_64 rng_{11};
+    std::uint64_t nextId_ = 1;
+    double now_ = 0.0;
+    double lastSolveT_ = 0.0;
+};
+
+} // namespace ugv::correlator

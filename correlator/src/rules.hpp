@@ -1,0 +1,59 @@
+#pragma once
+
+// Rules both correlator modes share (internal): which classes move, the initial confirmation, its inheritance on
+// merges, track keys, and the non-combatant alerts of a snapshot.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ugv/correlator/messages.hpp"
+
+namespace ugv::correlator::rules {
+
+inline constexpr double kNonCombatantStaticAlertM = 5.0;
+inline constexpr double kNonCombatantMobileAlertM = 20.0;
+
+inline bool isMobileClass(OoiClass c) noexcept
+{
+    return c == OoiClass::Mobile || c == OoiClass::NonCombatant;
+}
+
+/// Non-combatants start confirmed negative (not a threat); everything else unknown until the operator says.
+inline Confirmation initialState(OoiClass c) noexcept
+{
+    return c == OoiClass::NonCombatant ? Confirmation::ConfirmedNegative : Confirmation::Unknown;
+}
+
+/// A confirmed state wins over unknown; otherwise the kept object's state stays.
+inline Confirmation inherit(Confirmation kept, Confirmation absorbed) noexcept
+{
+    return kept == Confirmation::Unknown ? absorbed : kept;
+}
+
+inline std::string trackKey(const std::string& ugv, const std::string& track)
+{
+    return ugv + '\x1f' + track;
+}
+
+/// (position in the local frame, index in snapshot.objects)
+using Placed = std::vector<std::pair<Eigen::Vector2d, std::size_t>>;
+
+/// An alert for every non-combatant within 20 m of a mobile OOI or 5 m of a static one.
+inline void appendAlerts(Snapshot& s, const Placed& civilians, const Placed& threats)
+{
+    for (const auto& [pc, ci] : civilians) {
+        for (const auto& [pt, ti] : threats) {
+            const double limit =
+                s.objects[ti].cls == OoiClass::Mobile ? kNonCombatantMobileAlertM : kNonCombatantStaticAlertM;
+            const double d = (pc - pt).norm();
+            if (d <= limit) {
+                s.alerts.push_back(Alert{s.objects[ci].id, s.objects[ti].id, d});
+            }
+        }
+    }
+}
+
+} // namespace ugv::correlator::rules
