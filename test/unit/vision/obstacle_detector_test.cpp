@@ -235,16 +235,19 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
 {
     const auto a = renderScene("pole", 3.0, 5.0);
     const auto b = renderScene("box", 4.0, -8.0);
-    constexpr int kFrames = 300;
+    // 300 frames of the default matcher; for an OpenCV mode 60 frames show the equality (a long sanitizer run
+    // otherwise).
+    int frames = 300;
     const auto countFrames = [&](auto&& step) {
         const test::AllocationScope scope;
-        for (int i = 0; i < kFrames; ++i) {
+        for (int i = 0; i < frames; ++i) {
             const auto& frame = i % 2 == 0 ? a : b;
             step(frame, i);
         }
         return scope.count();
     };
     for (const MatcherMode mode : {MatcherMode::CensusSgm, MatcherMode::Sgbm3Way}) {
+        frames = mode == MatcherMode::CensusSgm ? 300 : 60;
         DetectorConfig config;
         config.matcher.mode = mode;
         auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
@@ -261,8 +264,8 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
 
         std::printf("[ MEASURED ] matcher mode %d, %d frames: detector %zu allocations (%.1f per frame), bare "
                     "matcher %zu\n",
-                    static_cast<int>(mode), kFrames, detectorAllocations,
-                    static_cast<double>(detectorAllocations) / kFrames, matcherAllocations);
+                    static_cast<int>(mode), frames, detectorAllocations,
+                    static_cast<double>(detectorAllocations) / frames, matcherAllocations);
         EXPECT_EQ(sut.status(), DetectorStatus::Ok);
         EXPECT_EQ(detectorAllocations, matcherAllocations);
         if (mode == MatcherMode::CensusSgm) {

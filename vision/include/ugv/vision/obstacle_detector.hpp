@@ -2,8 +2,8 @@
 
 /// @file
 /// The per-frame stereo obstacle pipeline on the rectified ROI:
-/// RoiMatcher (census SGM or StereoSGBM on the ROI) -> GroundEstimator (per-frame ground from that disparity, falling back to
-/// the configured plane) -> warpGround + GroundMismatch (edge pixels where the left image warped through the
+/// RoiMatcher (census SGM or StereoSGBM on the ROI) -> GroundEstimator (per-frame ground from that disparity, falling
+/// back to the configured plane) -> warpGround + GroundMismatch (edge pixels where the left image warped through the
 /// ground plane disagrees with the right one, with the sign of the residual disparity) -> ObstacleVerifier (every
 /// off-ground disparity must explain the images better than the ground does, else it is invalidated) ->
 /// SectorBuilder (dense disparity cue, confirmed and weighted by the mismatch labels) -> sectors.
