@@ -5,6 +5,7 @@
 #include <set>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include "rules.hpp"
@@ -21,8 +22,15 @@ constexpr double kSolvedOffsetSigmaM = 0.3;
 /// Added to a static object's covariance: its observations share their UGVs' remaining pose errors, so it is
 /// never more certain than those (the information of independent observations would say centimetres).
 constexpr double kFloorSigmaM = 0.3;
-constexpr double kSplitDistanceM = 2.0;           ///< track groups of one object at least this far apart may split
-constexpr double kMaxPublishedMobileSigmaM = 2.5; ///< a mobile object predicted longer than this is not shown
+constexpr double kSplitDistanceM = 2.0; ///< track groups of one object at least this far apart may split
+constexpr double kMaxPublishedMobileSigmaM = 2.5;
+constexpr double kLineHistoryS = 180.0; ///< history kept per mobile object for its line
+constexpr std::size_t kLineMinSamples = 20;
+constexpr double kLineMinSpanS = 40.0;
+constexpr double kLineMaxWidthM = 1.5; ///< rms distance from the line
+constexpr double kLineMinLengthM = 10.0;
+constexpr double kLineSigmaM = 2.0; ///< reported sigma of a position predicted along the line ///< a mobile object
+                                    ///< predicted longer than this is not shown
 constexpr int kMinSamplesToSolve = 10;
 constexpr double kMaxPriorObservations = 20.0; ///< a folded prior is worth at most this many observations
 
@@ -671,6 +679,71 @@ void ImprovedCorrelator::updateMobile(Mobile& m, const Eigen::Vector2d& z, const
     m.p = (Eigen::Matrix4d::Identity() - k * Eigen::Matrix<double, 2, 4>::Identity()) * m.p;
     m.t = t;
     ++m.observations;
+    if (m.history.empty() || t - m.history.back().first >= 1.0) {
+        m.history.emplace_back(t, m.x.head<2>());
+        const auto old = std::find_if(m.history.begin(), m.history.end(),
+                                      [t](const auto& h) { return t - h.first <= kLineHistoryS; });
+        m.history.erase(m.history.begin(), old);
+    }
+}
+
+bool ImprovedCorrelator::predictOnLine(const Mobile& m, double t, Eigen::Vector2d& out) const
+{
+    if (m.history.size() < kLineMinSamples || m.history.back().first - m.history.front().first < kLineMinSpanS) {
+        return false;
+    }
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (const auto& [ht, hp] : m.history) {
+        centre += hp;
+    }
+    centre /= static_cast<double>(m.history.size());
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (const auto& [ht, hp] : m.history) {
+        scatter += (hp - centre) * (hp - centre).transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter / static_cast<double>(m.history.size()));
+    const Eigen::Vector2d u = eig.eigenvectors().col(1);
+    if (std::sqrt(std::max(eig.eigenvalues()(0), 0.0)) > kLineMaxWidthM) {
+        return false;
+    }
+    double lo = 1e300;
+    double hi = -1e300;
+    double travelled = 0.0;
+    bool reversed = false;
+    double lastStep = 0.0;
+    for (std::size_t i = 0; i < m.history.size(); ++i) {
+        const double a = u.dot(m.history[i].second - centre);
+        lo = std::min(lo, a);
+        hi = std::max(hi, a);
+        if (i > 0) {
+            const double step = a - u.dot(m.history[i - 1].second - centre);
+            travelled += std::abs(step);
+            reversed = reversed || (step * lastStep < 0.0 && std::abs(step) > 0.3 && std::abs(lastStep) > 0.3);
+            lastStep = std::abs(step) > 0.3 ? step : lastStep;
+        }
+    }
+    if (!reversed || hi - lo < kLineMinLengthM) {
+        return false;
+    }
+    const double speed = travelled / (m.history.back().first - m.history.front().first);
+    double along = u.dot(m.x.head<2>() - centre);
+    double direction = u.dot(m.x.tail<2>()) >= 0.0 ? 1.0 : -1.0;
+    double remaining = speed * std::max(0.0, t - m.t);
+    while (remaining > 0.0) { // walk, turning at the ends
+        const double room = direction > 0.0 ? hi - along : along - lo;
+        if (remaining <= room) {
+            along += direction * remaining;
+            break;
+        }
+        along += direction * std::max(room, 0.0);
+        remaining -= std::max(room, 0.0);
+        direction = -direction;
+        if (hi - lo <= 0.0) {
+            break;
+        }
+    }
+    out = centre + along * u;
+    return true;
 }
 
 int ImprovedCorrelator::nearestMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const
@@ -845,9 +918,14 @@ Snapshot ImprovedCorrelator::snapshot(double t)
         Eigen::Vector4d x = live.x;
         Eigen::Matrix4d pm = live.p;
         predictState(x, pm, t - live.t); // through the gap since its last fix
-        const Ellipse el = ellipseOf(pm.topLeftCorner<2, 2>());
+        Ellipse el = ellipseOf(pm.topLeftCorner<2, 2>());
         if (el.sigmaMajor > kMaxPublishedMobileSigmaM) {
-            continue; // predicted too long to be useful; kept (with its id) for when it is seen again
+            Eigen::Vector2d onLine;
+            if (!predictOnLine(live, t, onLine)) {
+                continue; // predicted too long to be useful; kept (with its id) for when it is seen again
+            }
+            x.head<2>() = onLine;
+            el = Ellipse{kLineSigmaM, kLineSigmaM, 0.0};
         }
         ObjectEstimate e;
         e.id = live.id;

@@ -119,6 +119,27 @@ TEST(ImprovedCorrelator, MobileObjectIsPredictedThroughAGap)
     EXPECT_DOUBLE_EQ(mobiles[0].zoneDiameterM, kMobileZoneDiameterM);
 }
 
+TEST(ImprovedCorrelator, AMobileWalkingALineIsPredictedAlongItThroughALongGap)
+{
+    const Scene scene;
+    ImprovedCorrelator sut;
+    // Back and forth along 20 m of the east axis at 1 m/s (a 40 s round trip), seen for 120 s.
+    const auto truth = [](double t) {
+        const double phase = std::fmod(t, 40.0);
+        return Eigen::Vector2d(-10.0 + (phase < 20.0 ? phase : 40.0 - phase), 15.0);
+    };
+    for (int i = 0; i <= 240; ++i) {
+        const double t = i * 0.5;
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "m", OoiClass::Mobile, {0, 0}, truth(t))).has_value());
+    }
+    // 25 s unseen: far too long for the Kalman prediction, it turned at the end of the line meanwhile.
+    const Snapshot s = sut.snapshot(145);
+
+    const auto mobiles = ofClass(s, OoiClass::Mobile);
+    ASSERT_EQ(mobiles.size(), 1U);
+    EXPECT_LT((scene.local(mobiles[0]) - truth(145)).norm(), 2.0);
+}
+
 TEST(ImprovedCorrelator, ASingleMobileSightingIsNotPublishedAndTimesOut)
 {
     const Scene scene;

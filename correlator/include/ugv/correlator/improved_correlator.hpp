@@ -12,7 +12,8 @@
 ///   window, a random walk between windows) jointly with the static objects, by sparse Gauss-Newton least
 ///   squares with Eigen (zero-mean priors fix the gauge: the fleet on average is unbiased);
 /// - tracks mobile objects with a constant-velocity Kalman filter, predicted through gaps, published after
-///   minMobileObservations; UAV fixes are precise measurements that confirm;
+///   minMobileObservations; when the Kalman prediction grows too uncertain but the object's history shows a line
+///   walked back and forth, it is predicted along that line; UAV fixes are precise measurements that confirm;
 /// - never changes a published id: merges keep the earliest; a track stays with its object, unless the object's
 ///   tracks form two groups far apart (associated while the pose errors were unknown): then it splits, and
 ///   the group with more observations keeps the id.
@@ -132,6 +133,7 @@ private:
         double t = 0.0;
         int observations = 0;
         std::vector<std::string> ugvs;
+        std::vector<std::pair<double, Eigen::Vector2d>> history; ///< filtered positions, 1 per s, last 180 s
     };
 
     int ugvIndex(const std::string& name);
@@ -158,6 +160,9 @@ private:
     [[nodiscard]] Eigen::Vector2d trackMean(int trackIndex, double& weight) const;
     void predict(Mobile& m, double t) const;
     void predictState(Eigen::Vector4d& x, Eigen::Matrix4d& p, double dt) const;
+    /// Mobile OOIs walk fixed lines back and forth (the original's observation): once the history shows one,
+    /// the position at time t along it, reflecting at its ends. @return false when the history shows no line.
+    [[nodiscard]] bool predictOnLine(const Mobile& m, double t, Eigen::Vector2d& out) const;
     void updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const;
     std::string newId();
 
