@@ -20,6 +20,8 @@ packages=(
     libcamera-dev          # the libcamera camera backend
     libgeographiclib-dev   # WGS84 <-> local tangent plane (correlator)
     nlohmann-json3-dev     # JSON lines of the correlator's offline tools
+    libfastrtps-dev fastddsgen fastdds-tools   # the DDS bus: Fast DDS 2.9, the IDL code generator, discovery server
+    iproute2 nftables      # the multi-host test: network namespaces and packet loss
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
 )
@@ -93,7 +95,10 @@ run_tests() {
     if [ "${UGV_SKIP_ASAN:-0}" != 1 ]; then
         build asan
         echo "== asan (address + undefined sanitizers): unit tests"
-        ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+        # new_delete_type_mismatch=0: Fast DDS 2.9.1 itself deletes its StatisticsReaderImpl through RTPSReader with
+        # the smaller size (a Debian libfastrtps bug, not ours); every other ASan check stays on.
+        ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:new_delete_type_mismatch=0 \
+            UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
             ctest --preset asan -j "$(nproc)" || status=1
     fi
     return $status

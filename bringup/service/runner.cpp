@@ -85,6 +85,82 @@ std::string summaryLine(const PublishedFrame& frame)
     return text;
 }
 
+std::string formatBusReport(const RunResult& r)
+{
+    std::string out;
+    char line[400];
+    if (r.bus) {
+        std::snprintf(
+            line, sizeof(line),
+            "dds: %llu frame(s) sent (sectors, LaserScan, PointCloud2), %llu write failure(s); poses %llu "
+            "used, %llu of other vehicles, %llu refused; %llu frame(s) with a stale or no pose\n",
+            static_cast<unsigned long long>(r.bus->framesSent), static_cast<unsigned long long>(r.bus->writeFailures),
+            static_cast<unsigned long long>(r.bus->posesUsed), static_cast<unsigned long long>(r.bus->posesForeign),
+            static_cast<unsigned long long>(r.bus->posesRejected), static_cast<unsigned long long>(r.bus->stalePoses));
+        out += line;
+    }
+    if (r.correlator) {
+        const LiveCorrelatorStats& c = *r.correlator;
+        std::snprintf(line, sizeof(line),
+                      "correlator: %llu input(s) received, %llu applied, %llu refused as malformed, %llu duplicate(s), "
+                      "%llu refused by the flood guard, %llu refused by the correlator; %llu list(s) published\n",
+                      static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.applied),
+                      static_cast<unsigned long long>(c.rejected), static_cast<unsigned long long>(c.duplicates),
+                      static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.refused),
+                      static_cast<unsigned long long>(c.published));
+        out += line;
+    }
+    return out;
+}
+
+namespace {
+
+LiveCorrelatorOptions correlatorOptions(const bringup::ServiceConfig& config)
+{
+    LiveCorrelatorOptions o;
+    o.improved = config.correlator.improved;
+    o.periodS = config.correlator.periodS;
+    o.reorderMs = config.correlator.reorderMs;
+    o.startupHoldMs = config.correlator.startupHoldMs;
+    o.maxRatePerSource = config.correlator.maxRatePerSource;
+    o.logDir = config.correlator.logDir;
+    o.source = config.vehicleId;
+    return o;
+}
+
+/// A ground station: the correlator task alone, until *stop.
+Result<RunResult, Error> runCorrelatorOnly(const bringup::ServiceConfig& config, const RunOptions& options,
+                                           ipc::dds::Bus& bus)
+{
+    auto task = CorrelatorTask::create(bus, correlatorOptions(config), *rt::findTask(config.tasks, "correlator"));
+    if (!task) {
+        return Unexpected(task.error());
+    }
+    (*task)->start();
+    const hal::SystemdNotifier systemd;
+    systemd.ready();
+    systemd.status("correlating on DDS domain " + std::to_string(config.dds.domainId));
+    const std::chrono::nanoseconds pingEvery = systemd.watchdogInterval() / 2;
+    std::int64_t lastPingNs = 0;
+    const std::int64_t startNs = MonotonicClock::nowNs();
+    while (!(options.stop != nullptr && options.stop->load())) {
+        const std::int64_t now = MonotonicClock::nowNs();
+        if (pingEvery.count() > 0 && now - lastPingNs >= pingEvery.count()) {
+            systemd.watchdog();
+            lastPingNs = now;
+        }
+        sleepMs(kMonitorPoll);
+    }
+    systemd.stopping();
+    (*task)->stop();
+    RunResult result;
+    result.correlator = (*task)->stats();
+    result.report.wallSeconds = static_cast<double>(MonotonicClock::nowNs() - startNs) * 1e-9;
+    return result;
+}
+
+} // namespace
+
 Result<RunResult, Error> runService(const RunOptions& options)
 {
     bringup::ServiceConfig config;
@@ -94,6 +170,26 @@ Result<RunResult, Error> runService(const RunOptions& options)
             return Unexpected(joinErrors(loaded.error()));
         }
         config = std::move(*loaded);
+    }
+    if (const char* domain = std::getenv("UGV_DDS_DOMAIN"); domain != nullptr && *domain != '\0') {
+        char* end = nullptr;
+        const long id = std::strtol(domain, &end, 10);
+        if (*end != '\0' || id < 0 || id > 232) {
+            return Unexpected(Error{"$UGV_DDS_DOMAIN", std::string("'") + domain + "' is not a DDS domain id",
+                                    "give 0..232 or unset it"});
+        }
+        config.dds.domainId = static_cast<int>(id);
+    }
+    std::unique_ptr<ipc::dds::Bus> bus;
+    if (config.dds.enabled) {
+        auto created = ipc::dds::Bus::create(busConfig(config));
+        if (!created) {
+            return Unexpected(created.error());
+        }
+        bus = std::move(*created);
+    }
+    if (!config.visionEnabled) {
+        return runCorrelatorOnly(config, options, *bus);
     }
     if (options.pinAllTasksTo >= 0) {
         for (rt::TaskSpec& task : config.tasks) {
@@ -148,6 +244,24 @@ Result<RunResult, Error> runService(const RunOptions& options)
         serviceOptions.deadlineFactor = config.overload.deadlineFactor;
         serviceOptions.spinBeforeFrame = std::chrono::microseconds(config.handover.spinUs);
     }
+    std::unique_ptr<DdsBridge> bridge;
+    if (bus) {
+        auto created = DdsBridge::create(*bus, config, (*camera)->period());
+        if (!created) {
+            return Unexpected(created.error());
+        }
+        bridge = std::move(*created);
+        serviceOptions.bus = bridge.get();
+    }
+    std::unique_ptr<CorrelatorTask> correlatorTask;
+    if (config.correlator.enabled) {
+        auto created =
+            CorrelatorTask::create(*bus, correlatorOptions(config), *rt::findTask(config.tasks, "correlator"));
+        if (!created) {
+            return Unexpected(created.error());
+        }
+        correlatorTask = std::move(*created);
+    }
     auto service = Service::create(config, *calibration, std::move(*camera), serviceOptions);
     if (!service) {
         return Unexpected(service.error());
@@ -157,6 +271,9 @@ Result<RunResult, Error> runService(const RunOptions& options)
     }
     result.extras.threadCount = processThreadCount();
     (*service)->start();
+    if (correlatorTask) {
+        correlatorTask->start();
+    }
     const hal::SystemdNotifier systemd;
     systemd.ready();
     systemd.status("replaying " + options.replayPath);
@@ -197,6 +314,14 @@ Result<RunResult, Error> runService(const RunOptions& options)
     systemd.stopping();
     (*service)->stop();
     result.report = (*service)->report();
+    result.visionRan = true;
+    if (bridge) {
+        result.bus = bridge->stats();
+    }
+    if (correlatorTask) {
+        correlatorTask->stop();
+        result.correlator = correlatorTask->stats();
+    }
     if (!result.roudiLost) {
         service->reset(); // threads and iceoryx ports go before the runtime
     } else {

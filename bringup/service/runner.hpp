@@ -12,6 +12,8 @@
 #include <optional>
 #include <string>
 
+#include "correlator_task.hpp"
+#include "dds_bridge.hpp"
 #include "report.hpp"
 #include "service.hpp"
 #include "ugv/hal/replay_camera.hpp"
@@ -40,10 +42,17 @@ struct RunOptions {
 struct RunResult {
     ServiceReport report;
     ReportExtras extras;
-    bool roudiLost = false; ///< RouDi went away during the run (its shared memory is stale: the run stopped)
+    bool roudiLost = false;            ///< RouDi went away during the run (its shared memory is stale: the run stopped)
+    bool visionRan = false;            ///< false: a correlator-only run (vision.enabled false)
+    std::optional<DdsBridgeStats> bus; ///< dds.enabled and vision ran
+    std::optional<LiveCorrelatorStats> correlator; ///< correlator.enabled
 };
 
-/// Runs until the recording ends (without looping), maxFrames are published, or *stop is set.
+/// The bus and correlator lines of the report ("" when neither ran).
+std::string formatBusReport(const RunResult& result);
+
+/// Runs until the recording ends (without looping), maxFrames are published, or *stop is set. With vision.enabled
+/// false (a ground station), runs only the correlator task on the bus until *stop is set.
 /// @return the figures, or an error naming what failed at start (config, calibration, RouDi, recording).
 Result<RunResult, Error> runService(const RunOptions& options);
 

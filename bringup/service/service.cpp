@@ -116,6 +116,10 @@ Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceCo
     if (::sem_init(&s->published_, 0, 0) != 0) {
         return Unexpected(Error{"ugvsensed", "sem_init failed", "check the system"});
     }
+    if (::sem_init(&s->busReady_, 0, 0) != 0) {
+        ::sem_destroy(&s->published_);
+        return Unexpected(Error{"ugvsensed", "sem_init failed", "check the system"});
+    }
     s->semaphoreReady_ = true;
     const vision::RectifiedProjection& projection = s->pipeline_->rectifier().projection();
     const auto hfovDeg = static_cast<float>(
@@ -123,9 +127,14 @@ Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceCo
     initSectors(s->unknownSectors_, config.obstacles.sectorCount, hfovDeg);
     s->unknownSectors_.degraded = true;
 
-    const std::pair<const char*, rt::TaskBody> bodies[] = {
-        {"capture", &Service::captureBody}, {"vision", &Service::visionBody}, {"publish", &Service::publishBody}};
+    const std::pair<const char*, rt::TaskBody> bodies[] = {{"capture", &Service::captureBody},
+                                                           {"vision", &Service::visionBody},
+                                                           {"publish", &Service::publishBody},
+                                                           {"bus", &Service::busBody}};
     for (const auto& [name, body] : bodies) {
+        if (body == &Service::busBody && options.bus == nullptr) {
+            continue;
+        }
         const auto spec = rt::findTask(config.tasks, name);
         if (!spec) {
             return Unexpected(Error{"ugvsensed", std::string("task table has no '") + name + "' task",
@@ -146,6 +155,7 @@ Service::~Service()
     stop();
     if (semaphoreReady_) {
         ::sem_destroy(&published_);
+        ::sem_destroy(&busReady_);
     }
 }
 
@@ -208,6 +218,10 @@ void Service::visionBody(void* self, const std::atomic<bool>& stop)
 void Service::publishBody(void* self, const std::atomic<bool>& stop)
 {
     static_cast<Service*>(self)->publishLoop(stop);
+}
+void Service::busBody(void* self, const std::atomic<bool>& stop)
+{
+    static_cast<Service*>(self)->busLoop(stop);
 }
 
 void Service::captureLoop(const std::atomic<bool>& stop) noexcept
@@ -337,6 +351,11 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             const auto took = static_cast<double>(detectedNs - rectifiedNs);
             fullMeanNs = fullMeanNs > 0.0 ? 0.8 * fullMeanNs + 0.2 * took : took;
         }
+        const vision::GroundEstimate& ground = pipeline_->detector().groundEstimate();
+        out.groundReliable = ground.reliable;
+        out.groundPitchDeg = static_cast<float>(ground.plane.pitchDeg());
+        out.groundRollDeg = static_cast<float>(ground.plane.rollDeg());
+        out.cameraHeightM = static_cast<float>(ground.plane.heightM);
         if (done == PipelineStatus::Ok) {
             out.sectors = pipeline_->sectors();
             if (out.sectors.degraded) {
@@ -384,6 +403,7 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
 {
     Handover in;
     PublishedFrame seen;
+    BusFrame bus;
     std::uint64_t count = 0;
     bool steady = false;
     while (!stop.load(std::memory_order_relaxed)) {
@@ -415,6 +435,21 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
             if (!monitor_.tryPush(seen)) {
                 monitorDrops_.fetch_add(1, std::memory_order_relaxed);
             }
+            if (options_.bus != nullptr) {
+                bus.message = m;
+                bus.groundReliable = in.groundReliable;
+                bus.groundPitchDeg = in.groundPitchDeg;
+                bus.groundRollDeg = in.groundRollDeg;
+                bus.cameraHeightM = in.cameraHeightM;
+                bus.endToEndNs = endToEnd;
+                bus.deadlineMissed = seen.deadlineMissed;
+                bus.busDrops = busDrops_.load(std::memory_order_relaxed);
+                if (toBus_.tryPush(bus)) {
+                    ::sem_post(&busReady_);
+                } else {
+                    busDrops_.fetch_add(1, std::memory_order_relaxed);
+                }
+            }
             publishedCount_.fetch_add(1, std::memory_order_release);
             probeSteady("publish", count, steady);
             if (options_.maxFrames > 0 && count >= options_.maxFrames) {
@@ -424,6 +459,22 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
     }
     probeStopping("publish");
     cpuSeconds_[2].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+void Service::busLoop(const std::atomic<bool>& stop) noexcept
+{
+    BusFrame frame;
+    while (!stop.load(std::memory_order_relaxed)) {
+        semWait(&busReady_, std::chrono::milliseconds(20));
+        while (toBus_.tryPop(frame)) {
+            options_.bus->onFrame(frame);
+        }
+        options_.bus->idle();
+    }
+    while (toBus_.tryPop(frame)) {
+        options_.bus->onFrame(frame);
+    }
+    cpuSeconds_[3].store(threadCpuSeconds(), std::memory_order_relaxed);
 }
 
 ServiceReport Service::report() const
@@ -439,12 +490,13 @@ ServiceReport Service::report() const
     r.loanFailures = loanFailures_.load() + sectorsOut_->loanFailures() + handoverFull_.load();
     r.cameraReconnects = reconnects_.load();
     r.monitorDrops = monitorDrops_.load();
+    r.busDrops = busDrops_.load();
     r.deadline = deadline_;
     const std::int64_t end = endNs_.load() != 0 ? endNs_.load() : MonotonicClock::nowNs();
     r.wallSeconds = static_cast<double>(end - startNs_) * 1e-9;
     r.stages = histograms_;
     r.cpu = {TaskCpu{"capture", cpuSeconds_[0].load()}, TaskCpu{"vision", cpuSeconds_[1].load()},
-             TaskCpu{"publish", cpuSeconds_[2].load()}};
+             TaskCpu{"publish", cpuSeconds_[2].load()}, TaskCpu{"bus", cpuSeconds_[3].load()}};
     r.threads = rt::formatReport(runner_.report());
     return r;
 }

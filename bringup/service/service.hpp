@@ -9,6 +9,7 @@
 ///                      -> FramePipeline (rectify, detect) -> SPSC ring -> semaphore post
 ///   publish (FIFO 60)  SPSC ring -> SectorsMessage + health -> SectorsPublisher (`ugvsense/obstacles/sectors`)
 ///                      -> stage histograms, deadline check -> monitor ring (non-RT reader: printing, tests)
+///                      -> SPSC ring + semaphore post -> bus (SCHED_OTHER): BusSink (DDS), when there is one
 ///
 /// No thread takes a lock on the frame path: the rings are iceoryx's lock-free queues and our wait-free SPSC
 /// rings; the waits are a semaphore (vision -> publish) and iceoryx's wait set (capture -> vision), bounded by a
@@ -57,6 +58,28 @@ enum class OverloadPolicy : std::uint8_t {
     Drop,    ///< always the full pipeline; the latest-frame-wins queue drops what it cannot process
 };
 
+/// What the bus task gets of each published frame (a copy: the frame path never waits for the bus).
+struct BusFrame {
+    ipc::SectorsMessage message; ///< as published on iceoryx (sectors and health)
+    bool groundReliable = false; ///< the ground estimate of this frame (else the configured plane)
+    float groundPitchDeg = 0.0F;
+    float groundRollDeg = 0.0F;
+    float cameraHeightM = 0.0F;
+    std::int64_t endToEndNs = 0;
+    bool deadlineMissed = false;
+    std::uint64_t busDrops = 0; ///< frames the bus task was too slow to take, so far
+};
+
+/// The service's side of the DDS bus (bringup/service/dds_bridge.hpp), called only from the low-priority "bus"
+/// task: a slow or absent network delays that task, never a frame (a test stalls it).
+class BusSink {
+public:
+    virtual ~BusSink() = default;
+    virtual void onFrame(const BusFrame& frame) noexcept = 0;
+    /// Between frames, at least every 20 ms: read inputs (poses), publish periodic records (health).
+    virtual void idle() noexcept = 0;
+};
+
 struct ServiceOptions {
     double deadlineFactor = 1.0; ///< deadline = this many camera periods from exposure to published sectors
     int stallPeriods = 10;       ///< camera periods without a frame before the camera counts as stalled
@@ -72,6 +95,7 @@ struct ServiceOptions {
     /// takes 50-200 us to run; a polling one takes a few (measured: hand-over p99 170 -> 19..37 us across two
     /// cores with 2000 us). Costs up to twice this much CPU per frame; none while the camera is stalled.
     std::chrono::microseconds spinBeforeFrame{2000};
+    BusSink* bus = nullptr;    ///< the DDS side (not owned; outlives the service), or none
     TaskProbe probe = nullptr; ///< SteadyState after a task's warmupFrames-th frame, Stopping at its end
     void* probeContext = nullptr;
 };
@@ -108,10 +132,11 @@ struct ServiceReport {
     std::uint64_t loanFailures = 0;
     std::uint64_t cameraReconnects = 0;
     std::uint64_t monitorDrops = 0; ///< published frames the monitor reader was too slow to see
+    std::uint64_t busDrops = 0;     ///< published frames the bus task was too slow to take
     std::chrono::nanoseconds deadline{};
     double wallSeconds = 0.0;
     std::array<rt::LatencyHistogram, kStageCount> stages{};
-    std::array<TaskCpu, 3> cpu{};
+    std::array<TaskCpu, 4> cpu{};
     std::string threads; ///< rt::formatReport of the tasks
 };
 
@@ -146,6 +171,8 @@ private:
     static void captureBody(void* self, const std::atomic<bool>& stop);
     static void visionBody(void* self, const std::atomic<bool>& stop);
     static void publishBody(void* self, const std::atomic<bool>& stop);
+    static void busBody(void* self, const std::atomic<bool>& stop);
+    void busLoop(const std::atomic<bool>& stop) noexcept;
     void captureLoop(const std::atomic<bool>& stop) noexcept;
     void visionLoop(const std::atomic<bool>& stop) noexcept;
     void publishLoop(const std::atomic<bool>& stop) noexcept;
@@ -156,6 +183,10 @@ private:
 
     struct Handover {
         ObstacleSectors sectors;
+        bool groundReliable = false;
+        float groundPitchDeg = 0.0F;
+        float groundRollDeg = 0.0F;
+        float cameraHeightM = 0.0F;
         std::array<std::int64_t, 5> stampNs{}; ///< exposure, ring publish, taken, rectified, detected [ns]
     };
     static constexpr std::size_t kPublishSlots = 64; ///< capture's ring-publish time per sequence % slots
@@ -171,7 +202,9 @@ private:
     std::unique_ptr<ipc::SectorsPublisher> sectorsOut_;
     SpscRing<Handover, 4> toPublish_;
     SpscRing<PublishedFrame, 64> monitor_;
+    SpscRing<BusFrame, 8> toBus_;
     sem_t published_{};
+    sem_t busReady_{};
     bool semaphoreReady_ = false;
     std::array<std::atomic<std::int64_t>, kPublishSlots> ringStampNs_{};
     ObstacleSectors unknownSectors_{};
@@ -195,9 +228,10 @@ private:
     std::atomic<std::uint64_t> publishedCount_{0};               // publish
     std::atomic<std::uint64_t> misses_{0};                       // publish
     std::atomic<std::uint64_t> monitorDrops_{0};                 // publish
+    std::atomic<std::uint64_t> busDrops_{0};                     // publish
     std::atomic<std::int64_t> lastLatencyNs_{0};                 // publish
     std::array<rt::LatencyHistogram, kStageCount> histograms_{}; // publish (read after stop)
-    std::array<std::atomic<double>, 3> cpuSeconds_{};            // each task at its end
+    std::array<std::atomic<double>, 4> cpuSeconds_{};            // each task at its end
     std::int64_t startNs_ = 0;
     std::atomic<std::int64_t> endNs_{0};
 };

@@ -19,22 +19,25 @@ void onSignal(int /*signal*/)
 
 void usage(std::FILE* out)
 {
-    std::fprintf(out,
-                 "usage: ugvsensed [--config FILE] --replay REC [options]\n"
-                 "  Runs the stereo obstacle service: capture -> iceoryx frame ring -> rectify + detect -> sectors on\n"
-                 "  iceoryx (ugvsense/obstacles/sectors). Stops at the end of the recording, after --frames, or on\n"
-                 "  SIGINT/SIGTERM, and prints the latency report.\n\n"
-                 "options:\n"
-                 "  --config FILE      service config (default: built-in defaults; see ugvsense check-config)\n"
-                 "  --replay REC       replay a recording (ugvsense sim --course, recording import, record)\n"
-                 "  --calib FILE       calibration (default: the one stored in the recording)\n"
-                 "  --rate FPS         replay at this rate instead of the recorded pace\n"
-                 "  --fast             replay as fast as possible (the vision queue keeps the latest frame)\n"
-                 "  --loop             replay the recording over and over\n"
-                 "  --frames N         stop after N published frames\n"
-                 "  --print-every N    print a sector summary every N frames (default 10, 0 = none)\n"
-                 "  --embedded-roudi   run RouDi inside this process (no iox-roudi on this machine)\n"
-                 "  --help             this text\n");
+    std::fprintf(
+        out, "usage: ugvsensed [--config FILE] --replay REC [options]\n"
+             "  Runs the stereo obstacle service: capture -> iceoryx frame ring -> rectify + detect -> sectors on\n"
+             "  iceoryx (ugvsense/obstacles/sectors) and on DDS (ugvsense/sectors, ROS 2 rt/<ns>/obstacle_scan and\n"
+             "  rt/<ns>/negative_obstacles, ugvsense/health), and the OOI correlator when the config enables it\n"
+             "  (vision.enabled: false runs only the correlator: a ground station). Stops at the end of the\n"
+             "  recording, after --frames, or on SIGINT/SIGTERM, and prints the latency report.\n"
+             "  $UGV_DDS_DOMAIN overrides dds.domain_id.\n\n"
+             "options:\n"
+             "  --config FILE      service config (default: built-in defaults; see ugvsense check-config)\n"
+             "  --replay REC       replay a recording (ugvsense sim --course, recording import, record)\n"
+             "  --calib FILE       calibration (default: the one stored in the recording)\n"
+             "  --rate FPS         replay at this rate instead of the recorded pace\n"
+             "  --fast             replay as fast as possible (the vision queue keeps the latest frame)\n"
+             "  --loop             replay the recording over and over\n"
+             "  --frames N         stop after N published frames\n"
+             "  --print-every N    print a sector summary every N frames (default 10, 0 = none)\n"
+             "  --embedded-roudi   run RouDi inside this process (no iox-roudi on this machine)\n"
+             "  --help             this text\n");
 }
 
 bool parseNumber(const char* text, double min, double max, double& out)
@@ -110,7 +113,10 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "ugvsensed: error: %s\n", run.error().message().c_str());
         return 1;
     }
-    std::printf("%s", ugv::service::formatReport(run->report, run->extras).c_str());
+    if (run->visionRan) {
+        std::printf("%s", ugv::service::formatReport(run->report, run->extras).c_str());
+    }
+    std::printf("%s", ugv::service::formatBusReport(*run).c_str());
     if (run->roudiLost) {
         std::fprintf(stderr,
                      "ugvsensed: error: iceoryx: RouDi went away during the run (nothing answers on /tmp/roudi); "

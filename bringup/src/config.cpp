@@ -1,6 +1,7 @@
 #include "ugv/bringup/config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -151,6 +152,47 @@ std::vector<KeySpec> baseKeys()
                   "the vision task polls the frame ring this long before and after each frame is due, instead of "
                   "sleeping (faster wake-up across cores, about this much CPU per frame) [us]; 0 = off",
                   UGV_REF(handover.spinUs)),
+        choiceKey<bool>("vision.enabled", "false: no camera, no vision (a ground station running only the correlator)",
+                        {{"true", true}, {"false", false}}, UGV_REF(visionEnabled)),
+        choiceKey<bool>("dds.enabled", "join the DDS bus: sectors, ROS 2 scans, health out; poses in",
+                        {{"true", true}, {"false", false}}, UGV_REF(dds.enabled)),
+        numberKey("dds.domain_id", Kind::Int, 0, 232, "DDS domain, the same on every vehicle and the ground station",
+                  UGV_REF(dds.domainId)),
+        textKey("dds.partition", Kind::Text, "DDS partition of our topics (a team); empty = the default partition",
+                UGV_REF(dds.partition)),
+        textKey("dds.ros_namespace", Kind::Text,
+                "ROS 2 topics rt/<ns>/obstacle_scan...; empty = vehicle_id without its - (ugv-1: ugv1)",
+                UGV_REF(dds.rosNamespace)),
+        textKey("dds.frame_id", Kind::Text, "frame of the LaserScan and PointCloud2: on the ground below the camera",
+                UGV_REF(dds.frameId)),
+        textKey(
+            "dds.discovery_server", Kind::Text,
+            "empty = multicast discovery; IP:PORT[;IP:PORT] of Fast DDS discovery servers (meshes without multicast)",
+            UGV_REF(dds.discoveryServer)),
+        choiceKey<bool>("dds.shared_memory", "also Fast DDS shared memory between processes of this host",
+                        {{"true", true}, {"false", false}}, UGV_REF(dds.sharedMemory)),
+        numberKey("dds.pose_max_age_ms", Kind::Double, 1, 60000,
+                  "a vehicle pose further than this from a frame's capture time is flagged stale [ms]",
+                  UGV_REF(dds.poseMaxAgeMs)),
+        choiceKey<bool>("correlator.enabled", "run the OOI correlator on the bus's observations (lowest priority)",
+                        {{"true", true}, {"false", false}}, UGV_REF(correlator.enabled)),
+        choiceKey<bool>("correlator.mode", "improved (default) or original (the published algorithm)",
+                        {{"improved", true}, {"original", false}}, UGV_REF(correlator.improved)),
+        numberKey("correlator.period_s", Kind::Double, 0.01, 3600, "mission-time period of the correlated list [s]",
+                  UGV_REF(correlator.periodS)),
+        numberKey("correlator.reorder_ms", Kind::Double, 0, 60000,
+                  "a received input waits this long to be put in time order with the others [ms]",
+                  UGV_REF(correlator.reorderMs)),
+        numberKey("correlator.startup_hold_ms", Kind::Double, 0, 600000,
+                  "after the first input nothing is applied this long: a (re)started station gathers the team's "
+                  "histories first [ms]",
+                  UGV_REF(correlator.startupHoldMs)),
+        textKey("correlator.log_dir", Kind::Path,
+                "folder of inputs.jsonl (every accepted input) and snapshots.jsonl; empty = no log",
+                UGV_REF(correlator.logDir)),
+        numberKey("correlator.max_rate_per_source", Kind::Double, 1, 1e6,
+                  "inputs per second one participant may send; beyond it they are refused and counted (a flood)",
+                  UGV_REF(correlator.maxRatePerSource)),
     };
     return keys;
 }
@@ -325,7 +367,8 @@ public:
             error(at("stereo"), "stereo.block_size", "value " + std::to_string(config_.stereo.blockSize) + " is even",
                   "use an odd size such as 5");
         }
-        if (config_.camera.backend == CameraBackend::Replay && config_.camera.replayPath.empty()) {
+        if (config_.visionEnabled && config_.camera.backend == CameraBackend::Replay &&
+            config_.camera.replayPath.empty()) {
             error(at("camera"), "camera.replay_path", "is empty but camera.backend is replay",
                   "set replay_path to a recording");
         }
@@ -340,6 +383,20 @@ public:
                 const std::string name(task.name);
                 error(tasks[name] ? tasks[name] : tasks, "tasks." + name, valid.error().what,
                       "set tasks." + name + ".policy/priority/cpu within the range");
+            }
+        }
+        if (!config_.visionEnabled && !config_.correlator.enabled) {
+            error(at("vision"), "vision.enabled", "is false and correlator.enabled is false: nothing to run",
+                  "enable one of them");
+        }
+        if (config_.correlator.enabled && !config_.dds.enabled) {
+            error(at("dds"), "dds.enabled", "is false but the correlator needs the bus", "set dds.enabled: true");
+        }
+        for (const char c : config_.dds.rosNamespace) {
+            if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/')) {
+                error(at("dds"), "dds.ros_namespace", "'" + config_.dds.rosNamespace + "' is not a ROS 2 name",
+                      "letters, digits and _ only, e.g. ugv1");
+                break;
             }
         }
         if (config_.calibrationPath.empty()) {

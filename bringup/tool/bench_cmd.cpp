@@ -144,11 +144,17 @@ int sweep(const Args& args, std::uint64_t frames, bool oneCore)
         if (args.has("config")) {
             command += " --config '" + args.get("config") + "'";
         }
-        command += " >/dev/null 2>&1";
+        const std::string log = json + ".log";
+        command += " >'" + log + "' 2>&1";
         if (std::system(command.c_str()) != 0) { // NOLINT(cert-env33-c): our own binary, quoted arguments
-            return fail(Error{"ugvsense bench --sweep", "the run at " + std::to_string(r) + " fps failed",
+            std::ifstream failed(log);
+            const std::string output{std::istreambuf_iterator<char>(failed), std::istreambuf_iterator<char>()};
+            std::fprintf(stderr, "%s", output.substr(output.size() > 4000 ? output.size() - 4000 : 0).c_str());
+            return fail(Error{"ugvsense bench --sweep",
+                              "the run at " + std::to_string(r) + " fps failed (its output above)",
                               "run it alone: ugvsense bench --recording REC --rate " + std::to_string(r)});
         }
+        std::filesystem::remove(log);
         std::ifstream in(json);
         const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
         const std::size_t e2e = text.find("\"end_to_end\"");
@@ -209,7 +215,8 @@ int runBench(int argc, char** argv)
     if (!run) {
         return fail(run.error());
     }
-    std::printf("%s", service::formatReport(run->result.report, run->result.extras).c_str());
+    std::printf("%s%s", service::formatReport(run->result.report, run->result.extras).c_str(),
+                service::formatBusReport(run->result).c_str());
     std::printf("allocations after warm-up by task: %s (0 expected; with stereo.mode an OpenCV mode, vision "
                 "counts StereoSGBM::compute's own, see vision/roi_matcher.hpp)\n",
                 run->allocationsByTask.c_str());

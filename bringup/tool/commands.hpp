@@ -18,5 +18,7 @@ int runRecord(int argc, char** argv);
 int runCorrelate(int argc, char** argv);
 int runCorrelateSim(int argc, char** argv);
 int runCorrelateEval(int argc, char** argv);
+int runListen(int argc, char** argv);
+int runBusSend(int argc, char** argv);
 
 } // namespace ugv::tool

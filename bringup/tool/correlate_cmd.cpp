@@ -1,11 +1,16 @@
 // ugvsense correlate: the OOI correlator offline. Reads time-ordered JSON lines of observations, UAV fixes,
 // operator confirmations and pose corrections (bringup/tool/correlate_io.hpp), writes one snapshot of the
 // correlated objects per period, reports bad lines with their line number and goes on, and prints the
-// correlator's processing rate. `--map` draws the last snapshot for the ground control station.
+// correlator's processing rate. `--map` draws the last snapshot for the ground control station. `--from-dds` takes
+// the inputs live from the bus instead (service::LiveCorrelator, the ground station's own code) and writes the
+// last snapshot (and the map) when stopped.
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -18,12 +23,15 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "correlate_io.hpp"
+#include "correlator_task.hpp"
+#include "ugv/bringup/correlate_io.hpp"
+#include "ugv/bringup/correlator_feed.hpp"
 #include "ugv/correlator/geodesy.hpp"
-#include "ugv/correlator/improved_correlator.hpp"
-#include "ugv/correlator/original_correlator.hpp"
 
 namespace ugv::tool {
+using bringup::parseMessageLine;
+using bringup::parseSnapshotLine;
+using bringup::toJsonLine;
 namespace {
 
 using namespace correlator;
@@ -38,12 +46,6 @@ int fail(const Error& error)
     return 1;
 }
 
-struct UgvPose {
-    double lat = 0.0;
-    double lon = 0.0;
-    double headingDeg = 0.0;
-};
-
 cv::Scalar stateColour(const ObjectEstimate& o)
 {
     if (o.state == Confirmation::ConfirmedPositive) {
@@ -56,7 +58,8 @@ cv::Scalar stateColour(const ObjectEstimate& o)
 }
 
 /// Objects (2-sigma ellipses, ids, confirmation colours, activation zones) and UGVs (triangles) on a metric grid.
-Result<void, Error> drawMap(const std::string& path, const Snapshot& s, const std::map<std::string, UgvPose>& ugvs)
+Result<void, Error> drawMap(const std::string& path, const Snapshot& s,
+                            const std::map<std::string, bringup::UgvPose>& ugvs)
 {
     if (s.objects.empty() && ugvs.empty()) {
         return Unexpected(Error{path, "nothing to draw: no objects and no UGVs", "check the input"});
@@ -124,18 +127,118 @@ Result<void, Error> drawMap(const std::string& path, const Snapshot& s, const st
 
 } // namespace
 
+namespace {
+
+std::atomic<bool> g_stop{false};
+void onSignal(int /*signal*/)
+{
+    g_stop.store(true);
+}
+
+/// --from-dds: the live correlator on the bus as a viewer (it publishes nothing), until --duration or SIGINT.
+int correlateFromDds(const Args& args, bool improved, double period, std::ofstream& out)
+{
+    const auto duration = args.number("duration", 0.0, 0.0, 1e7);
+    const auto domain = args.number(
+        "domain", std::getenv("UGV_DDS_DOMAIN") != nullptr ? std::atof(std::getenv("UGV_DDS_DOMAIN")) : 0.0, 0, 232);
+    const auto reorder = args.number("reorder-ms", 2000.0, 0.0, 60000.0);
+    if (!duration || !domain || !reorder) {
+        return reportUsageError(kCommand, !duration ? duration.error() : !domain ? domain.error() : reorder.error());
+    }
+    ipc::dds::BusConfig bc;
+    bc.domainId = static_cast<int>(*domain);
+    bc.participantName = "ugvsense/correlate";
+    if (args.has("partition")) {
+        bc.partitions.push_back(args.get("partition"));
+    }
+    bc.discoveryServers = args.get("discovery-server");
+    bc.sharedMemory = !args.has("no-shm");
+    auto bus = ipc::dds::Bus::create(bc);
+    if (!bus) {
+        return fail(bus.error());
+    }
+    service::LiveCorrelatorOptions o;
+    o.improved = improved;
+    o.periodS = period;
+    o.reorderMs = *reorder;
+    // The station's default hold: the histories of the team come first.
+    o.publish = false;
+    o.logDir = args.get("log-dir");
+    auto live = service::LiveCorrelator::create(**bus, o);
+    if (!live) {
+        return fail(live.error());
+    }
+    struct sigaction action {};
+    action.sa_handler = onSignal;
+    ::sigaction(SIGINT, &action, nullptr);
+    ::sigaction(SIGTERM, &action, nullptr);
+    std::printf("correlating live inputs on DDS domain %d%s (Ctrl-C to stop)\n", bc.domainId,
+                *duration > 0.0 ? (", for " + std::to_string(static_cast<int>(*duration)) + " s").c_str() : "");
+    std::fflush(stdout);
+    const auto start = std::chrono::steady_clock::now();
+    while (!g_stop.load() &&
+           (*duration <= 0.0 ||
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < *duration)) {
+        (*live)->waitForInput(std::chrono::milliseconds(50));
+        (*live)->poll(
+            std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+                .count());
+        for (const std::string& w : (*live)->takeWarnings()) {
+            std::cerr << w << '\n';
+        }
+    }
+    const auto last = (*live)->finish();
+    for (const std::string& w : (*live)->takeWarnings()) {
+        std::cerr << w << '\n';
+    }
+    const service::LiveCorrelatorStats st = (*live)->stats();
+    std::printf("received %llu input(s): %llu applied, %llu malformed, %llu duplicate(s), %llu flood, %llu refused; "
+                "%zu object(s) at t %.1f\n",
+                static_cast<unsigned long long>(st.received), static_cast<unsigned long long>(st.applied),
+                static_cast<unsigned long long>(st.rejected), static_cast<unsigned long long>(st.duplicates),
+                static_cast<unsigned long long>(st.flooded), static_cast<unsigned long long>(st.refused),
+                last ? last->objects.size() : std::size_t{0}, last ? last->t : 0.0);
+    if (last) {
+        out << toJsonLine(*last) << '\n';
+    }
+    out.flush();
+    if (args.has("map")) {
+        if (!last) {
+            return fail(Error{args.get("map"), "no input arrived: nothing to draw",
+                              "check the domain, the partition and that the vehicles publish"});
+        }
+        if (auto drawn = drawMap(args.get("map"), *last, (*live)->feed().ugvs()); !drawn) {
+            return fail(drawn.error());
+        }
+        std::printf("map of t %.1f written to %s\n", last->t, args.get("map").c_str());
+    }
+    return last ? 0 : 1;
+}
+
+} // namespace
+
 int runCorrelate(int argc, char** argv)
 {
     Args args(kCommand,
-              "--input OBS.jsonl --output SNAPSHOTS.jsonl [--period S] [--mode improved|original] [--map MAP.png]",
-              {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", true},
-               {"output", "SNAPSHOTS.jsonl", "one snapshot of the correlated objects per period", true},
+              "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode improved|original] "
+              "[--map MAP.png]",
+              {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", false},
+               {"from-dds", "", "take the inputs live from the DDS bus (ugvsense/ooi/*) instead of a file", false},
+               {"output", "SNAPSHOTS.jsonl", "one snapshot of the correlated objects per period (--from-dds: the last)",
+                true},
                {"period", "S", "snapshot period, default 1 s", false},
                {"mode", "MODE",
                 "improved (default: pose errors estimated, statistical gates, Kalman mobiles) or original (the "
                 "published algorithm)",
                 false},
-               {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false}});
+               {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false},
+               {"duration", "S", "--from-dds: stop after S seconds (default: at Ctrl-C)", false},
+               {"domain", "N", "--from-dds: DDS domain (default $UGV_DDS_DOMAIN, else 0)", false},
+               {"partition", "P", "--from-dds: DDS partition of the team", false},
+               {"discovery-server", "LIST", "--from-dds: IP:PORT[;IP:PORT] of Fast DDS discovery servers", false},
+               {"no-shm", "", "--from-dds: UDP only, no Fast DDS shared memory", false},
+               {"reorder-ms", "MS", "--from-dds: wait this long to put inputs in time order (default 2000)", false},
+               {"log-dir", "DIR", "--from-dds: write inputs.jsonl and snapshots.jsonl there", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }
@@ -147,29 +250,34 @@ int runCorrelate(int argc, char** argv)
     if (mode != "original" && mode != "improved") {
         return reportUsageError(kCommand, Error{"--mode " + mode, "unknown mode", "use original or improved"});
     }
-    std::ifstream in(args.get("input"));
-    if (!in) {
-        return fail(Error{args.get("input"), "cannot open the input", "check the path"});
+    // Before the run, not after it: cv::imwrite throws on an extension it has no writer for.
+    if (args.has("map") && !cv::haveImageWriter(args.get("map"))) {
+        return reportUsageError(kCommand, Error{"--map " + args.get("map"), "no image writer for this file name",
+                                                "give a .png (or .jpg) file name"});
+    }
+    if (args.has("input") == args.has("from-dds")) {
+        return reportUsageError(kCommand, Error{"--input / --from-dds", "give exactly one input",
+                                                "a JSON-lines file with --input, or --from-dds for the live bus"});
+    }
+    std::ifstream in;
+    if (args.has("input")) {
+        in.open(args.get("input"));
+        if (!in) {
+            return fail(Error{args.get("input"), "cannot open the input", "check the path"});
+        }
     }
     std::ofstream out(args.get("output"));
     if (!out) {
         return fail(Error{args.get("output"), "cannot create the output", "check the folder"});
     }
-
-    std::variant<OriginalCorrelator, ImprovedCorrelator> correlator;
-    if (mode == "improved") {
-        correlator.emplace<ImprovedCorrelator>();
+    if (args.has("from-dds")) {
+        return correlateFromDds(args, mode == "improved", *period, out);
     }
-    std::map<std::string, UgvPose> ugvs;
+
+    bringup::CorrelatorFeed feed(mode == "improved", *period);
     std::string line;
     std::size_t lineNumber = 0;
     std::size_t bad = 0;
-    std::size_t messages = 0;
-    std::size_t snapshots = 0;
-    double lastT = -1e300;
-    double nextSnapshotT = NAN;
-    std::chrono::nanoseconds busy{0};         ///< in add()
-    std::chrono::nanoseconds snapshotBusy{0}; ///< in snapshot()
     Snapshot last;
     const auto report = [&](const Error& e) {
         ++bad;
@@ -177,12 +285,9 @@ int runCorrelate(int argc, char** argv)
             std::cerr << args.get("input") << ':' << lineNumber << ": skipped: " << e.message() << '\n';
         }
     };
-    const auto emit = [&](double t) {
-        const auto t0 = std::chrono::steady_clock::now();
-        last = std::visit([t](auto& c) { return c.snapshot(t); }, correlator);
-        snapshotBusy += std::chrono::steady_clock::now() - t0;
-        out << toJsonLine(last) << '\n';
-        ++snapshots;
+    const auto write = [&](const Snapshot& s) {
+        last = s;
+        out << toJsonLine(s) << '\n';
     };
     while (std::getline(in, line)) {
         ++lineNumber;
@@ -194,35 +299,11 @@ int runCorrelate(int argc, char** argv)
             report(message.error());
             continue;
         }
-        const double t = std::visit([](const auto& m) { return m.t; }, *message);
-        if (t < lastT) {
-            report(Error{"", "time " + std::to_string(t) + " is before the previous line's " + std::to_string(lastT),
-                         "sort the input by time"});
-            continue;
-        }
-        lastT = t;
-        if (std::isnan(nextSnapshotT)) {
-            nextSnapshotT = (std::floor(t / *period) + 1.0) * *period;
-        }
-        while (t >= nextSnapshotT) {
-            emit(nextSnapshotT);
-            nextSnapshotT += *period;
-        }
-        const auto t0 = std::chrono::steady_clock::now();
-        auto applied = std::visit([&message](auto& c) { return c.add(*message); }, correlator);
-        busy += std::chrono::steady_clock::now() - t0;
-        if (!applied) {
+        if (auto applied = feed.add(*message, write); !applied) {
             report(applied.error());
-            continue;
-        }
-        ++messages;
-        if (const auto* o = std::get_if<Observation>(&*message)) {
-            ugvs[o->ugv] = UgvPose{o->ugvLat, o->ugvLon, o->ugvHeadingDeg};
         }
     }
-    if (messages > 0) {
-        emit(lastT);
-    }
+    feed.finish(write);
     out.flush();
     if (!out) {
         return fail(Error{args.get("output"), "write failed", "check the free space"});
@@ -230,17 +311,19 @@ int runCorrelate(int argc, char** argv)
     if (bad > kMaxReportedLines) {
         std::cerr << args.get("input") << ": " << bad - kMaxReportedLines << " more bad line(s) not shown\n";
     }
-    const double seconds = std::chrono::duration<double>(busy).count();
-    const double snapshotSeconds = std::chrono::duration<double>(snapshotBusy).count();
+    const double seconds = std::chrono::duration<double>(feed.addTime()).count();
+    const double snapshotSeconds = std::chrono::duration<double>(feed.snapshotTime()).count();
+    const std::size_t messages = feed.applied();
+    const std::size_t snapshots = feed.snapshots();
     std::printf("correlated %zu message(s), %zu bad line(s) skipped, %zu snapshot(s) to %s; %zu object(s) at t %.1f\n"
                 "correlator: %.3f s in add() (%.0f messages/s), %.3f s in snapshot() (%.1f us each); "
                 "mode %s; %zu observation points held\n",
                 messages, bad, snapshots, args.get("output").c_str(), last.objects.size(), last.t, seconds,
                 seconds > 0.0 ? static_cast<double>(messages) / seconds : 0.0, snapshotSeconds,
-                snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0, mode.c_str(),
-                std::visit([](const auto& c) { return c.storedPoints(); }, correlator));
+                snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0, feed.mode(),
+                feed.storedPoints());
     if (args.has("map")) {
-        if (auto drawn = drawMap(args.get("map"), last, ugvs); !drawn) {
+        if (auto drawn = drawMap(args.get("map"), last, feed.ugvs()); !drawn) {
             return fail(drawn.error());
         }
         std::printf("map of t %.1f written to %s\n", last.t, args.get("map").c_str());

@@ -27,12 +27,15 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "correlate_io.hpp"
+#include "ugv/bringup/correlate_io.hpp"
 #include "ugv/correlator/geodesy.hpp"
 #include "ugv/correlator/gospa.hpp"
 #include "ugv/correlator/messages.hpp"
 
 namespace ugv::tool {
+using bringup::parseMessageLine;
+using bringup::parseSnapshotLine;
+using bringup::toJsonLine;
 namespace {
 
 using correlator::GospaResult;

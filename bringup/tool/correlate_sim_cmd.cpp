@@ -17,10 +17,13 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "correlate_io.hpp"
+#include "ugv/bringup/correlate_io.hpp"
 #include "ugv/correlator/scenario.hpp"
 
 namespace ugv::tool {
+using bringup::parseMessageLine;
+using bringup::parseSnapshotLine;
+using bringup::toJsonLine;
 namespace {
 
 using correlator::ScenarioConfig;

@@ -29,6 +29,8 @@ constexpr Subcommand kSubcommands[] = {
      ugv::tool::runCorrelateSim},
     {"correlate-eval", "score correlator snapshots against correlate-sim truth (GOSPA, ID changes)",
      ugv::tool::runCorrelateEval},
+    {"listen", "print the samples of one DDS topic live, one JSON line each (field debugging)", ugv::tool::runListen},
+    {"bus-send", "publish correlator input files, hostile samples or test poses on the DDS bus", ugv::tool::runBusSend},
     {"bench", "latency budget: replay a recording through the real service and report p50..max", ugv::tool::runBench},
 };
 

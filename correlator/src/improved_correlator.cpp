@@ -12,6 +12,7 @@
 #include <Eigen/Sparse>
 
 #include "ugv/correlator/gaussian_mixture.hpp"
+#include "ugv/correlator/gospa.hpp"
 
 namespace ugv::correlator {
 namespace {
@@ -23,14 +24,26 @@ constexpr double kSolvedOffsetSigmaM = 0.3;
 /// never more certain than those (the information of independent observations would say centimetres).
 constexpr double kFloorSigmaM = 0.3;
 constexpr double kSplitDistanceM = 2.0; ///< track groups of one object at least this far apart may split
+/// A mobile object predicted with a larger sigma is not shown: under GOSPA (c 5 m, p 2, alpha 2) an estimate that
+/// far off costs about as much as a miss (12.5 m^2) and it would also crowd the planner's map with stale zones.
 constexpr double kMaxPublishedMobileSigmaM = 2.5;
-constexpr double kLineHistoryS = 180.0; ///< history kept per mobile object for its line
-constexpr std::size_t kLineMinSamples = 20;
+constexpr double kWalkerSpeedSigmaMps = 2.0; ///< prior of a new (or manoeuvring) mobile's velocity, per axis
+// The line a mobile object walks (fitLine).
+constexpr double kLineHistoryS = 180.0;    ///< history of filtered positions kept per mobile object
+constexpr double kLineHistoryStepS = 1.0;  ///< at most one history sample per this
+constexpr std::size_t kLineMinSamples = 8; ///< an object only the UAV fixes (every 10 s) has 18 in its history
+constexpr std::size_t kLineMinSpeedPairs = 5;
 constexpr double kLineMinSpanS = 40.0;
 constexpr double kLineMaxWidthM = 1.5; ///< rms distance from the line
 constexpr double kLineMinLengthM = 10.0;
-constexpr double kLineSigmaM = 2.0; ///< reported sigma of a position predicted along the line ///< a mobile object
-                                    ///< predicted longer than this is not shown
+constexpr double kLineMinStepM = 0.3;          ///< a step along the line shorter than this has no direction
+constexpr double kLineMinBaselineS = 4.0;      ///< speed from history pairs at least this far apart (noise)...
+constexpr double kLineMaxBaselineS = 15.0;     ///< ...and at most this far (the longer, the more straddle a turn)
+constexpr double kLineMinSpeedSigmaMps = 0.03; ///< people do not walk at an exactly constant speed
+// UAV fixes outside every gate (flushUav).
+constexpr double kMaxWalkSpeedMps = 2.5; ///< farther than a person walks since the last estimate: another object
+constexpr double kReachSigmas = 3.0;
+constexpr double kReachMaxAgeS = 20.0; ///< an object unseen longer than this is only reached through its gate
 constexpr int kMinSamplesToSolve = 10;
 constexpr double kMaxPriorObservations = 20.0; ///< a folded prior is worth at most this many observations
 
@@ -116,6 +129,10 @@ void ImprovedCorrelator::projectSample(int ugv, const Sample& s, Eigen::Vector2d
 
 Result<void, Error> ImprovedCorrelator::add(const Message& message)
 {
+    // UAV fixes of one instant are assigned together (flushUav): the first message of a later instant ends them.
+    if (!pendingUav_.empty() && std::visit([](const auto& m) { return m.t; }, message) > pendingUav_.front().t) {
+        flushUav();
+    }
     if (const auto* o = std::get_if<Observation>(&message)) {
         now_ = std::max(now_, o->t);
         if (!frame_) {
@@ -651,6 +668,10 @@ void ImprovedCorrelator::predict(Mobile& m, double t) const
     m.t = std::max(m.t, t);
 }
 
+/// Constant velocity with continuous white-noise acceleration of density q = mobileAccelDensity: the covariance
+/// of a prediction over dt is the same whether it is made in one step or many (the discrete "one acceleration per
+/// step" model grows the velocity variance with dt^2 per step, which made a 10 s gap between UAV fixes look like
+/// 25 m of uncertainty and hid every object that only the UAV fixes).
 void ImprovedCorrelator::predictState(Eigen::Vector4d& x, Eigen::Matrix4d& pm, double dt) const
 {
     if (dt <= 0.0) {
@@ -659,91 +680,175 @@ void ImprovedCorrelator::predictState(Eigen::Vector4d& x, Eigen::Matrix4d& pm, d
     Eigen::Matrix4d f = Eigen::Matrix4d::Identity();
     f(0, 2) = dt;
     f(1, 3) = dt;
-    const double q = config_.mobileAccelSigma * config_.mobileAccelSigma;
+    const double q = config_.mobileAccelDensity;
     Eigen::Matrix4d qm = Eigen::Matrix4d::Zero();
     for (int i = 0; i < 2; ++i) {
-        qm(i, i) = q * std::pow(dt, 4) / 4.0;
-        qm(i, i + 2) = qm(i + 2, i) = q * std::pow(dt, 3) / 2.0;
-        qm(i + 2, i + 2) = q * dt * dt;
+        qm(i, i) = q * dt * dt * dt / 3.0;
+        qm(i, i + 2) = qm(i + 2, i) = q * dt * dt / 2.0;
+        qm(i + 2, i + 2) = q * dt;
     }
     x = f * x;
     pm = f * pm * f.transpose() + qm;
 }
 
+/// The prior of a measurement at t is the line's prediction where the object walks a known line (so it turns at
+/// the ends instead of overshooting them), else the constant-velocity one. A measurement far outside the prior
+/// is a manoeuvre (a turn before any line is known, a change of course, a UAV fix after a turn between fixes):
+/// the velocity is forgotten and re-learnt from the next measurements, instead of dragging the old one along.
 void ImprovedCorrelator::updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const
 {
+    LinePrediction onLine;
+    const bool lined = predictOnLine(m, t, onLine);
     predict(m, t);
+    if (lined) {
+        m.x.head<2>() = onLine.position;
+        m.x.tail<2>() = onLine.velocity;
+    }
+    const Eigen::Vector2d innovation = z - m.x.head<2>();
+    if (mahalanobis2(innovation, m.p.topLeftCorner<2, 2>() + r) > config_.gateChi2) {
+        m.p.topRightCorner<2, 2>().setZero();
+        m.p.bottomLeftCorner<2, 2>().setZero();
+        m.p.bottomRightCorner<2, 2>() = kWalkerSpeedSigmaMps * kWalkerSpeedSigmaMps * Eigen::Matrix2d::Identity();
+        m.p.topLeftCorner<2, 2>() += innovation * innovation.transpose();
+    }
     const Eigen::Matrix2d s = m.p.topLeftCorner<2, 2>() + r;
     const Eigen::Matrix<double, 4, 2> k = m.p.leftCols<2>() * s.inverse();
-    m.x += k * (z - m.x.head<2>());
+    m.x += k * innovation;
     m.p = (Eigen::Matrix4d::Identity() - k * Eigen::Matrix<double, 2, 4>::Identity()) * m.p;
     m.t = t;
     ++m.observations;
-    if (m.history.empty() || t - m.history.back().first >= 1.0) {
+    if (m.history.empty() || t - m.history.back().first >= kLineHistoryStepS) {
         m.history.emplace_back(t, m.x.head<2>());
         const auto old = std::find_if(m.history.begin(), m.history.end(),
                                       [t](const auto& h) { return t - h.first <= kLineHistoryS; });
         m.history.erase(m.history.begin(), old);
+        fitLine(m);
     }
 }
 
-bool ImprovedCorrelator::predictOnLine(const Mobile& m, double t, Eigen::Vector2d& out) const
+/// Fits the line an object walks back and forth (the original's observation of the mobile OOIs) to its history
+/// of filtered positions: the principal axis, the speed along it and the two ends. Invalid (the object is
+/// predicted by its Kalman filter alone) until the history is long, narrow and shows a turn.
+void ImprovedCorrelator::fitLine(Mobile& m)
 {
-    if (m.history.size() < kLineMinSamples || m.history.back().first - m.history.front().first < kLineMinSpanS) {
-        return false;
+    Line& line = m.line;
+    line.valid = false;
+    const auto& h = m.history;
+    if (h.size() < kLineMinSamples || h.back().first - h.front().first < kLineMinSpanS) {
+        return;
     }
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (const auto& [ht, hp] : m.history) {
+    for (const auto& [ht, hp] : h) {
         centre += hp;
     }
-    centre /= static_cast<double>(m.history.size());
+    centre /= static_cast<double>(h.size());
     Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-    for (const auto& [ht, hp] : m.history) {
+    for (const auto& [ht, hp] : h) {
         scatter += (hp - centre) * (hp - centre).transpose();
     }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter / static_cast<double>(m.history.size()));
-    const Eigen::Vector2d u = eig.eigenvectors().col(1);
-    if (std::sqrt(std::max(eig.eigenvalues()(0), 0.0)) > kLineMaxWidthM) {
-        return false;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter / static_cast<double>(h.size()));
+    const double width = std::sqrt(std::max(eig.eigenvalues()(0), 0.0));
+    if (width > kLineMaxWidthM) {
+        return;
     }
-    double lo = 1e300;
-    double hi = -1e300;
-    double travelled = 0.0;
+    const Eigen::Vector2d u = eig.eigenvectors().col(1);
+    std::vector<double> along(h.size());
+    for (std::size_t i = 0; i < h.size(); ++i) {
+        along[i] = u.dot(h[i].second - centre);
+    }
+    // Speed: the median over pairs of samples kLineMinBaselineS..kLineMaxBaselineS apart. A pair that straddles
+    // a turn reads low and noise either way, but turns are a minority of pairs; the spread gives its uncertainty.
+    std::vector<double> speeds;
+    for (std::size_t i = 0, j = 0; i < h.size(); ++i) {
+        j = std::max(j, i + 1);
+        while (j < h.size() && h[j].first - h[i].first < kLineMinBaselineS) {
+            ++j;
+        }
+        if (j < h.size() && h[j].first - h[i].first <= kLineMaxBaselineS) {
+            speeds.push_back(std::abs(along[j] - along[i]) / (h[j].first - h[i].first));
+        }
+    }
+    if (speeds.size() < kLineMinSpeedPairs) {
+        return;
+    }
+    const auto median = [](std::vector<double>& v) {
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    const double speed = median(speeds);
+    std::vector<double> deviations;
+    deviations.reserve(speeds.size());
+    for (const double v : speeds) {
+        deviations.push_back(std::abs(v - speed));
+    }
+    constexpr double kMadToSigma = 1.4826; // of a normal distribution
+    const double speedSigma = std::max(kLineMinSpeedSigmaMps, kMadToSigma * median(deviations) /
+                                                                  std::sqrt(static_cast<double>(speeds.size())));
+    // A turn: consecutive steps in opposite directions. The ends: beyond the extreme samples, where a pair of
+    // consecutive samples straddles a turn (both walked to the end and back at the line's speed).
     bool reversed = false;
     double lastStep = 0.0;
-    for (std::size_t i = 0; i < m.history.size(); ++i) {
-        const double a = u.dot(m.history[i].second - centre);
-        lo = std::min(lo, a);
-        hi = std::max(hi, a);
-        if (i > 0) {
-            const double step = a - u.dot(m.history[i - 1].second - centre);
-            travelled += std::abs(step);
-            reversed = reversed || (step * lastStep < 0.0 && std::abs(step) > 0.3 && std::abs(lastStep) > 0.3);
-            lastStep = std::abs(step) > 0.3 ? step : lastStep;
+    double lo = *std::min_element(along.begin(), along.end());
+    double hi = *std::max_element(along.begin(), along.end());
+    for (std::size_t i = 1; i < h.size(); ++i) {
+        const double step = along[i] - along[i - 1];
+        reversed = reversed || (step * lastStep < 0.0 && std::abs(step) > kLineMinStepM);
+        lastStep = std::abs(step) > kLineMinStepM ? step : lastStep;
+        const double dt = h[i].first - h[i - 1].first;
+        if (dt <= kLineMaxBaselineS) {
+            hi = std::max(hi, (along[i] + along[i - 1] + speed * dt) / 2.0);
+            lo = std::min(lo, (along[i] + along[i - 1] - speed * dt) / 2.0);
         }
     }
     if (!reversed || hi - lo < kLineMinLengthM) {
+        return;
+    }
+    line = Line{true, centre, u, lo, hi, speed, speedSigma, width};
+}
+
+bool ImprovedCorrelator::predictOnLine(const Mobile& m, double t, LinePrediction& out) const
+{
+    const Line& line = m.line;
+    if (!line.valid) {
         return false;
     }
-    const double speed = travelled / (m.history.back().first - m.history.front().first);
-    double along = u.dot(m.x.head<2>() - centre);
-    double direction = u.dot(m.x.tail<2>()) >= 0.0 ? 1.0 : -1.0;
-    double remaining = speed * std::max(0.0, t - m.t);
-    while (remaining > 0.0) { // walk, turning at the ends
-        const double room = direction > 0.0 ? hi - along : along - lo;
+    double along = std::clamp(line.u.dot(m.x.head<2>() - line.centre), line.lo, line.hi);
+    double direction = line.u.dot(m.x.tail<2>()) >= 0.0 ? 1.0 : -1.0;
+    const double dt = std::max(0.0, t - m.t);
+    // Walk, turning at the ends; whole round trips change nothing.
+    const double length = line.hi - line.lo;
+    double remaining = std::fmod(line.speed * dt, 2.0 * length);
+    while (remaining > 0.0) {
+        const double room = direction > 0.0 ? line.hi - along : along - line.lo;
         if (remaining <= room) {
             along += direction * remaining;
             break;
         }
-        along += direction * std::max(room, 0.0);
-        remaining -= std::max(room, 0.0);
+        along += direction * room;
+        remaining -= room;
         direction = -direction;
-        if (hi - lo <= 0.0) {
-            break;
-        }
     }
-    out = centre + along * u;
+    out.position = line.centre + along * line.u;
+    out.velocity = direction * line.speed * line.u;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> last(m.p.topLeftCorner<2, 2>());
+    out.sigma =
+        std::sqrt(std::max(last.eigenvalues()(1), 0.0) + std::pow(line.speedSigma * dt, 2) + line.width * line.width);
     return true;
+}
+
+void ImprovedCorrelator::predictPosition(const Mobile& m, double t, Eigen::Vector2d& p, Eigen::Matrix2d& cov) const
+{
+    LinePrediction onLine;
+    if (predictOnLine(m, t, onLine)) {
+        p = onLine.position;
+        cov = onLine.sigma * onLine.sigma * Eigen::Matrix2d::Identity();
+        return;
+    }
+    Eigen::Vector4d x = m.x;
+    Eigen::Matrix4d pm = m.p;
+    predictState(x, pm, t - m.t);
+    p = x.head<2>();
+    cov = pm.topLeftCorner<2, 2>();
 }
 
 int ImprovedCorrelator::nearestMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const
@@ -755,10 +860,10 @@ int ImprovedCorrelator::nearestMobile(OoiClass cls, const Eigen::Vector2d& z, co
         if (!m.alive || m.cls != cls) {
             continue;
         }
-        Eigen::Vector4d x = m.x;
-        Eigen::Matrix4d pm = m.p;
-        predictState(x, pm, t - m.t);
-        const double d2 = mahalanobis2(z - x.head<2>(), pm.topLeftCorner<2, 2>() + r);
+        Eigen::Vector2d p;
+        Eigen::Matrix2d cov;
+        predictPosition(m, t, p, cov);
+        const double d2 = mahalanobis2(z - p, cov + r);
         if (d2 < bestD2) {
             index = i;
             bestD2 = d2;
@@ -777,9 +882,10 @@ int ImprovedCorrelator::createMobile(OoiClass cls, const Eigen::Vector2d& z, con
     created.x << z, 0.0, 0.0;
     created.p.setZero();
     created.p.topLeftCorner<2, 2>() = r;
-    created.p(2, 2) = created.p(3, 3) = 4.0; // (2 m/s)^2: a walking person
+    created.p(2, 2) = created.p(3, 3) = kWalkerSpeedSigmaMps * kWalkerSpeedSigmaMps;
     created.t = t;
     created.observations = 1;
+    created.history.emplace_back(t, z);
     const int index = static_cast<int>(mobiles_.size());
     idIndex_[created.id] = {false, index};
     mobiles_.push_back(std::move(created));
@@ -810,20 +916,84 @@ void ImprovedCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& 
 
 void ImprovedCorrelator::addUav(const UavFix& u)
 {
-    const Eigen::Vector2d z = frame_->toLocal(u.lat, u.lon);
+    if (!pendingUav_.empty() && pendingUav_.front().t != u.t) {
+        flushUav();
+    }
+    pendingUav_.push_back(u);
+}
+
+/// The UAV fixes of one instant, assigned jointly (an optimal assignment of their statistical distances), so
+/// that one object's fix cannot take the track of another it passes close to (one at a time, the first fix took
+/// whichever track was nearest and left the other fix the wrong one). A fix outside every gate may still go to an
+/// object it could have walked to since its last estimate (a turn between two fixes of an object that only the
+/// UAV sees), at a cost above every gated pair; a fix cheapest alone is a new object.
+void ImprovedCorrelator::flushUav()
+{
+    if (pendingUav_.empty()) {
+        return;
+    }
     const Eigen::Matrix2d r = config_.uavSigmaM * config_.uavSigmaM * Eigen::Matrix2d::Identity();
-    const OoiClass cls = u.cls == OoiClass::NonCombatant ? OoiClass::NonCombatant : OoiClass::Mobile;
-    int index = nearestMobile(cls, z, r, u.t);
-    if (index < 0) {
-        index = createMobile(cls, z, r, u.t);
-    } else {
-        updateMobile(mobiles_[static_cast<std::size_t>(index)], z, r, u.t);
+    const double newObjectCost = config_.gateChi2 + 1.0; // above every pair: gated < gate, reached < gate + 1
+    const double forbidden = 1e6 * newObjectCost;
+    const std::size_t fixCount = pendingUav_.size();
+    std::vector<Eigen::Vector2d> fixes;
+    std::vector<int> candidates; // mobile indices of the columns after the fixes' own "new object" columns
+    for (int i = 0; i < static_cast<int>(mobiles_.size()); ++i) {
+        if (mobiles_[static_cast<std::size_t>(i)].alive) {
+            candidates.push_back(i);
+        }
     }
-    Mobile& m = mobiles_[static_cast<std::size_t>(index)];
-    m.state = Confirmation::ConfirmedPositive;
-    if (std::find(m.ugvs.begin(), m.ugvs.end(), "uav") == m.ugvs.end()) {
-        m.ugvs.emplace_back("uav");
+    const std::size_t cols = fixCount + candidates.size();
+    std::vector<double> cost(fixCount * cols, forbidden);
+    for (std::size_t k = 0; k < fixCount; ++k) {
+        const UavFix& u = pendingUav_[k];
+        const Eigen::Vector2d z = frame_->toLocal(u.lat, u.lon);
+        fixes.push_back(z);
+        const OoiClass cls = u.cls == OoiClass::NonCombatant ? OoiClass::NonCombatant : OoiClass::Mobile;
+        cost[k * cols + k] = newObjectCost;
+        for (std::size_t c = 0; c < candidates.size(); ++c) {
+            const Mobile& m = mobiles_[static_cast<std::size_t>(candidates[c])];
+            if (m.cls != cls) {
+                continue;
+            }
+            Eigen::Vector2d p;
+            Eigen::Matrix2d cov;
+            predictPosition(m, u.t, p, cov);
+            const double d2 = mahalanobis2(z - p, cov + r);
+            const double age = u.t - m.t;
+            const double reach = kMaxWalkSpeedMps * age + kReachSigmas * std::sqrt(m.p.topLeftCorner<2, 2>().trace());
+            const double d = (z - m.x.head<2>()).norm();
+            if (d2 < config_.gateChi2) {
+                cost[k * cols + fixCount + c] = d2;
+            } else if (age <= kReachMaxAgeS && d <= reach) {
+                cost[k * cols + fixCount + c] = config_.gateChi2 + d / reach;
+            }
+        }
     }
+    const std::vector<int> column = solveAssignment(cost, fixCount, cols);
+    std::vector<int> assigned(fixCount, -1);
+    for (std::size_t k = 0; k < fixCount; ++k) {
+        const int c = column[k];
+        if (c >= static_cast<int>(fixCount) && cost[k * cols + static_cast<std::size_t>(c)] < forbidden) {
+            assigned[k] = candidates[static_cast<std::size_t>(c) - fixCount];
+        }
+    }
+    for (std::size_t k = 0; k < pendingUav_.size(); ++k) {
+        const UavFix& u = pendingUav_[k];
+        int index = assigned[k];
+        if (index < 0) {
+            const OoiClass cls = u.cls == OoiClass::NonCombatant ? OoiClass::NonCombatant : OoiClass::Mobile;
+            index = createMobile(cls, fixes[k], r, u.t);
+        } else {
+            updateMobile(mobiles_[static_cast<std::size_t>(index)], fixes[k], r, u.t);
+        }
+        Mobile& m = mobiles_[static_cast<std::size_t>(index)];
+        m.state = Confirmation::ConfirmedPositive;
+        if (std::find(m.ugvs.begin(), m.ugvs.end(), "uav") == m.ugvs.end()) {
+            m.ugvs.emplace_back("uav");
+        }
+    }
+    pendingUav_.clear();
 }
 
 Result<void, Error> ImprovedCorrelator::confirm(const Confirm& c)
@@ -870,6 +1040,7 @@ void ImprovedCorrelator::dropTentative(double t)
 
 Snapshot ImprovedCorrelator::snapshot(double t)
 {
+    flushUav();
     dropTentative(t);
     Snapshot s;
     s.t = t;
@@ -910,27 +1081,25 @@ Snapshot ImprovedCorrelator::snapshot(double t)
     for (Mobile& live : mobiles_) {
         if (live.alive && t - live.t > config_.mobileTimeoutS) {
             live.alive = false;
+            live.history.clear(); // memory stays bounded by the objects alive
+            live.history.shrink_to_fit();
         }
         if (!live.alive ||
             (live.observations < config_.minMobileObservations && live.state != Confirmation::ConfirmedPositive)) {
             continue;
         }
-        Eigen::Vector4d x = live.x;
-        Eigen::Matrix4d pm = live.p;
-        predictState(x, pm, t - live.t); // through the gap since its last fix
-        Ellipse el = ellipseOf(pm.topLeftCorner<2, 2>());
+        // Through the gap since its last measurement, along its line if it walks one.
+        Eigen::Vector2d position;
+        Eigen::Matrix2d cov;
+        predictPosition(live, t, position, cov);
+        const Ellipse el = ellipseOf(cov);
         if (el.sigmaMajor > kMaxPublishedMobileSigmaM) {
-            Eigen::Vector2d onLine;
-            if (!predictOnLine(live, t, onLine)) {
-                continue; // predicted too long to be useful; kept (with its id) for when it is seen again
-            }
-            x.head<2>() = onLine;
-            el = Ellipse{kLineSigmaM, kLineSigmaM, 0.0};
+            continue; // predicted too long to be useful; kept (with its id) for when it is seen again
         }
         ObjectEstimate e;
         e.id = live.id;
         e.cls = live.cls;
-        frame_->toLatLon(x.head<2>(), e.lat, e.lon);
+        frame_->toLatLon(position, e.lat, e.lon);
         e.sigmaMajorM = el.sigmaMajor;
         e.sigmaMinorM = el.sigmaMinor;
         e.majorAxisDeg = el.majorAxisDeg;
@@ -939,7 +1108,7 @@ Snapshot ImprovedCorrelator::snapshot(double t)
         e.ugvs = live.ugvs;
         std::sort(e.ugvs.begin(), e.ugvs.end());
         e.zoneDiameterM = kMobileZoneDiameterM;
-        (live.cls == OoiClass::NonCombatant ? civilians : threats).emplace_back(x.head<2>(), s.objects.size());
+        (live.cls == OoiClass::NonCombatant ? civilians : threats).emplace_back(position, s.objects.size());
         s.objects.push_back(std::move(e));
     }
     rules::appendAlerts(s, civilians, threats);

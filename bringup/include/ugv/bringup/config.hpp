@@ -74,6 +74,30 @@ struct HandoverConfig {
     int spinUs = 2000;
 };
 
+/// The DDS bus (ipc/dds_bus.hpp): how this process joins the vehicle's and the team's data bus.
+struct DdsConfig {
+    bool enabled = true;      ///< publish sectors, scans and health, read poses (and run the correlator's bus)
+    int domainId = 0;         ///< the same on every vehicle and the ground station (ROS 2's default is 0)
+    std::string partition;    ///< our topics only; empty = the default partition
+    std::string rosNamespace; ///< ROS 2 topics rt/<ns>/...; empty = vehicle_id's letters, digits and _ (ugv-1: ugv1)
+    std::string frameId =
+        "ugvsense_ground";       ///< frame of the LaserScan and PointCloud2 (on the ground below the camera)
+    std::string discoveryServer; ///< "" = multicast discovery; "IP:PORT[;IP:PORT]" = Fast DDS discovery servers
+    bool sharedMemory = true;    ///< Fast DDS shared memory between processes of this host (besides UDP)
+    double poseMaxAgeMs = 600.0; ///< [ms] a pose further than this from the capture time is flagged stale
+};
+
+/// The OOI correlator task (issue 5's algorithm, live on the bus).
+struct CorrelatorTaskConfig {
+    bool enabled = false;
+    bool improved = true;           ///< mode improved (default) or original
+    double periodS = 1.0;           ///< [s] mission-time period of the correlated list
+    double reorderMs = 2000.0;      ///< [ms] how long a received input waits to be put in time order with the others
+    double startupHoldMs = 10000.0; ///< [ms] after the first input nothing is applied this long (the team's histories)
+    std::string logDir;             ///< inputs.jsonl (every accepted input, in processing order) and snapshots.jsonl
+    double maxRatePerSource = 2000.0; ///< [1/s] inputs from one participant beyond this rate are refused (a flood)
+};
+
 struct ServiceConfig {
     std::string sourceFile; ///< the file this came from (for messages)
     std::string vehicleId = "ugv-1";
@@ -84,6 +108,9 @@ struct ServiceConfig {
     ObstacleConfig obstacles;
     OverloadConfig overload;
     HandoverConfig handover;
+    bool visionEnabled = true; ///< false: no camera and no vision (a ground station running only the correlator)
+    DdsConfig dds;
+    CorrelatorTaskConfig correlator;
     /// The service's threads: rt's default table with the `tasks.<name>.{policy,priority,cpu}` overrides.
     std::array<rt::TaskSpec, rt::kDefaultTaskTable.size()> tasks = rt::kDefaultTaskTable;
 };

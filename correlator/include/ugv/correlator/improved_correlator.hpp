@@ -11,9 +11,12 @@
 /// - estimates, every solvePeriodS, each UGV's heading bias (constant) and position offset (per offsetWindowS
 ///   window, a random walk between windows) jointly with the static objects, by sparse Gauss-Newton least
 ///   squares with Eigen (zero-mean priors fix the gauge: the fleet on average is unbiased);
-/// - tracks mobile objects with a constant-velocity Kalman filter, predicted through gaps, published after
-///   minMobileObservations; when the Kalman prediction grows too uncertain but the object's history shows a line
-///   walked back and forth, it is predicted along that line; UAV fixes are precise measurements that confirm;
+/// - tracks mobile objects with a constant-velocity Kalman filter (continuous white acceleration), predicted
+///   through gaps, published after minMobileObservations while the prediction's sigma stays below 2.5 m; once
+///   the object's history shows a line walked back and forth, it is predicted along that line (turning at its
+///   ends, the sigma growing with the speed's uncertainty), and a measurement far from the prediction re-learns
+///   the velocity (a manoeuvre); UAV fixes are precise measurements that confirm, the fixes of one instant
+///   assigned together (an optimal assignment), one beyond every gate to an object it could have walked to;
 /// - never changes a published id: merges keep the earliest; a track stays with its object, unless the object's
 ///   tracks form two groups far apart (associated while the pose errors were unknown): then it splits, and
 ///   the group with more observations keeps the id.
@@ -55,7 +58,10 @@ struct ImprovedConfig {
     std::size_t samplesPerTrackWindow = 4; ///< reservoir per track and offset window
     double horizonS = 1800.0;              ///< windows older than this are frozen and their samples dropped
     // Mobile objects.
-    double mobileAccelSigma = 0.5; ///< [m/s^2] white-acceleration process noise
+    /// [m^2/s^3] density of the continuous white acceleration of a mobile object: people walk at a steady
+    /// velocity for tens of seconds; turns are handled as manoeuvres (the velocity is re-learnt, see
+    /// updateMobile), not by a process noise large enough to cover them.
+    double mobileAccelDensity = 0.05;
     double mobileTimeoutS = 60.0;
     int minMobileObservations = 3;
     double uavSigmaM = 0.5;
@@ -122,6 +128,22 @@ private:
         std::vector<PoseCorrection> corrections; ///< explicit, from the map builder
         bool solved = false;
     };
+    /// The line a mobile object walks back and forth: centre + a u, a in [lo, hi], at `speed`.
+    struct Line {
+        bool valid = false;
+        Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+        Eigen::Vector2d u = Eigen::Vector2d::UnitX(); ///< unit direction
+        double lo = 0.0;                              ///< [m] along u from centre
+        double hi = 0.0;                              ///< [m]
+        double speed = 0.0;                           ///< [m/s]
+        double speedSigma = 0.0;                      ///< [m/s]
+        double width = 0.0;                           ///< [m] rms distance of the history from the line
+    };
+    struct LinePrediction {
+        Eigen::Vector2d position = Eigen::Vector2d::Zero();
+        Eigen::Vector2d velocity = Eigen::Vector2d::Zero();
+        double sigma = 0.0; ///< [m]
+    };
     struct Mobile {
         std::string id;
         std::uint64_t order = 0;
@@ -134,6 +156,7 @@ private:
         int observations = 0;
         std::vector<std::string> ugvs;
         std::vector<std::pair<double, Eigen::Vector2d>> history; ///< filtered positions, 1 per s, last 180 s
+        Line line;                                               ///< fitted to history
     };
 
     int ugvIndex(const std::string& name);
@@ -146,6 +169,7 @@ private:
     void addStatic(const Observation& o, int ugv);
     void addMobile(const Observation& o, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov);
     void addUav(const UavFix& u);
+    void flushUav();
     [[nodiscard]] int nearestMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const;
     int createMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t);
     Result<void, Error> confirm(const Confirm& c);
@@ -161,8 +185,11 @@ private:
     void predict(Mobile& m, double t) const;
     void predictState(Eigen::Vector4d& x, Eigen::Matrix4d& p, double dt) const;
     /// Mobile OOIs walk fixed lines back and forth (the original's observation): once the history shows one,
-    /// the position at time t along it, reflecting at its ends. @return false when the history shows no line.
-    [[nodiscard]] bool predictOnLine(const Mobile& m, double t, Eigen::Vector2d& out) const;
+    /// the position at time t along it, turning at its ends. @return false when the history shows no line.
+    [[nodiscard]] bool predictOnLine(const Mobile& m, double t, LinePrediction& out) const;
+    static void fitLine(Mobile& m);
+    /// Where m is at t, and the covariance: along its line if it walks one, else by its Kalman filter.
+    void predictPosition(const Mobile& m, double t, Eigen::Vector2d& p, Eigen::Matrix2d& cov) const;
     void updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const;
     std::string newId();
 
@@ -175,6 +202,7 @@ private:
     std::vector<StaticObject> statics_;
     std::vector<Mobile> mobiles_;
     std::unordered_map<std::string, int> mobileTrackObject_; ///< (ugv, track) -> mobile index
+    std::vector<UavFix> pendingUav_;                         ///< the fixes of the latest instant, not yet assigned
     std::unordered_map<std::string, std::string> mergedInto_;
     std::unordered_map<std::string, std::pair<bool, int>> idIndex_; ///< id -> (static?, index)
     std::mt19937_64 rng_{11};

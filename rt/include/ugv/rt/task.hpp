@@ -40,10 +40,11 @@ inline constexpr int kMaxFifoPriority = 99;
 
 /// ugvsensed's threads: capture > vision > publish (SCHED_FIFO), correlator and logger (SCHED_OTHER).
 /// The capture period is one frame at 30 fps; vision and publish run when their input arrives.
-inline constexpr std::array<TaskSpec, 5> kDefaultTaskTable{{
+inline constexpr std::array<TaskSpec, 6> kDefaultTaskTable{{
     {"capture", SchedPolicy::Fifo, 80, -1, std::chrono::nanoseconds(33'333'333), kDefaultStackBytes},
     {"vision", SchedPolicy::Fifo, 70, -1, std::chrono::nanoseconds(0), kDefaultStackBytes},
     {"publish", SchedPolicy::Fifo, 60, -1, std::chrono::nanoseconds(0), kDefaultStackBytes},
+    {"bus", SchedPolicy::Other, 0, -1, std::chrono::nanoseconds(0), kDefaultStackBytes},
     {"correlator", SchedPolicy::Other, 0, -1, std::chrono::nanoseconds(0), kDefaultStackBytes},
     {"logger", SchedPolicy::Other, 0, -1, std::chrono::milliseconds(5), kDefaultStackBytes},
 }};

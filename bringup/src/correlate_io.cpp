@@ -1,10 +1,10 @@
-#include "correlate_io.hpp"
+#include "ugv/bringup/correlate_io.hpp"
 
 #include <cmath>
 
 #include <nlohmann/json.hpp>
 
-namespace ugv::tool {
+namespace ugv::bringup {
 namespace {
 
 using nlohmann::json;
@@ -363,4 +363,4 @@ Result<Snapshot, Error> parseSnapshotLine(std::string_view line)
     return s;
 }
 
-} // namespace ugv::tool
+} // namespace ugv::bringup

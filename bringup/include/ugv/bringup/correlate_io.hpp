@@ -1,7 +1,8 @@
 #pragma once
 
-// JSON lines of the correlator's offline tools (`ugvsense correlate`, `correlate-sim`, `correlate-eval`):
-// the input messages and the output snapshots, in the format of issue 5 (README "Correlator"). nlohmann::json.
+// JSON lines of the correlator: the offline tools (`ugvsense correlate`, `correlate-sim`, `correlate-eval`) and the
+// live task's logs. The input messages and the output snapshots, in the format of issue 5 (README "Correlator").
+// nlohmann::json.
 
 #include <optional>
 #include <string>
@@ -11,7 +12,7 @@
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 
-namespace ugv::tool {
+namespace ugv::bringup {
 
 /// One input line -> a message; an error says what is wrong with the line (the caller adds the line number).
 /// Rejects malformed JSON, missing or mistyped fields, NaN/inf, latitude outside [-90, 90], longitude outside
@@ -27,4 +28,4 @@ std::string toJsonLine(const correlator::Snapshot& snapshot);
 /// One snapshot line back (correlate-eval).
 Result<correlator::Snapshot, Error> parseSnapshotLine(std::string_view line);
 
-} // namespace ugv::tool
+} // namespace ugv::bringup

@@ -1,0 +1,161 @@
+#pragma once
+
+/// @file
+/// The OOI correlator on the bus: the ground station's (or a vehicle's) lowest-priority task.
+///
+///   ugvsense/ooi/{observations,uav,confirmations,pose_corrections}  (reliable, transient local)
+///     -> check (NaN, latitude, enums, names: refused and counted) -> duplicates dropped by (sender, sequence)
+///     -> flood guard per participant -> reorder buffer (time order across senders, `reorderMs` of wall time;
+///        `startupHoldMs` after the first input: the histories of the team)
+///     -> CorrelatorFeed (the offline tool's own driver) -> inputs.jsonl
+///     -> every snapshot: snapshots.jsonl and ugvsense/ooi/correlated (reliable, transient local, keep last 1)
+///
+/// Same results as `ugvsense correlate` on the same messages: inputs.jsonl holds every message given to the feed,
+/// in order, so `ugvsense correlate --input inputs.jsonl` writes the same snapshots.jsonl (a test checks it).
+///
+/// Duplicates: a sender numbers its samples; one at or below the highest number seen from that sender is a
+/// duplicate (a restarted sender replaying its file, a writer's history replayed to this reader). Reliable
+/// delivery is in order per writer, so nothing new is dropped; numbers must grow across a sender's restarts.
+///
+/// An input that arrives more than `reorderMs` after later-stamped ones were applied is refused by the correlator
+/// (out of time order), counted and logged: choose reorder_ms above the worst repair time of the link.
+///
+/// Flood guard: a token bucket per participant over the samples' source timestamps (`maxRatePerSource` per
+/// second, a burst of one second's worth). A writer's history replayed to a late or restarted reader keeps its
+/// original timestamps and passes; a participant writing faster than the rate is refused beyond it, counted.
+///
+/// Thread-safety: thread-bound (one task). RT-safe: no; it runs at the lowest priority, never on the frame path.
+
+#include <chrono>
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+
+#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/ipc/dds_bus.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/rt/thread_runner.hpp"
+
+namespace ugv::service {
+
+struct LiveCorrelatorOptions {
+    bool improved = true;
+    double periodS = 1.0;
+    double reorderMs = 2000.0;
+    /// After the first input arrives, nothing is applied for this long: a (re)started station first gathers the
+    /// team's transient-local histories, which come all at once and, on a lossy link, repaired over seconds.
+    double startupHoldMs = 10000.0;
+    double maxRatePerSource = 2000.0;
+    std::string logDir;         ///< empty: no logs
+    bool publish = true;        ///< publish ugvsense/ooi/correlated (false: a viewer such as correlate --from-dds)
+    std::string source = "gcs"; ///< the source name of the published list
+};
+
+struct LiveCorrelatorStats {
+    std::uint64_t received = 0;   ///< samples taken from the readers
+    std::uint64_t rejected = 0;   ///< refused by the checks (malformed, hostile)
+    std::uint64_t duplicates = 0; ///< (sender, sequence) seen before
+    std::uint64_t flooded = 0;    ///< refused by the flood guard
+    std::uint64_t refused = 0;    ///< given to the correlator and refused (out of time order, unknown id)
+    std::uint64_t applied = 0;
+    std::uint64_t published = 0; ///< correlated lists written
+    std::size_t waiting = 0;     ///< in the reorder buffer now
+};
+
+class LiveCorrelator {
+public:
+    /// Creates the readers (and the writer), opens the logs in `logDir` (existing ones are renamed
+    /// inputs.N.jsonl / snapshots.N.jsonl, never overwritten).
+    static Result<std::unique_ptr<LiveCorrelator>, Error> create(ipc::dds::Bus& bus,
+                                                                 const LiveCorrelatorOptions& options);
+
+    /// Waits up to `timeout` for an observation (the busiest input).
+    void waitForInput(std::chrono::milliseconds timeout);
+    /// Takes what arrived, applies what waited long enough (steady clock `nowNs`), publishes new snapshots.
+    void poll(std::int64_t nowNs);
+    /// Takes what arrived, applies everything still waiting, takes and publishes the final snapshot, flushes.
+    std::optional<correlator::Snapshot> finish();
+
+    [[nodiscard]] LiveCorrelatorStats stats() const;
+    [[nodiscard]] const bringup::CorrelatorFeed& feed() const noexcept { return feed_; }
+    /// The latest snapshot taken (empty before the first).
+    [[nodiscard]] const correlator::Snapshot& latest() const noexcept { return latest_; }
+    /// Problems seen (the first ones of each kind, for the log), drained by the caller.
+    std::vector<std::string> takeWarnings();
+
+private:
+    explicit LiveCorrelator(const LiveCorrelatorOptions& options);
+    struct Pending {
+        correlator::Message message;
+        std::int64_t arrivalNs = 0;
+    };
+    struct Bucket {
+        double tokens = 0.0;
+        std::int64_t lastSourceNs = 0;
+    };
+    template <class Sample>
+    void drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs);
+    bool admit(const std::string& sender, std::uint64_t sequence, const eprosima::fastdds::dds::SampleInfo& info);
+    void apply(const correlator::Message& message);
+    void onSnapshot(const correlator::Snapshot& s);
+    void warn(const std::string& text);
+
+    LiveCorrelatorOptions options_;
+    bringup::CorrelatorFeed feed_;
+    ipc::dds::Reader<ipc::dds::msg::OoiObservation> observations_;
+    ipc::dds::Reader<ipc::dds::msg::UavObservation> uav_;
+    ipc::dds::Reader<ipc::dds::msg::ConfirmationState> confirmations_;
+    ipc::dds::Reader<ipc::dds::msg::PoseCorrection> corrections_;
+    ipc::dds::Writer<ipc::dds::msg::CorrelatedOoiList> out_;
+    /// By mission time, then sender and sequence number: the same inputs come out in the same order whatever the
+    /// order they arrived in (a restarted ground station replays them as the first one did).
+    std::map<std::tuple<double, std::string, std::uint64_t>, Pending> reorder_;
+    std::unordered_map<std::string, std::uint64_t> highestSeq_; ///< per sender
+    std::unordered_map<std::string, Bucket> buckets_;           ///< per participant (GUID prefix)
+    std::ofstream inputsLog_;
+    std::ofstream snapshotsLog_;
+    correlator::Snapshot latest_;
+    ipc::dds::msg::CorrelatedOoiList sample_;
+    LiveCorrelatorStats stats_;
+    std::vector<std::string> warnings_;
+    std::uint64_t warned_ = 0;
+    std::int64_t firstArrivalNs_ = 0;
+};
+
+/// The LiveCorrelator on its own thread: the task table's "correlator" row (SCHED_OTHER by default, below every
+/// frame-path task), polling every 50 ms at most. stop() applies what is still waiting and takes the last snapshot.
+class CorrelatorTask {
+public:
+    static Result<std::unique_ptr<CorrelatorTask>, Error>
+    create(ipc::dds::Bus& bus, const LiveCorrelatorOptions& options, const rt::TaskSpec& spec);
+    ~CorrelatorTask();
+    CorrelatorTask(const CorrelatorTask&) = delete;
+    CorrelatorTask& operator=(const CorrelatorTask&) = delete;
+    CorrelatorTask(CorrelatorTask&&) = delete;
+    CorrelatorTask& operator=(CorrelatorTask&&) = delete;
+    void start() noexcept;
+    /// Joins the thread, then finish(). Idempotent.
+    void stop();
+    /// Stats as of the last poll (any thread).
+    [[nodiscard]] LiveCorrelatorStats stats() const;
+    [[nodiscard]] const LiveCorrelator& correlator() const noexcept { return *live_; }
+
+private:
+    CorrelatorTask() = default;
+    static void body(void* self, const std::atomic<bool>& stop);
+
+    std::unique_ptr<LiveCorrelator> live_;
+    rt::ThreadRunner runner_;
+    mutable std::mutex statsMutex_; ///< the task and a reader of stats(); never on the frame path
+    LiveCorrelatorStats stats_;
+    bool stopped_ = false;
+};
+
+} // namespace ugv::service

@@ -1,0 +1,133 @@
+#pragma once
+
+/// @file
+/// The DDS options that `ugvsense listen` and `ugvsense bus-send` share (--domain, --partition, --ros-namespace,
+/// --discovery-server, --no-shm), their checks, and a stop flag set by SIGINT/SIGTERM. Header-only: the two commands
+/// are the only users. Init-time only (allocates).
+
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "ugv/ipc/dds_bus.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+
+namespace ugv::tool::bus {
+
+inline constexpr int kMaxDomainId = 232; ///< the RTPS UDP port formula's limit (ipc::dds::validate)
+
+/// The option specs, to append to a command's own.
+inline std::vector<OptionSpec> options()
+{
+    return {{"domain", "N", "DDS domain id 0..232, default $UGV_DDS_DOMAIN, else 0", false},
+            {"partition", "P[,P...]", "DDS partition(s) of our topics (a team, a test), default none", false},
+            {"ros-namespace", "NS", "namespace of the ROS 2 topics rt/NS/obstacle_scan..., default ugv1", false},
+            {"discovery-server", "LIST",
+             "IP:PORT[;IP:PORT...] of Fast DDS discovery servers, default multicast discovery", false},
+            {"no-shm", "", "UDP only, no Fast DDS shared memory (processes of one host in separate network namespaces)",
+             false}};
+}
+
+/// The bus settings of the command line; errors name the option (or UGV_DDS_DOMAIN) and how to fix it.
+inline Result<ipc::dds::BusConfig, Error> configFrom(const Args& args, const std::string& command,
+                                                     const std::string& participant)
+{
+    ipc::dds::BusConfig config;
+    config.participantName = participant;
+    double fallback = 0.0;
+    if (const char* env = std::getenv("UGV_DDS_DOMAIN"); env != nullptr && *env != '\0') {
+        char* end = nullptr;
+        errno = 0;
+        const long v = std::strtol(env, &end, 10);
+        if (errno != 0 || *end != '\0' || v < 0 || v > kMaxDomainId) {
+            return Unexpected(Error{"environment UGV_DDS_DOMAIN", "bad domain id '" + std::string(env) + "'",
+                                    "set a whole number in 0..232, or unset it (domain 0)"});
+        }
+        fallback = static_cast<double>(v);
+    }
+    const auto domain = args.number("domain", fallback, 0, kMaxDomainId);
+    if (!domain) {
+        return Unexpected(domain.error());
+    }
+    if (static_cast<double>(static_cast<int>(*domain)) != *domain) {
+        return Unexpected(Error{"ugvsense " + command + " --domain", "bad value '" + args.get("domain") + "'",
+                                "give a whole number in [0, 232]"});
+    }
+    config.domainId = static_cast<int>(*domain);
+    if (args.has("partition")) {
+        const std::string list = args.get("partition");
+        std::size_t from = 0;
+        while (true) {
+            const std::size_t comma = list.find(',', from);
+            config.partitions.push_back(
+                list.substr(from, comma == std::string::npos ? std::string::npos : comma - from));
+            if (comma == std::string::npos) {
+                break;
+            }
+            from = comma + 1;
+        }
+    }
+    config.rosNamespace = args.get("ros-namespace", config.rosNamespace);
+    config.discoveryServers = args.get("discovery-server");
+    config.sharedMemory = !args.has("no-shm");
+    if (auto ok = ipc::dds::validate(config, "ugvsense " + command); !ok) {
+        // validate() names the service's config keys; on the command line they are options.
+        Error e = ok.error();
+        const std::string prefix = "ugvsense " + command;
+        if (e.where == prefix + " vehicle") {
+            e.where = prefix + " --ros-namespace";
+        } else if (e.where == prefix + " partitions") {
+            e.where = prefix + " --partition";
+        } else if (e.where == prefix + " discovery_server") {
+            e.where = prefix + " --discovery-server";
+        } else if (e.where == prefix + " domain_id") {
+            e.where = prefix + " --domain";
+        }
+        return Unexpected(e);
+    }
+    return config;
+}
+
+/// "domain 7, partition 'a,b'" (for messages).
+inline std::string describe(const ipc::dds::BusConfig& config)
+{
+    std::string text = "domain " + std::to_string(config.domainId);
+    if (config.partitions.empty()) {
+        text += ", default partition";
+    } else {
+        text += ", partition '";
+        for (std::size_t i = 0; i < config.partitions.size(); ++i) {
+            text += (i == 0 ? "" : ",") + config.partitions[i];
+        }
+        text += "'";
+    }
+    if (!config.discoveryServers.empty()) {
+        text += ", discovery server " + config.discoveryServers;
+    }
+    return text;
+}
+
+/// Set by SIGINT/SIGTERM once installStopHandler() ran; a second signal exits with 130.
+inline std::atomic<bool> g_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+inline void installStopHandler()
+{
+    struct sigaction action {};
+    // A second signal ends the process at once (a Fast DDS teardown that hangs must not need kill -9).
+    action.sa_handler = [](int /*signal*/) {
+        if (g_stop.exchange(true)) {
+            std::_Exit(130);
+        }
+    };
+    sigemptyset(&action.sa_mask);
+    ::sigaction(SIGINT, &action, nullptr);
+    ::sigaction(SIGTERM, &action, nullptr);
+}
+
+} // namespace ugv::tool::bus

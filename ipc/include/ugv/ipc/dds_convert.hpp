@@ -1,0 +1,64 @@
+#pragma once
+
+/// @file
+/// Platform values -> DDS samples (the sectors as ugvsense/sectors, a ROS 2 LaserScan and a PointCloud2 of the
+/// negative obstacles), and the checks every received sample passes before anything trusts a field (NaN,
+/// out-of-range latitude, unknown enum values, empty or oversized strings and sequences).
+///
+/// Stamps: capture stamps on the frame path are CLOCK_MONOTONIC; on the bus they are UNIX-epoch nanoseconds:
+/// monoToRealtimeNs() converts with the offset between the two clocks read now (both clocks tick at the same rate;
+/// NTP slews move the offset by microseconds).
+///
+/// Thread-safety: pure functions. RT-safe: no (the samples own strings and vectors).
+
+#include <cstdint>
+#include <string>
+
+#include "ugv/ipc/dds_bus.hpp"
+#include "ugv/platform/obstacle_sectors.hpp"
+
+namespace ugv::ipc::dds {
+
+/// CLOCK_REALTIME - CLOCK_MONOTONIC now [ns].
+std::int64_t realtimeOffsetNs() noexcept;
+/// Nanoseconds since the UNIX epoch now.
+std::int64_t realtimeNowNs() noexcept;
+
+/// The ground estimate as the service knows it.
+struct GroundSummary {
+    bool reliable = false;
+    float pitchDeg = 0.0F;
+    float rollDeg = 0.0F;
+    float cameraHeightM = 0.0F;
+};
+
+/// The sectors as ugvsense/sectors (pose fields untouched: the caller attaches the pose).
+void toDds(const ObstacleSectors& sectors, const GroundSummary& ground, const std::string& vehicle,
+           std::int64_t captureRealNs, std::int64_t publishRealNs, msg::ObstacleSectors& out);
+/// Back (ugvsense listen, tests): false when the sample fails validate().
+bool fromDds(const msg::ObstacleSectors& in, ObstacleSectors& out);
+
+/// The sectors as a sensor_msgs/LaserScan in frame `frameId` (x forward, y left, on the ground below the camera):
+/// one ray per sector at its centre bearing (ROS angles: counter-clockwise, like ours). Obstacle -> its range,
+/// Clear -> +inf (REP 117: nothing within range_max; costmaps clear along the ray), Unknown -> NaN (no
+/// measurement; nothing cleared). Negative obstacles are in it too: a hole is as impassable as a post.
+void toLaserScan(const ObstacleSectors& sectors, std::int64_t captureRealNs, const std::string& frameId,
+                 float rangeMinM, float rangeMaxM, float periodS, ros::LaserScan_& out);
+/// The negative obstacles as a sensor_msgs/PointCloud2 (x, y, z float32) in `frameId`: one point per Negative
+/// sector at its range and centre bearing, z = -depth (below the ground). Empty cloud when there is none.
+void toNegativeCloud(const ObstacleSectors& sectors, std::int64_t captureRealNs, const std::string& frameId,
+                     ros::PointCloud2_& out);
+
+/// Why a received sample was refused (static strings), or nullptr when it is fine.
+const char* check(const msg::ObstacleSectors& s) noexcept;
+const char* check(const msg::ServiceHealth& s) noexcept;
+const char* check(const msg::VehiclePose& s) noexcept;
+const char* check(const msg::OoiObservation& s) noexcept;
+const char* check(const msg::UavObservation& s) noexcept;
+const char* check(const msg::ConfirmationState& s) noexcept;
+const char* check(const msg::PoseCorrection& s) noexcept;
+const char* check(const msg::CorrelatedOoiList& s) noexcept;
+const char* check(const ros::LaserScan_& s) noexcept;
+const char* check(const ros::PointCloud2_& s) noexcept;
+
+} // namespace ugv::ipc::dds

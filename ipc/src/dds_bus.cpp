@@ -1,0 +1,245 @@
+#include "ugv/ipc/dds_bus.hpp"
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+#include <fastdds/dds/publisher/qos/PublisherQos.hpp>
+#include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+#include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+
+namespace ugv::ipc::dds {
+
+namespace fdds = eprosima::fastdds::dds;
+namespace rtps = eprosima::fastrtps::rtps;
+
+namespace {
+
+struct TopicSpec {
+    const char* shortName;
+    const char* suffix; ///< our topics: the whole name; ROS 2 ones: after rt/<ns>/
+    bool ros;
+    bool reliable;
+    bool transientLocal;
+    bool keepAll;
+    int depth; ///< keep-last depth
+};
+
+// Why these QoS (ipc/README.md): sensor-like streams are best effort, keep last 1 (a late sample is worse than
+// none; a consumer wants the newest); the correlator's inputs must all arrive and be replayed to a late or
+// restarted ground station (reliable, transient local, keep all); states (health, the correlated list) reach a
+// late joiner as their latest value (transient local, keep last 1).
+constexpr std::array<TopicSpec, kTopicCount> kTopics{{
+    {"sectors", "ugvsense/sectors", false, false, false, false, 1},
+    {"health", "ugvsense/health", false, true, true, false, 1},
+    {"pose", "ugvsense/pose", false, false, false, false, 8},
+    {"observations", "ugvsense/ooi/observations", false, true, true, true, 0},
+    {"uav", "ugvsense/ooi/uav", false, true, true, true, 0},
+    {"confirmations", "ugvsense/ooi/confirmations", false, true, true, true, 0},
+    {"pose_corrections", "ugvsense/ooi/pose_corrections", false, true, true, true, 0},
+    {"correlated", "ugvsense/ooi/correlated", false, true, true, false, 1},
+    {"scan", "obstacle_scan", true, false, false, false, 1},
+    {"negatives", "negative_obstacles", true, false, false, false, 1},
+}};
+
+/// Keep-all histories are bounded too: a writer whose readers do not acknowledge blocks (up to its
+/// max_blocking_time) and then refuses the sample, counted by the caller; memory stays bounded.
+constexpr int kKeepAllMaxSamples = 100'000;
+
+const TopicSpec& spec(TopicId id)
+{
+    return kTopics[static_cast<std::size_t>(id)];
+}
+
+template <class Qos>
+void applyCommon(Qos& q, const TopicSpec& s)
+{
+    // No data-sharing delivery (Fast DDS's default AUTO enables it between processes of one host for our bounded
+    // types). In 2.9.1 a late-joining reader of a keep-all transient-local writer's data-sharing history could spin
+    // at 100 % CPU in DataSharingListener::process_new_data() and then hang forever when deleted (found by
+    // `ugvsense listen observations --count 1`, about 1 run in 12 against a writer with a few hundred samples).
+    // Same-host traffic still goes through the shared-memory transport.
+    q.data_sharing().off();
+    q.reliability().kind = s.reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
+    q.durability().kind = s.transientLocal ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS : fdds::VOLATILE_DURABILITY_QOS;
+    if (s.keepAll) {
+        q.history().kind = fdds::KEEP_ALL_HISTORY_QOS;
+        q.resource_limits().max_samples = kKeepAllMaxSamples;
+        q.resource_limits().max_instances = 1;
+        q.resource_limits().max_samples_per_instance = kKeepAllMaxSamples;
+    } else {
+        q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+        q.history().depth = s.depth;
+    }
+}
+
+Result<void, Error> parseServers(const std::string& list, rtps::RemoteServerList_t& out, const std::string& where)
+{
+    if (!eprosima::fastdds::rtps::load_environment_server_info(list, out) || out.empty()) {
+        return Unexpected(
+            Error{where, "bad discovery server list '" + list + "'",
+                  "write IP:PORT[;IP:PORT...], e.g. 192.168.1.10:11811, or leave it empty for multicast"});
+    }
+    return {};
+}
+
+} // namespace
+
+Result<void, Error> validate(const BusConfig& config, const std::string& where)
+{
+    if (config.domainId < 0 || config.domainId > 232) {
+        return Unexpected(Error{where + " domain_id", "domain id " + std::to_string(config.domainId) + " out of range",
+                                "use 0..232 (the same on every vehicle and the ground station)"});
+    }
+    if (config.participantName.empty() || config.rosNamespace.empty() ||
+        config.rosNamespace.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_/") !=
+            std::string::npos ||
+        config.rosNamespace.front() == '/' || config.rosNamespace.back() == '/') {
+        return Unexpected(Error{where + " vehicle", "vehicle name '" + config.rosNamespace + "' is not a ROS 2 name",
+                                "letters, digits, _ and inner /, e.g. ugv1"});
+    }
+    for (const std::string& p : config.partitions) {
+        if (p.empty()) {
+            return Unexpected(Error{where + " partitions", "an empty partition name", "remove it or name it"});
+        }
+    }
+    if (!config.discoveryServers.empty()) {
+        rtps::RemoteServerList_t servers;
+        if (auto ok = parseServers(config.discoveryServers, servers, where + " discovery_server"); !ok) {
+            return ok;
+        }
+    }
+    return {};
+}
+
+std::string topicName(TopicId id, const BusConfig& config)
+{
+    const TopicSpec& s = spec(id);
+    return s.ros ? "rt/" + config.rosNamespace + "/" + s.suffix : std::string(s.suffix);
+}
+
+const char* shortName(TopicId id) noexcept
+{
+    return spec(id).shortName;
+}
+
+bool parseTopic(const std::string& name, const BusConfig& config, TopicId& out)
+{
+    for (int i = 0; i < kTopicCount; ++i) {
+        const auto id = static_cast<TopicId>(i);
+        if (name == shortName(id) || name == topicName(id, config)) {
+            out = id;
+            return true;
+        }
+    }
+    return false;
+}
+
+Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
+{
+    if (auto ok = validate(config, "dds"); !ok) {
+        return Unexpected(ok.error());
+    }
+    fdds::DomainParticipantQos pq = fdds::PARTICIPANT_QOS_DEFAULT;
+    pq.name(config.participantName);
+    pq.transport().use_builtin_transports = false;
+    if (config.sharedMemory) {
+        pq.transport().user_transports.push_back(
+            std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+    }
+    pq.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
+    if (!config.discoveryServers.empty()) {
+        rtps::RemoteServerList_t servers;
+        if (auto ok = parseServers(config.discoveryServers, servers, "dds discovery_server"); !ok) {
+            return Unexpected(ok.error());
+        }
+        auto& discovery = pq.wire_protocol().builtin.discovery_config;
+        discovery.discoveryProtocol = rtps::DiscoveryProtocol_t::CLIENT;
+        discovery.m_DiscoveryServers = servers;
+    }
+
+    std::unique_ptr<Bus> bus(new Bus());
+    bus->config_ = config;
+    bus->participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
+        static_cast<fdds::DomainId_t>(config.domainId), pq);
+    if (bus->participant_ == nullptr) {
+        return Unexpected(Error{"dds domain " + std::to_string(config.domainId), "cannot create the DDS participant",
+                                "check the network interfaces, /dev/shm, and the Fast DDS messages above"});
+    }
+    fdds::PublisherQos pubq = fdds::PUBLISHER_QOS_DEFAULT;
+    fdds::SubscriberQos subq = fdds::SUBSCRIBER_QOS_DEFAULT;
+    for (const std::string& p : config.partitions) {
+        pubq.partition().push_back(p.c_str());
+        subq.partition().push_back(p.c_str());
+    }
+    bus->publisher_ = bus->participant_->create_publisher(pubq);
+    bus->subscriber_ = bus->participant_->create_subscriber(subq);
+    bus->rosPublisher_ = bus->participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    bus->rosSubscriber_ = bus->participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    if (bus->publisher_ == nullptr || bus->subscriber_ == nullptr || bus->rosPublisher_ == nullptr ||
+        bus->rosSubscriber_ == nullptr) {
+        return Unexpected(Error{"dds", "cannot create the publishers and subscribers", "a bug or out of memory"});
+    }
+    return bus;
+}
+
+Bus::~Bus()
+{
+    if (participant_ != nullptr) {
+        participant_->delete_contained_entities();
+        fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+    }
+}
+
+fdds::Topic* Bus::topic(TopicId id, MakeType make)
+{
+    fdds::Topic*& t = topics_[static_cast<std::size_t>(id)];
+    if (t == nullptr) {
+        fdds::TypeSupport type(make());
+        if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
+            return nullptr;
+        }
+        t = participant_->create_topic(topicName(id, config_), type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    }
+    return t;
+}
+
+Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
+{
+    const TopicSpec& s = spec(id);
+    fdds::Topic* t = topic(id, make);
+    if (t == nullptr) {
+        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the topic", "a bug"});
+    }
+    fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
+    applyCommon(q, s);
+    if (s.reliable) {
+        q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100'000'000);
+        q.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0, 100'000'000);
+    }
+    fdds::DataWriter* w = (s.ros ? rosPublisher_ : publisher_)->create_datawriter(t, q);
+    if (w == nullptr) {
+        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the writer", "a bug"});
+    }
+    return w;
+}
+
+Result<fdds::DataReader*, Error> Bus::makeReader(TopicId id, MakeType make)
+{
+    const TopicSpec& s = spec(id);
+    fdds::Topic* t = topic(id, make);
+    if (t == nullptr) {
+        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the topic", "a bug"});
+    }
+    fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
+    applyCommon(q, s);
+    fdds::DataReader* r = (s.ros ? rosSubscriber_ : subscriber_)->create_datareader(t, q);
+    if (r == nullptr) {
+        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the reader", "a bug"});
+    }
+    return r;
+}
+
+} // namespace ugv::ipc::dds

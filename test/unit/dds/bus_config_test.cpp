@@ -1,0 +1,120 @@
+// ipc::dds::validate / Bus::create: configuration errors are caught before any DDS entity exists, and say what
+// is wrong and how to fix it. Also the topic names of `ugvsense listen`.
+
+#include "ugv/ipc/dds_bus.hpp"
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace ugv::ipc::dds {
+namespace {
+
+BusConfig good()
+{
+    BusConfig c;
+    c.domainId = 0;
+    c.rosNamespace = "ugv1";
+    return c;
+}
+
+TEST(BusConfig, DefaultsAreValid)
+{
+    EXPECT_TRUE(validate(BusConfig{}, "dds"));
+    BusConfig c = good();
+    c.domainId = 232;
+    c.discoveryServers = "127.0.0.1:11811;192.168.1.10:11812";
+    c.partitions = {"team-a", "test"};
+    c.rosNamespace = "team_a/ugv_1";
+    EXPECT_TRUE(validate(c, "dds")) << validate(c, "dds").error().message();
+}
+
+TEST(BusConfig, Domain233IsRefused)
+{
+    BusConfig c = good();
+    c.domainId = 233;
+
+    const auto sut = validate(c, "config.yaml dds");
+
+    ASSERT_FALSE(sut);
+    EXPECT_NE(sut.error().where.find("config.yaml dds domain_id"), std::string::npos) << sut.error().message();
+    EXPECT_NE(sut.error().what.find("233"), std::string::npos);
+    EXPECT_NE(sut.error().fix.find("0..232"), std::string::npos);
+    c.domainId = -1;
+    EXPECT_FALSE(validate(c, "dds"));
+}
+
+TEST(BusConfig, BadDiscoveryServerIsRefused)
+{
+    for (const char* list :
+         {"nonsense", "127.0.0.1:notaport", "127.0.0.1:99999", "300.1.2.3:11811", ";;", "1.2.3.4:11811;;x"}) {
+        BusConfig c = good();
+        c.discoveryServers = list;
+
+        const auto sut = validate(c, "dds");
+
+        ASSERT_FALSE(sut) << list << " was accepted";
+        EXPECT_NE(sut.error().where.find("discovery_server"), std::string::npos);
+        EXPECT_NE(sut.error().what.find(list), std::string::npos);
+        EXPECT_NE(sut.error().fix.find("IP:PORT"), std::string::npos);
+    }
+}
+
+TEST(BusConfig, BadRosNamespaceIsRefused)
+{
+    for (const char* ns : {"", "/ugv1", "ugv1/", "ugv 1", "ugv-1", "ügv"}) {
+        BusConfig c = good();
+        c.rosNamespace = ns;
+
+        const auto sut = validate(c, "dds");
+
+        ASSERT_FALSE(sut) << "'" << ns << "' was accepted";
+        EXPECT_NE(sut.error().what.find("not a ROS 2 name"), std::string::npos) << sut.error().message();
+        EXPECT_FALSE(sut.error().fix.empty());
+    }
+}
+
+TEST(BusConfig, EmptyPartitionIsRefused)
+{
+    BusConfig c = good();
+    c.partitions = {"team", ""};
+
+    const auto sut = validate(c, "dds");
+
+    ASSERT_FALSE(sut);
+    EXPECT_NE(sut.error().where.find("partitions"), std::string::npos);
+}
+
+TEST(BusConfig, CreateRefusesAnInvalidConfigWithoutAParticipant)
+{
+    BusConfig c = good();
+    c.domainId = 233;
+
+    const auto sut = Bus::create(c);
+
+    ASSERT_FALSE(sut);
+    EXPECT_NE(sut.error().what.find("233"), std::string::npos);
+}
+
+TEST(BusTopics, ShortAndWireNamesParse)
+{
+    BusConfig c = good();
+    c.rosNamespace = "team/ugv7";
+    for (int i = 0; i < kTopicCount; ++i) {
+        const auto id = static_cast<TopicId>(i);
+        TopicId byShort{};
+        TopicId byWire{};
+        EXPECT_TRUE(parseTopic(shortName(id), c, byShort)) << shortName(id);
+        EXPECT_TRUE(parseTopic(topicName(id, c), c, byWire)) << topicName(id, c);
+        EXPECT_EQ(byShort, id);
+        EXPECT_EQ(byWire, id);
+    }
+    EXPECT_EQ(topicName(TopicId::RosScan, c), "rt/team/ugv7/obstacle_scan");
+    EXPECT_EQ(topicName(TopicId::Observation, c), "ugvsense/ooi/observations");
+    TopicId unused{};
+    EXPECT_FALSE(parseTopic("observation", c, unused));           // singular: not a name
+    EXPECT_FALSE(parseTopic("rt/ugv1/obstacle_scan", c, unused)); // another vehicle's namespace
+}
+
+} // namespace
+} // namespace ugv::ipc::dds
