@@ -20,7 +20,7 @@ packages=(
     libcamera-dev          # the libcamera camera backend
     libgeographiclib-dev   # WGS84 <-> local tangent plane (correlator)
     nlohmann-json3-dev     # JSON lines of the correlator's offline tools
-    libfastrtps-dev fastddsgen fastdds-tools   # the DDS bus: Fast DDS 2.9, the IDL code generator, discovery server
+    libfastrtps-dev fastddsgen fastdds-tools default-jre-headless   # DDS: Fast DDS 2.9, IDL generator (Java), discovery server
     iproute2 nftables      # the multi-host test: network namespaces and packet loss
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
