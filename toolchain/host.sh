@@ -4,6 +4,7 @@
 #   toolchain/host.sh test   install missing packages, build (release + asan), run every test with a summary
 #   toolchain/host.sh deps   only install the Debian packages
 #   toolchain/host.sh build  only configure and build the release preset
+#   toolchain/host.sh package  build the release preset and the Debian package (build/release/package/*.deb)
 # Environment: UGV_SHARED_DATA (real test data, default ../shared/data), UGV_SKIP_ASAN=1 (test: release only).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,6 +25,7 @@ packages=(
     iproute2 nftables      # the multi-host test: network namespaces and packet loss
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
+    systemd dpkg-dev file adduser util-linux   # systemd-analyze (unit tests), the .deb (CPack: dpkg-shlibdeps, file), its test
 )
 
 as_root() {
@@ -107,7 +109,8 @@ run_tests() {
 case "${1:-}" in
     deps) deps ;;
     build) deps; build release ;;
+    package) deps; build release; cpack --config build/release/CPackConfig.cmake -B build/release/package ;;
     run) deps; build release; run_main_job ;;
     test) deps; run_tests ;;
-    *) echo "usage: toolchain/host.sh run|test|deps|build" >&2; exit 2 ;;
+    *) echo "usage: toolchain/host.sh run|test|deps|build|package" >&2; exit 2 ;;
 esac

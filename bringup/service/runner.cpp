@@ -226,8 +226,16 @@ Result<RunResult, Error> runService(const RunOptions& options)
             return Unexpected(started.error());
         }
         roudi = std::move(*started);
-    } else if (auto runtime = ipc::startRuntime(options.appName); !runtime) {
-        return Unexpected(runtime.error());
+    } else {
+        // Under systemd the RouDi unit may still be setting up when this one starts: give it roudiWait.
+        const std::int64_t waitUntilNs = MonotonicClock::nowNs() + std::chrono::nanoseconds(options.roudiWait).count();
+        while (!ipc::roudiReachable() && MonotonicClock::nowNs() < waitUntilNs &&
+               !(options.stop != nullptr && options.stop->load())) {
+            sleepMs(kMonitorPoll);
+        }
+        if (auto runtime = ipc::startRuntime(options.appName); !runtime) {
+            return Unexpected(runtime.error());
+        }
     }
 
     RunResult result;

@@ -8,6 +8,7 @@
 /// Thread-safety: call from the main thread. RT-safe: no (it is the non-RT side of the service).
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -33,6 +34,7 @@ struct RunOptions {
     std::string calibrationPath; ///< empty: the recording's own calibration, or the config's for a live camera
     hal::ReplayOptions replay;
     RouDiMode roudi = RouDiMode::External;
+    std::chrono::milliseconds roudiWait{0}; ///< External: wait this long for a RouDi that is still starting
     ServiceOptions service;
     int printEvery = 0;                      ///< print one sector summary every N published frames (0: none)
     int pinAllTasksTo = -1;                  ///< >= 0: capture, vision and publish on this CPU (one-core budgets)

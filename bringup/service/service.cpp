@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <utility>
 
 #include "ugv/platform/clock.hpp"
@@ -19,6 +20,18 @@ namespace {
 constexpr std::chrono::milliseconds kWaitSlice{50}; ///< longest wait before a thread looks at its stop flag
 constexpr std::chrono::milliseconds kMinBackoff{100};
 constexpr std::chrono::milliseconds kMaxBackoff{2000};
+constexpr std::int64_t kMissLogIntervalNs = 1'000'000'000; ///< at most one deadline-miss line a second
+
+/// 1, 2, 4, 8, ...: the counts at which a repeated event is logged again (rate limiting without a clock).
+bool isPowerOfTwo(std::uint64_t n) noexcept
+{
+    return n != 0 && (n & (n - 1)) == 0;
+}
+
+std::int64_t toUs(std::int64_t ns) noexcept
+{
+    return ns / 1000;
+}
 
 double threadCpuSeconds() noexcept
 {
@@ -144,6 +157,11 @@ Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceCo
             return Unexpected(added.error());
         }
     }
+    for (RtLogChannel* channel : {&s->captureLog_, &s->visionLog_, &s->publishLog_}) {
+        if (auto added = s->logDrain_.addChannel(*channel); !added) {
+            return Unexpected(added.error());
+        }
+    }
     if (auto created = s->runner_.createAll(); !created) {
         return Unexpected(created.error());
     }
@@ -162,12 +180,17 @@ Service::~Service()
 void Service::start() noexcept
 {
     startNs_ = MonotonicClock::nowNs();
+    if (auto started = logDrain_.start(); !started) {
+        UGV_LOG(Rt, Error) << started.error().message() << "; the RT tasks' log records are written at stop";
+    }
     runner_.startAll();
 }
 
 void Service::stop() noexcept
 {
     runner_.stopAll();
+    logDrain_.stop();
+    logDrain_.drainOnce(); // without a drain thread (it could not start), the records come out here
     if (endNs_.load(std::memory_order_relaxed) == 0) {
         endNs_.store(MonotonicClock::nowNs(), std::memory_order_relaxed);
     }
@@ -232,6 +255,8 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
     const std::chrono::nanoseconds stall = period_ * options_.stallPeriods;
     std::uint64_t frames = 0;
     bool steady = false;
+    bool stalled = false;      // logged as stalled, not yet logged as flowing again
+    std::int64_t attempts = 0; // reconnect attempts since the camera went away
     while (!stop.load(std::memory_order_relaxed) && !cameraEnded_.load(std::memory_order_relaxed)) {
         const hal::GrabStatus status = camera_->grab(frame, std::min<std::chrono::nanoseconds>(kWaitSlice, stall));
         switch (status) {
@@ -243,12 +268,25 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
             cameraGaps_.store(stats.sequenceGaps, std::memory_order_relaxed);
             // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written
             // before the frame becomes visible to the vision task.
+            if (stalled) {
+                captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: frames again (sequence %lld)",
+                                static_cast<std::int64_t>(frame.sequence));
+                stalled = false;
+            }
             if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
                                     &ringStampNs_[frame.sequence % kPublishSlots])) {
                 lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
                 inRing_.fetch_add(1, std::memory_order_relaxed);
             } else {
-                loanFailures_.store(framesOut_->loanFailures(), std::memory_order_relaxed); // e.g. a wrong size
+                const std::uint64_t refused = framesOut_->loanFailures();
+                loanFailures_.store(refused, std::memory_order_relaxed); // e.g. a wrong size
+                if (isPowerOfTwo(refused)) {
+                    captureLog_.log(LogLevel::Warn, LogCategory::Hal,
+                                    "frame %lld: the frame ring refused the pair (%lldx%lld: wrong size, or no free "
+                                    "chunk); %lld refused so far",
+                                    static_cast<std::int64_t>(frame.sequence), frame.left.width(), frame.left.height(),
+                                    static_cast<std::int64_t>(refused));
+                }
             }
             captured_.fetch_add(1, std::memory_order_release);
             probeSteady("capture", ++frames, steady);
@@ -259,20 +297,41 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
             if (sinceFrame >= stall) {
                 cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting),
                                    std::memory_order_relaxed);
+                if (!stalled) {
+                    captureLog_.log(LogLevel::Warn, LogCategory::Hal, "camera: no frame for %lld ms (stalled)",
+                                    std::chrono::duration_cast<std::chrono::milliseconds>(sinceFrame).count());
+                    stalled = true;
+                }
             }
             break;
-        case hal::GrabStatus::BadFrame:
-            badFrames_.fetch_add(1, std::memory_order_relaxed);
+        case hal::GrabStatus::BadFrame: {
+            const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
+            if (isPowerOfTwo(bad)) {
+                captureLog_.log(LogLevel::Warn, LogCategory::Hal, "camera: a bad frame (%lld so far)",
+                                static_cast<std::int64_t>(bad));
+            }
             break;
+        }
         case hal::GrabStatus::End:
             cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Stopped), std::memory_order_relaxed);
             cameraEnded_.store(true, std::memory_order_release);
+            captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: end of stream after %lld frame(s)",
+                            static_cast<std::int64_t>(frames));
             break;
         case hal::GrabStatus::Disconnected:
             cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting), std::memory_order_relaxed);
+            if (attempts == 0) {
+                captureLog_.log(LogLevel::Error, LogCategory::Hal,
+                                "camera: disconnected after frame %lld; reconnecting (backoff %lld..%lld ms)",
+                                static_cast<std::int64_t>(frame.sequence), kMinBackoff.count(), kMaxBackoff.count());
+            }
             sleepFor(backoff);
+            ++attempts;
             if (camera_->reconnect()) {
                 reconnects_.fetch_add(1, std::memory_order_relaxed);
+                captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: reconnected after %lld attempt(s)",
+                                attempts);
+                attempts = 0;
                 backoff = kMinBackoff;
             } else {
                 backoff = std::min<std::chrono::nanoseconds>(backoff * 2, kMaxBackoff);
@@ -318,6 +377,8 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
     bool steady = false;
     double fullMeanNs = 0.0; // running mean of the full pipeline's time (rectified -> detected) [ns]
     int degradedInARow = 0;
+    bool overloaded = false;         // in the degraded mode (logged on entering and leaving)
+    std::uint64_t overloadStart = 0; // degraded_ when the mode began
     while (!stop.load(std::memory_order_relaxed)) {
         spinUntilFrame(lastRingNs, stop);
         const ipc::TakeStatus status = framesIn_->take(frame, kWaitSlice);
@@ -325,7 +386,11 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             continue;
         }
         if (status == ipc::TakeStatus::Malformed) {
-            badFrames_.fetch_add(1, std::memory_order_relaxed);
+            const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
+            if (isPowerOfTwo(bad)) {
+                visionLog_.log(LogLevel::Warn, LogCategory::Ipc, "frame ring: a malformed frame (%lld bad so far)",
+                               static_cast<std::int64_t>(bad));
+            }
             continue;
         }
         const std::int64_t takenNs = MonotonicClock::nowNs();
@@ -344,6 +409,21 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
         const PipelineStatus done =
             pipeline_->process(frame.views.left, frame.views.right, h.sequence, h.leftStampNs, rectifiedNs, groundOnly);
         const std::int64_t detectedNs = MonotonicClock::nowNs();
+        if (groundOnly && !overloaded) {
+            visionLog_.log(LogLevel::Warn, LogCategory::Vision,
+                           "frame %lld: the full pipeline would miss the %lld ms deadline: ground-plane-only "
+                           "sectors (degraded) until it catches up",
+                           static_cast<std::int64_t>(h.sequence),
+                           std::chrono::duration_cast<std::chrono::milliseconds>(deadline_).count());
+            overloaded = true;
+            overloadStart = degraded_.load(std::memory_order_relaxed);
+        } else if (!late && overloaded) {
+            visionLog_.log(LogLevel::Info, LogCategory::Vision,
+                           "frame %lld: full pipeline again after %lld degraded frame(s)",
+                           static_cast<std::int64_t>(h.sequence),
+                           static_cast<std::int64_t>(degraded_.load(std::memory_order_relaxed) - overloadStart));
+            overloaded = false;
+        }
         if (groundOnly) {
             ++degradedInARow;
         } else {
@@ -362,7 +442,14 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
                 degraded_.fetch_add(1, std::memory_order_relaxed);
             }
         } else {
-            badFrames_.fetch_add(1, std::memory_order_relaxed);
+            const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
+            if (isPowerOfTwo(bad)) {
+                visionLog_.log(LogLevel::Error, LogCategory::Vision,
+                               "frame %lld: the pipeline refused the pair (status %lld); published as unknown "
+                               "(%lld bad frame(s) so far)",
+                               static_cast<std::int64_t>(h.sequence), static_cast<std::int64_t>(done),
+                               static_cast<std::int64_t>(bad));
+            }
             out.sectors = unknownSectors_;
             out.sectors.sequence = h.sequence;
             out.sectors.captureStampNs = h.leftStampNs;
@@ -406,6 +493,8 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
     BusFrame bus;
     std::uint64_t count = 0;
     bool steady = false;
+    std::int64_t lastMissLogNs = std::numeric_limits<std::int64_t>::min() / 2; // the first miss is logged
+    std::uint64_t missesLogged = 0;                                            // misses_ at the last miss line
     while (!stop.load(std::memory_order_relaxed)) {
         semWait(&published_, kWaitSlice);
         while (toPublish_.tryPop(in)) {
@@ -422,7 +511,16 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
                             in.stampNs[4] - in.stampNs[3], doneNs - in.stampNs[4],        endToEnd};
             seen.deadlineMissed = endToEnd > deadline_.count();
             if (seen.deadlineMissed) {
-                misses_.fetch_add(1, std::memory_order_relaxed);
+                const std::uint64_t missed = misses_.fetch_add(1, std::memory_order_relaxed) + 1;
+                if (doneNs - lastMissLogNs >= kMissLogIntervalNs) {
+                    publishLog_.log(LogLevel::Warn, LogCategory::Rt,
+                                    "frame %lld missed its deadline: %lld us from exposure to sectors (deadline %lld "
+                                    "us); %lld miss(es) since the last report",
+                                    static_cast<std::int64_t>(m.sectors.sequence), toUs(endToEnd),
+                                    toUs(deadline_.count()), static_cast<std::int64_t>(missed - missesLogged));
+                    lastMissLogNs = doneNs;
+                    missesLogged = missed;
+                }
             }
             lastLatencyNs_.store(endToEnd, std::memory_order_relaxed);
             if (count >= static_cast<std::uint64_t>(options_.warmupFrames)) {

@@ -22,6 +22,12 @@
 /// Disconnected reconnects with exponential backoff (100 ms .. 2 s) while the service keeps running and publishes
 /// nothing new (consumers see the health record's camera state and the capture stamps age).
 ///
+/// Logging: each RT task owns an RtLogChannel (a preallocated ring of fixed records: no formatting, allocation or
+/// system call on the frame path); a LogDrain thread (SCHED_OTHER, started with the tasks) formats them onto the
+/// log output, the journal under systemd. Logged: camera stalls, disconnects, reconnects, end, bad and refused
+/// frames; pipeline failures; entering and leaving the degraded (ground-only) mode; deadline misses, at most one
+/// line a second with the count since the last. Everything is also counted in the report and health record.
+///
 /// Thread-safety: create/start/stop/report from one owner thread; the monitor ring has one reader. RT-safe: the
 /// three task bodies after their first frame (asserted by the allocation test in test/unit/service/).
 
@@ -40,6 +46,7 @@
 #include "ugv/ipc/iceoryx_rings.hpp"
 #include "ugv/ipc/sectors_message.hpp"
 #include "ugv/platform/error.hpp"
+#include "ugv/platform/log.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/platform/spsc_ring.hpp"
 #include "ugv/rt/latency_histogram.hpp"
@@ -209,6 +216,10 @@ private:
     std::array<std::atomic<std::int64_t>, kPublishSlots> ringStampNs_{};
     ObstacleSectors unknownSectors_{};
     rt::ThreadRunner runner_;
+    RtLogChannel captureLog_{"capture"}; // written by capture only
+    RtLogChannel visionLog_{"vision"};   // written by vision only
+    RtLogChannel publishLog_{"publish"}; // written by publish only
+    LogDrain logDrain_;                  // the channels' one reader, a SCHED_OTHER thread while the tasks run
 
     // Counters: each written by one thread (named), read by others (relaxed).
     std::atomic<std::uint64_t> captured_{0};                     // capture

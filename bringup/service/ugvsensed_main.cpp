@@ -1,12 +1,15 @@
 // ugvsensed: the real-time stereo obstacle service. See runner.hpp for one run and service.hpp for the threads.
 
+#include <chrono>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
 
 #include "runner.hpp"
+#include "ugv/platform/log.hpp"
 
 namespace {
 
@@ -20,7 +23,7 @@ void onSignal(int /*signal*/)
 void usage(std::FILE* out)
 {
     std::fprintf(
-        out, "usage: ugvsensed [--config FILE] --replay REC [options]\n"
+        out, "usage: ugvsensed [--config FILE] [--replay REC] [options]\n"
              "  Runs the stereo obstacle service: capture -> iceoryx frame ring -> rectify + detect -> sectors on\n"
              "  iceoryx (ugvsense/obstacles/sectors) and on DDS (ugvsense/sectors, ROS 2 rt/<ns>/obstacle_scan and\n"
              "  rt/<ns>/negative_obstacles, ugvsense/health), and the OOI correlator when the config enables it\n"
@@ -37,6 +40,7 @@ void usage(std::FILE* out)
              "  --frames N         stop after N published frames\n"
              "  --print-every N    print a sector summary every N frames (default 10, 0 = none)\n"
              "  --embedded-roudi   run RouDi inside this process (no iox-roudi on this machine)\n"
+             "  --wait-roudi S     wait up to S seconds for a RouDi that is still starting (systemd units)\n"
              "  --help             this text\n");
 }
 
@@ -95,6 +99,12 @@ int main(int argc, char** argv)
                 return 2;
             }
             options.printEvery = static_cast<int>(number);
+        } else if (arg == "--wait-roudi") {
+            if (!parseNumber(value("--wait-roudi"), 0, 600, number)) {
+                std::fprintf(stderr, "ugvsensed: error: --wait-roudi: '%s' is not a time in 0..600 s\n", argv[i]);
+                return 2;
+            }
+            options.roudiWait = std::chrono::milliseconds(static_cast<std::int64_t>(number * 1000.0));
         } else if (arg == "--embedded-roudi") {
             options.roudi = ugv::service::RouDiMode::Embedded;
         } else {
@@ -110,7 +120,9 @@ int main(int argc, char** argv)
 
     auto run = ugv::service::runService(options);
     if (!run) {
-        std::fprintf(stderr, "ugvsensed: error: %s\n", run.error().message().c_str());
+        // Under systemd "<3>" makes it an error-priority journal entry (platform/log.hpp).
+        std::fprintf(stderr, "%sugvsensed: error: %s\n", ugv::journalPrefix(ugv::LogLevel::Error),
+                     run.error().message().c_str());
         return 1;
     }
     if (run->visionRan) {
@@ -119,9 +131,10 @@ int main(int argc, char** argv)
     std::printf("%s", ugv::service::formatBusReport(*run).c_str());
     if (run->roudiLost) {
         std::fprintf(stderr,
-                     "ugvsensed: error: iceoryx: RouDi went away during the run (nothing answers on /tmp/roudi); "
+                     "%sugvsensed: error: iceoryx: RouDi went away during the run (nothing answers on /tmp/roudi); "
                      "the service stopped (fix: restart RouDi, then the service; under systemd the units do "
-                     "both)\n");
+                     "both)\n",
+                     ugv::journalPrefix(ugv::LogLevel::Error));
         std::fflush(nullptr);
         std::_Exit(1); // iceoryx's runtime would wait for the missing RouDi at exit
     }

@@ -36,6 +36,7 @@ Result<std::unique_ptr<hal::StereoCamera>, Error> openCamera(const ServiceConfig
                        : config.camera.replayPace == ReplayPace::Fixed  ? hal::ReplayPace::Forced
                                                                         : hal::ReplayPace::AsFastAsPossible;
         options.forcedFps = config.camera.replayFps;
+        options.loop = config.camera.replayLoop;
         return upcast(hal::ReplayCamera::open(config.camera.replayPath, options));
     }
     case CameraBackend::V4l2: {

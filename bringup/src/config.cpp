@@ -114,6 +114,8 @@ std::vector<KeySpec> baseKeys()
             UGV_REF(camera.replayPace)),
         numberKey("camera.replay_fps", Kind::Double, 0.1, 1000, "replay rate when replay_pace is fixed [Hz]",
                   UGV_REF(camera.replayFps)),
+        choiceKey<bool>("camera.replay_loop", "replay the recording over and over (backend: replay)",
+                        {{"true", true}, {"false", false}}, UGV_REF(camera.replayLoop)),
         numberKey("roi.top_fraction", Kind::Double, 0.0, 0.9,
                   "first row of the region of interest, as a fraction of the height", UGV_REF(roi.topFraction)),
         numberKey("roi.matcher_margin_rows", Kind::Int, 0, 64,

@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/config.hpp"
+#include "ugv/hal/replay_camera.hpp"
 
 namespace ugv::tool {
 
@@ -21,7 +22,8 @@ int runCheckConfig(int argc, char** argv)
         std::cout
             << args.usage()
             << "\nFILE defaults to $UGV_CONFIG, then /etc/ugvsense/config.yaml. It also loads the calibration file the "
-               "config names\n(unless --no-calibration) and checks its image size. Exit status: 0 valid, 1 invalid.\n";
+               "config names\n(unless --no-calibration) and checks its image size; with camera.backend replay it opens "
+               "the recording\ninstead, whose stored calibration the service uses. Exit status: 0 valid, 1 invalid.\n";
         return 0;
     }
     if (args.has("schema")) {
@@ -42,7 +44,25 @@ int runCheckConfig(int argc, char** argv)
         return 1;
     }
     std::cout << bringup::formatConfig(config.value());
-    if (!args.has("no-calibration")) {
+    if (!args.has("no-calibration") && config->camera.backend == bringup::CameraBackend::Replay) {
+        // The service replays with the calibration stored in the recording (runner.cpp), not the config's.
+        auto replay = hal::ReplayCamera::open(config->camera.replayPath, hal::ReplayOptions{});
+        if (!replay) {
+            std::cerr << "error: " << replay.error().message() << '\n'
+                      << path << ": the recording camera.replay_path names cannot be replayed; the service would "
+                      << "refuse to start\n";
+            return 1;
+        }
+        const auto calibration = bringup::parseCalibration((*replay)->calibrationText(),
+                                                           config->camera.replayPath + " (its stored calibration)");
+        if (!calibration) {
+            std::cerr << "error: " << calibration.error().message() << '\n'
+                      << path << ": the recording's calibration cannot be used; the service would refuse to start\n";
+            return 1;
+        }
+        std::cerr << config->camera.replayPath << ": OK (a recording of " << (*replay)->recordedFrames() << " frames, "
+                  << (*replay)->width() << "x" << (*replay)->height() << ", with its own calibration)\n";
+    } else if (!args.has("no-calibration")) {
         const auto calibration = bringup::loadCalibration(config->calibrationPath);
         if (!calibration) {
             std::cerr << "error: " << calibration.error().message() << '\n'

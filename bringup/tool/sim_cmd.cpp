@@ -220,14 +220,17 @@ int runCatalogueScene(const Args& args)
 
 /// A course as a recording (hal/recording.hpp) at `out` and its ground truth beside it in `<out>.truth.csv`:
 /// one row per frame and sector (sequence, time, vehicle pose, sector bounds, state, kind, range, class).
+/// The recording is written as `<out>.part` and renamed at the end, so `out` exists only when complete (the
+/// default-recording unit makes it only when it is missing).
 int writeCourseRecording(const sim::Course& course, std::size_t count, double fps, const std::filesystem::path& out)
 {
     const sim::Rig& rig = course.scene.rig;
     hal::RecordingWriterOptions options;
     options.overwrite = true;
     options.syncEveryFrame = false; // generated data: one sync at close is enough
+    const std::filesystem::path partPath = out.string() + ".part";
     auto writer =
-        hal::RecordingWriter::create(out.string(), static_cast<std::uint32_t>(rig.width),
+        hal::RecordingWriter::create(partPath.string(), static_cast<std::uint32_t>(rig.width),
                                      static_cast<std::uint32_t>(rig.height), sim::calibrationText(rig), options);
     if (!writer) {
         return reportFailure(writer.error());
@@ -248,7 +251,8 @@ int writeCourseRecording(const sim::Course& course, std::size_t count, double fp
         const ConstImageViewU8 l(left.ptr<std::uint8_t>(), left.cols, left.rows, static_cast<int>(left.step));
         const ConstImageViewU8 r(right.ptr<std::uint8_t>(), right.cols, right.rows, static_cast<int>(right.step));
         if (auto appended = writer->append(k, stampNs, stampNs, l, r); !appended) {
-            return reportFailure(Error{out.string(), std::string("cannot append frame: ") + appended.error().text(),
+            return reportFailure(Error{partPath.string(),
+                                       std::string("cannot append frame: ") + appended.error().text(),
                                        "check the free space"});
         }
         const sim::Pose& pose = course.poses[k];
@@ -267,7 +271,13 @@ int writeCourseRecording(const sim::Course& course, std::size_t count, double fp
         return reportFailure(Error{truthPath.string(), "cannot write the file", "check the folder"});
     }
     if (auto closed = writer->close(); !closed) {
-        return reportFailure(Error{out.string(), std::string("cannot close: ") + closed.error().text(), ""});
+        return reportFailure(Error{partPath.string(), std::string("cannot close: ") + closed.error().text(), ""});
+    }
+    std::error_code renamed;
+    std::filesystem::rename(partPath, out, renamed);
+    if (renamed) {
+        return reportFailure(Error{partPath.string(), "cannot rename it to " + out.string() + ": " + renamed.message(),
+                                   "check the folder's permissions"});
     }
     std::cout << "wrote " << count << " of " << course.poses.size() << " frames of the course to the recording "
               << out.string() << " (" << rig.width << "x" << rig.height << ", " << fps << " fps) and its ground truth "

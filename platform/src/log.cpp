@@ -2,9 +2,12 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cinttypes>
+#include <cstdio>
 #include <cstdlib>
 #include <mutex>
 #include <system_error>
@@ -26,6 +29,8 @@ std::array<std::atomic<LogLevel>, kLogCategoryCount> gThresholds{kDefaultLogLeve
 std::atomic<bool> gEnvRead{false};
 std::once_flag gEnvOnce;
 std::atomic<int> gOutputFd{kStderrFd};
+std::atomic<bool> gJournal{false};
+constexpr std::array<const char*, 5> kJournalPrefixes{"<7>", "<6>", "<4>", "<3>", "<2>"}; // syslog priorities
 
 std::string_view trim(std::string_view text)
 {
@@ -50,6 +55,8 @@ void readEnvOnce()
             writeLogLine("[platform] warn: " + error + " (item ignored)\n");
         }
     }
+    // NOLINTNEXTLINE(concurrency-mt-unsafe) NOLINTJUSTIFICATION: read once under call_once; nobody sets it.
+    gJournal.store(isJournalStream(gOutputFd.load(), std::getenv("JOURNAL_STREAM")), std::memory_order_relaxed);
     gEnvRead.store(true, std::memory_order_release);
 }
 
@@ -136,6 +143,39 @@ bool logEnabled(LogCategory category, LogLevel level)
     return level >= logThreshold(category);
 }
 
+bool isJournalStream(int fd, const char* journalStream) noexcept
+{
+    if (journalStream == nullptr) {
+        return false;
+    }
+    std::uintmax_t device = 0;
+    std::uintmax_t inode = 0;
+    struct stat st {};
+    if (std::sscanf(journalStream, "%ju:%ju", &device, &inode) != 2 || ::fstat(fd, &st) != 0) {
+        return false;
+    }
+    return static_cast<std::uintmax_t>(st.st_dev) == device && static_cast<std::uintmax_t>(st.st_ino) == inode;
+}
+
+bool journalPrefixes()
+{
+    if (!gEnvRead.load(std::memory_order_acquire)) {
+        initLogLevelsFromEnv();
+    }
+    return gJournal.load(std::memory_order_relaxed);
+}
+
+void setJournalPrefixes(bool on)
+{
+    initLogLevelsFromEnv();
+    gJournal.store(on, std::memory_order_relaxed);
+}
+
+const char* journalPrefix(LogLevel level)
+{
+    return journalPrefixes() ? kJournalPrefixes[static_cast<std::size_t>(level)] : "";
+}
+
 int setLogOutputFd(int fd) noexcept
 {
     return gOutputFd.exchange(fd);
@@ -158,7 +198,7 @@ void writeLogLine(std::string_view line) noexcept
 
 LogLine::LogLine(LogCategory category, LogLevel level)
 {
-    stream_ << '[' << toString(category) << "] " << toString(level) << ": ";
+    stream_ << journalPrefix(level) << '[' << toString(category) << "] " << toString(level) << ": ";
 }
 
 LogLine::~LogLine()
@@ -239,17 +279,17 @@ std::size_t LogDrain::drainOnce()
         while (channel.tryPop(record)) {
             std::string fraction = std::to_string(record.timestampNs % kNsPerSecond);
             fraction.insert(0, static_cast<std::size_t>(kFractionDigits) - fraction.size(), '0');
-            writeLogLine(std::string("[") + toString(record.category) + "] " + toString(record.level) + ": " +
-                         formatRtMessage(record.format, record.args) +
+            writeLogLine(std::string(journalPrefix(record.level)) + "[" + toString(record.category) + "] " +
+                         toString(record.level) + ": " + formatRtMessage(record.format, record.args) +
                          " [t=" + std::to_string(record.timestampNs / kNsPerSecond) + "." + fraction + "]\n");
             ++written;
         }
         const std::uint64_t dropped = channel.dropped();
         if (dropped != reportedDrops_[i]) {
-            writeLogLine(std::string("[platform] warn: RT log channel '") + channel.name() + "' dropped " +
-                         std::to_string(dropped - reportedDrops_[i]) + " record(s) (total " + std::to_string(dropped) +
-                         "); its ring holds " + std::to_string(kRtLogChannelCapacity) +
-                         ": log less often or drain more often\n");
+            writeLogLine(std::string(journalPrefix(LogLevel::Warn)) + "[platform] warn: RT log channel '" +
+                         channel.name() + "' dropped " + std::to_string(dropped - reportedDrops_[i]) +
+                         " record(s) (total " + std::to_string(dropped) + "); its ring holds " +
+                         std::to_string(kRtLogChannelCapacity) + ": log less often or drain more often\n");
             reportedDrops_[i] = dropped;
         }
     }

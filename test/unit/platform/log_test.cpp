@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -384,3 +385,53 @@ TEST(LogDrain, ThreadDrainsAProducerThreadInOrderAndAccountsForEveryRecord)
 }
 
 } // namespace
+
+// ---- journal priorities ----
+
+TEST(Journal, StreamIsRecognisedByDeviceAndInode)
+{
+    const int fd = ::memfd_create("ugv-journal-test", 0);
+    ASSERT_GE(fd, 0);
+    struct stat st {};
+    ASSERT_EQ(::fstat(fd, &st), 0);
+    const std::string mine = std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+    const std::string other = std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino + 1);
+
+    EXPECT_TRUE(ugv::isJournalStream(fd, mine.c_str()));
+    EXPECT_FALSE(ugv::isJournalStream(fd, other.c_str()));
+    EXPECT_FALSE(ugv::isJournalStream(fd, nullptr));
+    EXPECT_FALSE(ugv::isJournalStream(fd, "not a stream"));
+    EXPECT_FALSE(ugv::isJournalStream(-1, mine.c_str()));
+    ::close(fd);
+}
+
+TEST(Journal, LinesCarryTheirSyslogPriorityWhenWritingToTheJournal)
+{
+    ugv::setLogThresholds(allAt(LogLevel::Debug));
+    const CapturedLog log;
+    ugv::RtLogChannel channel("vision");
+    ugv::LogDrain drain;
+    ASSERT_TRUE(drain.addChannel(channel).has_value());
+    ugv::setJournalPrefixes(true);
+
+    UGV_LOG(Bringup, Debug) << "d";
+    UGV_LOG(Bringup, Info) << "i";
+    UGV_LOG(Hal, Warn) << "w";
+    UGV_LOG(Hal, Error) << "e";
+    UGV_LOG(Hal, Fatal) << "f";
+    channel.log(LogLevel::Warn, LogCategory::Rt, "frame %lld missed its deadline", 12);
+    drain.drainOnce();
+    ugv::setJournalPrefixes(false);
+    UGV_LOG(Hal, Warn) << "plain";
+
+    const auto all = lines(log.text());
+    ASSERT_EQ(all.size(), 7U);
+    EXPECT_EQ(all[0], "<7>[bringup] debug: d");
+    EXPECT_EQ(all[1], "<6>[bringup] info: i");
+    EXPECT_EQ(all[2], "<4>[hal] warn: w");
+    EXPECT_EQ(all[3], "<3>[hal] error: e");
+    EXPECT_EQ(all[4], "<2>[hal] fatal: f");
+    EXPECT_EQ(all[5].rfind("<4>[rt] warn: frame 12 missed its deadline [t=", 0), 0U) << all[5];
+    EXPECT_EQ(all[6], "[hal] warn: plain");
+    ugv::setLogThresholds(allAt(LogLevel::Info));
+}

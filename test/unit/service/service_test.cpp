@@ -5,9 +5,11 @@
 // - Allocations: 300 frames through the service with the default matcher (our census SGM): the capture, vision
 //   and publish threads allocate nothing.
 
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -30,6 +32,7 @@
 #include "ugv/hal/recording.hpp"
 #include "ugv/hal/replay_camera.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
+#include "ugv/platform/log.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 
 namespace ugv::service {
@@ -71,6 +74,38 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
     }
     return out;
 }
+
+/// The log output in a memory file while the object lives (the service's RT log lines arrive through its drain).
+class CapturedLog {
+public:
+    CapturedLog() : fd_(::memfd_create("ugv-service-log", 0)) { previous_ = setLogOutputFd(fd_); }
+    ~CapturedLog()
+    {
+        setLogOutputFd(previous_);
+        ::close(fd_);
+    }
+    CapturedLog(const CapturedLog&) = delete;
+    CapturedLog& operator=(const CapturedLog&) = delete;
+    CapturedLog(CapturedLog&&) = delete;
+    CapturedLog& operator=(CapturedLog&&) = delete;
+
+    [[nodiscard]] std::string text() const
+    {
+        std::string out;
+        std::array<char, 4096> buffer{};
+        ssize_t got = 0;
+        off_t offset = 0;
+        while ((got = ::pread(fd_, buffer.data(), buffer.size(), offset)) > 0) {
+            out.append(buffer.data(), static_cast<std::size_t>(got));
+            offset += got;
+        }
+        return out;
+    }
+
+private:
+    int fd_;
+    int previous_ = 2;
+};
 
 class ServiceTest : public ::testing::Test {
 protected:
@@ -342,6 +377,7 @@ TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEv
     options.maxFrames = 60;
     options.deadlineFactor = 0.1;
     options.spinBeforeFrame = std::chrono::microseconds(0); // the sleeping hand-over (the others poll)
+    const CapturedLog log;
     auto service = makeService(course, replay, options);
     ASSERT_NE(service, nullptr);
     service->start();
@@ -373,6 +409,9 @@ TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEv
     EXPECT_GE(report.degradedFrames, report.framesPublished * 3 / 4);
     EXPECT_NEAR(static_cast<double>(degraded), static_cast<double>(report.degradedFrames), 2.0); // in flight at stop
     EXPECT_EQ(degradedClear, 0);
+    // The vision task logged the switch through its RT channel; the drain wrote it.
+    EXPECT_NE(log.text().find("[vision] warn: frame "), std::string::npos) << log.text();
+    EXPECT_NE(log.text().find("ground-plane-only sectors (degraded) until it catches up"), std::string::npos);
 }
 
 /// A recording-backed camera that misbehaves: frames 10 and 11 come with the wrong size (a driver returning a
@@ -435,6 +474,7 @@ TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
     auto calibration = bringup::parseCalibration(course.calibration, "course").value();
     ServiceOptions options;
     options.maxFrames = 30;
+    const CapturedLog log;
     auto service = Service::create(bringup::ServiceConfig{}, calibration,
                                    std::make_unique<FlakyCamera>(std::move(*inner)), options);
     ASSERT_TRUE(service.has_value()) << service.error().message();
@@ -457,6 +497,15 @@ TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
     EXPECT_EQ(report.loanFailures, 2U);     // the two wrong-size pairs were refused, not published
     EXPECT_EQ(report.cameraReconnects, 1U); // after two failed attempts (backoff in between)
     EXPECT_GT(lastSequence, 20U);
+    // Each event is in the log once, with what and where (the capture task's RT channel, drained at low priority).
+    const std::string text = log.text();
+    EXPECT_NE(text.find(": the frame ring refused the pair (320x240: wrong size, or no free chunk); 1 refused so far"),
+              std::string::npos)
+        << text;
+    EXPECT_NE(text.find("refused the pair (320x240: wrong size, or no free chunk); 2 refused so far"),
+              std::string::npos);
+    EXPECT_NE(text.find("[hal] error: camera: disconnected after frame"), std::string::npos) << text;
+    EXPECT_NE(text.find("[hal] info: camera: reconnected after 3 attempt(s)"), std::string::npos) << text;
 }
 
 /// Delivers a recording whose last pair comes with the wrong size (refused by the frame ring).

@@ -40,6 +40,7 @@ struct CameraConfig {
     std::string replayPath;                             ///< recording for the replay backend
     ReplayPace replayPace = ReplayPace::Recorded;
     double replayFps = 30.0; ///< [Hz] rate when replayPace is Fixed
+    bool replayLoop = false; ///< replay the recording over and over (a demo that runs until stopped)
 };
 
 struct RoiConfig {

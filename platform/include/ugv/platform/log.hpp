@@ -14,6 +14,11 @@
 /// formatting, no allocation, no system call. A `LogDrain` on a low-priority thread formats and writes them.
 /// Formats use `%lld` for an argument (up to four) and `%%` for a percent sign; nothing else is special.
 ///
+/// Journal: under systemd, stderr is a stream to the journal and `$JOURNAL_STREAM` names its device and inode.
+/// When the log output is that stream, every line starts with its syslog priority (`<7>` debug, `<6>` info,
+/// `<4>` warn, `<3>` error, `<2>` fatal), which journald strips and stores as the entry's priority
+/// (`journalctl -p warning -u ugvsensed`). Elsewhere lines are unchanged.
+///
 /// Fatal is a level like the others: logging it does not end the process (the caller does, with its action).
 
 #include <array>
@@ -76,6 +81,19 @@ void setLogThresholds(const LogThresholds& thresholds);
 /// @brief Send log lines to `fd` instead of stderr (2); returns the previous fd. The caller keeps `fd` open.
 /// Thread-safety: thread-safe. RT-safe: yes.
 int setLogOutputFd(int fd) noexcept;
+
+/// @brief Whether lines carry syslog priority prefixes for the journal (see the file comment). Decided with the
+/// env on first use, from $JOURNAL_STREAM and the log output; setJournalPrefixes() overrides it (tests).
+/// Thread-safety: thread-safe. RT-safe: no on the first call, yes after initLogLevelsFromEnv().
+[[nodiscard]] bool journalPrefixes();
+void setJournalPrefixes(bool on);
+
+/// @brief "<4>" for Warn when journalPrefixes(), else "". Thread-safety: thread-safe. RT-safe: as journalPrefixes().
+[[nodiscard]] const char* journalPrefix(LogLevel level);
+
+/// @brief True when `fd` is the stream that `journalStream` (the value of $JOURNAL_STREAM, "DEV:INODE") names.
+/// Thread-safety: reentrant. RT-safe: no (fstat).
+[[nodiscard]] bool isJournalStream(int fd, const char* journalStream) noexcept;
 
 /// @brief Write `line` (which ends in '\n') with one write(2) to the log output, retrying EINTR/short writes.
 /// Thread-safety: thread-safe. RT-safe: no (system call).

@@ -1,0 +1,32 @@
+# The Debian package (CPack DEB): `cpack --config build/release/CPackConfig.cmake` after a release build, or
+# `bash toolchain/host.sh package`. What goes in is what `cmake --install` lays out (bringup/CMakeLists.txt).
+# Included from the top-level CMakeLists.txt (CPack wants its config in the top build folder).
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME ugvsense)
+set(CPACK_PACKAGE_VENDOR "ugvsense")
+set(CPACK_PACKAGE_CONTACT "ugvsense developers <ugvsense@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "real-time stereo obstacle service for unmanned ground vehicles")
+set(CPACK_DEBIAN_PACKAGE_DESCRIPTION
+    "ugvsensed captures a stereo camera pair, finds obstacles above and below the ground (ground-plane projection and
+ semi-global matching) and publishes obstacle sectors over iceoryx and DDS within a per-frame deadline. With the
+ ugvsense tool (calibration, recording, replay, latency budgets, the OOI correlator) and systemd units. Nothing is
+ enabled at install: 'systemctl start ugvsensed' runs it on the embedded default recording.")
+set(CPACK_PACKAGING_INSTALL_PREFIX ${CMAKE_INSTALL_PREFIX}) # the units name the programs by this prefix
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)                     # ugvsense_<version>_<arch>.deb
+set(CPACK_DEBIAN_PACKAGE_SECTION misc)
+set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
+# Libraries from dpkg-shlibdeps; iox-roudi (a program, not linked) and adduser (postinst) by hand.
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser, iceoryx (>= 2.0)")
+if(CMAKE_CROSSCOMPILING)
+    set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE arm64) # dpkg-shlibdeps cannot read the target's package database
+else()
+    set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+endif()
+set(CPACK_STRIP_FILES ON)
+file(WRITE ${CMAKE_BINARY_DIR}/packaging/conffiles "/etc/ugvsense/config.yaml\n/etc/ugvsense/roudi.toml\n")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
+    ${CMAKE_CURRENT_LIST_DIR}/postinst ${CMAKE_CURRENT_LIST_DIR}/prerm ${CMAKE_CURRENT_LIST_DIR}/postrm
+    ${CMAKE_BINARY_DIR}/packaging/conffiles)
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+set(CPACK_PACKAGE_DIRECTORY ${CMAKE_BINARY_DIR}/package)
+include(CPack)
