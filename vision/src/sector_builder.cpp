@@ -62,8 +62,10 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.clearGroundFraction > 0.0F && config.clearGroundFraction <= 1.0F) || config.labelWeight < 0 ||
         !(config.confidenceSupport > 0.0F) || !(config.minDropDepthM > 0.0F) || !(config.minDropGapM >= 0.0F) ||
         !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
+        !(config.faceHeightFraction > 0.0F && config.faceHeightFraction <= 1.0F) || config.minTallVotes < 1 ||
         !(config.dangerDistanceM <= config.cautionDistanceM)) {
-        return Unexpected(configError("a threshold is out of range (all must be positive, percentile in [0, 1))"));
+        return Unexpected(configError(
+            "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
     if (!(projection.fx > 0.0) || !(projection.fy > 0.0) || !(projection.baselineM > 0.0)) {
         return Unexpected(Error{"SectorBuilder::create", "projection has no positive focal length and baseline", ""});
@@ -87,6 +89,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     const auto n = static_cast<std::size_t>(config.sectorCount);
     sut.histograms_.assign(n * kKinds * static_cast<std::size_t>(sut.bins_), 0U);
     sut.extremes_.assign(sut.histograms_.size(), 0.0F);
+    sut.tallVotes_.assign(n * static_cast<std::size_t>(sut.bins_), 0U);
     sut.groundVotes_.assign(n, 0U);
     sut.farGroundVotes_.assign(n, 0U);
     sut.kindVotes_.assign(n * kKinds, 0U);
@@ -121,8 +124,8 @@ void SectorBuilder::setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) 
     sectors_.degraded = true;
 }
 
-SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram, float percentile,
-                                                     bool drop) const noexcept
+SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram, const std::uint32_t* tall,
+                                                     float percentile, bool drop) const noexcept
 {
     for (int start = 0; start < bins_; ++start) {
         if (histogram[start] == 0U) {
@@ -132,8 +135,13 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
         const float r1 = r0 * (1.0F + config_.clusterFraction) + config_.clusterWindowM;
         const int end = std::min(bins_, static_cast<int>(r1 / config_.rangeBinM) + 1);
         std::uint32_t votes = 0;
+        std::uint32_t tallVotes = 0;
         for (int b = start; b < end; ++b) {
             votes += histogram[b];
+            tallVotes += tall != nullptr ? tall[b] : 0U;
+        }
+        if (tall != nullptr && tallVotes < static_cast<std::uint32_t>(config_.minTallVotes)) {
+            continue; // a face that never rises above minHeightM: a bump, not an obstacle
         }
         // A drop's visible part shrinks with the square of its range (a strip of wall, not a face): beyond
         // dropSupportRangeM it needs proportionally fewer votes, never fewer than minDropSupport.
@@ -190,6 +198,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
 
     std::fill(histograms_.begin(), histograms_.end(), 0U);
     std::fill(extremes_.begin(), extremes_.end(), 0.0F);
+    std::fill(tallVotes_.begin(), tallVotes_.end(), 0U);
     std::fill(groundVotes_.begin(), groundVotes_.end(), 0U);
     std::fill(farGroundVotes_.begin(), farGroundVotes_.end(), 0U);
     std::fill(kindVotes_.begin(), kindVotes_.end(), 0U);
@@ -202,9 +211,10 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     const auto labelWeight = static_cast<std::uint32_t>(config_.labelWeight);
 
     const auto groundHeight = static_cast<float>(ground.heightM);
+    const float faceHeight = config_.faceHeightFraction * config_.minHeightM;
     const auto vote = [&](int s, float range, float z, const std::uint8_t* label, int u) noexcept {
         int kind = -1;
-        if (z > config_.minHeightM) {
+        if (z > faceHeight) {
             kind = 0;
         } else if (z < -config_.minDepthM ||
                    (z < -config_.minDropDepthM && range * -z >= config_.minDropGapM * (groundHeight - z))) {
@@ -217,8 +227,10 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
         const bool labelled = label != nullptr && label[u] == wanted;
         const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
+        // Face votes (below minHeightM) support a cluster but do not forbid Clear by themselves.
+        const bool tall = kind == 1 || z > config_.minHeightM;
         if (!labelled && !config_.useDenseCue) {
-            ++kindVotes_[slot]; // unconfirmed: not an obstacle, but it forbids Clear
+            kindVotes_[slot] += tall ? 1U : 0U; // unconfirmed: not an obstacle, but it forbids Clear
             return;
         }
         const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
@@ -231,7 +243,12 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         histograms_[slot * bins + bin] += weight;
         float& extreme = extremes_[slot * bins + bin];
         extreme = std::max(extreme, std::fabs(z));
-        kindVotes_[slot] += weight;
+        if (tall) {
+            kindVotes_[slot] += weight;
+            if (kind == 0) {
+                tallVotes_[static_cast<std::size_t>(s) * bins + bin] += weight;
+            }
+        }
     };
 
     if (reference) {
@@ -325,8 +342,11 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     for (int s = 0; s < config_.sectorCount; ++s) {
         Sector& out = sectors_.sectors[static_cast<std::size_t>(s)];
         const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
-        const Cluster positive = nearestCluster(&histograms_[slot0 * bins], config_.rangePercentile, false);
-        const Cluster negative = nearestCluster(&histograms_[(slot0 + 1) * bins], config_.dropRangePercentile, true);
+        const Cluster positive =
+            nearestCluster(&histograms_[slot0 * bins], &tallVotes_[static_cast<std::size_t>(s) * bins],
+                           config_.rangePercentile, false);
+        const Cluster negative =
+            nearestCluster(&histograms_[(slot0 + 1) * bins], nullptr, config_.dropRangePercentile, true);
         const bool havePositive = positive.votes > 0;
         const bool haveNegative = negative.votes > 0;
         if (havePositive || haveNegative) {

@@ -182,6 +182,59 @@ TEST(SectorBuilder, PositiveFaceGivesExactRangeKindHeightAndDanger)
     EXPECT_EQ(side.state, SectorState::Clear);
 }
 
+TEST(SectorBuilder, ACurbFarAwayIsAnObstacleThroughItsFaceBelowTheTop)
+{
+    // A 12 cm curb at 8 m: a row or two of its face are above minHeightM (0.10 m), too few votes for a cluster; the
+    // face above half of minHeightM supports it.
+    constexpr double kRangeM = 8.0;
+    constexpr double kTopM = 0.12;
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, kRangeM, -2.0, 2.0, kTopM);
+    auto sut = makeBuilder();
+    SectorBuilderConfig topOnly;
+    topOnly.faceHeightFraction = 1.0F; // only points above minHeightM vote (the rule before face votes)
+    auto topOnlySut = makeBuilder(topOnly);
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    ASSERT_EQ(topOnlySut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const auto ahead = static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0));
+    const Sector& curb = sut.sectors().sectors[ahead];
+    EXPECT_EQ(curb.state, SectorState::Obstacle);
+    EXPECT_EQ(curb.kind, ObstacleKind::Positive);
+    EXPECT_NEAR(curb.rangeM, kRangeM, 0.10);
+    EXPECT_NEAR(curb.heightM, kTopM, 0.02);
+    EXPECT_NE(topOnlySut.sectors().sectors[ahead].state, SectorState::Obstacle);
+}
+
+TEST(SectorBuilder, ABumpBelowMinHeightIsNoObstacleHoweverLarge)
+{
+    // An 8 cm bump at 4 m: a large face above half of minHeightM, but nothing above minHeightM.
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, 4.0, -2.0, 2.0, 0.08);
+    auto sut = makeBuilder();
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    for (int i = 0; i < sut.sectors().count; ++i) {
+        EXPECT_NE(sut.sectors().sectors[static_cast<std::size_t>(i)].state, SectorState::Obstacle) << i;
+    }
+}
+
+TEST(SectorBuilder, CreateRejectsInvalidFaceRule)
+{
+    SectorBuilderConfig noFace;
+    noFace.faceHeightFraction = 0.0F;
+    SectorBuilderConfig faceAboveTop;
+    faceAboveTop.faceHeightFraction = 1.5F;
+    SectorBuilderConfig noTallVotes;
+    noTallVotes.minTallVotes = 0;
+
+    EXPECT_FALSE(SectorBuilder::create(noFace, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(faceAboveTop, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noTallVotes, kProjection, kRoi, kFirstRow).has_value());
+}
+
 TEST(SectorBuilder, NegativeFloorGivesNegativeKind)
 {
     // The floor of a trench 0.3 m deep, seen from 4 m to 5 m straight ahead.

@@ -7,7 +7,10 @@
 /// Every analysed ROI pixel with a valid disparity becomes a vehicle-frame point (GroundPlane::pixelToVehicle)
 /// and is binned by the bearing of the point, atan2(y, x), into `sectorCount` equal bins over the horizontal
 /// field of view 2 atan(width / (2 fx)) (as the simulator's ground truth, bringup/sim/README.md):
-///  - positive vote: z > minHeightM; negative vote: z < -minDepthM, or z < -minDropDepthM where the ray to the
+///  - positive vote: z > faceHeightFraction * minHeightM (the face below an obstacle's top: a 12 cm curb at 8 m
+///    has a row or two above 10 cm but several below), counted as tall when z > minHeightM; a positive cluster
+///    needs minTallVotes tall votes besides its support, so only what rises above minHeightM is an obstacle (a 6 cm
+///    bump is not); negative vote: z < -minDepthM, or z < -minDropDepthM where the ray to the
 ///    point crosses the ground at least minDropGapM before it (the point is seen over a gap: a drop, not a dip;
 ///    beyond 4 m only the top centimetres of a trench's far wall are in view). With `useDenseCue` every such pixel
 ///    votes (weight 1); a pixel that the label image also marks (1 positive, 2 negative) votes with weight 1 +
@@ -43,25 +46,27 @@ namespace ugv::vision {
 
 struct SectorBuilderConfig {
     int sectorCount = 64;
-    float minHeightM = 0.10F;       ///< [m] positive obstacle points are higher than this
-    float minDepthM = 0.10F;        ///< [m] negative obstacle points are deeper than this
-    float minDropDepthM = 0.03F;    ///< [m] ... or deeper than this when the ground they hide is long:
-    float minDropGapM = 0.25F;      ///< [m] the ray to the point crosses the ground this far before it
-                                    ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
-                                    ///< view beyond 4 m, a few centimetres below the ground, behind a gap
-    float maxRangeM = 12.0F;        ///< [m] points farther away are ignored (disparity too coarse)
-    float rangeBinM = 0.02F;        ///< [m] histogram resolution
-    int minSupport = 40;            ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
-                                    ///< mismatch blobs on empty ground through: 23..33 votes measured)
-    float dropSupportRangeM = 5.0F; ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
-    int minDropSupport = 20;        ///< ... but at least this many votes
-    int maxStrayVotes = 8;          ///< positive votes outside any cluster at or above which a sector cannot be Clear
-                                    ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
-    int maxStrayDropVotes = 20;     ///< the same for negative votes (far ground is noisier below the plane: 10 would
-                                    ///< turn 52 -> 38 sectors of empty ground Unknown)
-    float clusterWindowM = 0.15F;   ///< [m] cluster window, fixed part
-    float clusterFraction = 0.05F;  ///< cluster window, part proportional to the range
-    float rangePercentile = 0.20F;  ///< quantile of the cluster's votes reported as the range, [0, 1)
+    float minHeightM = 0.10F;        ///< [m] positive obstacle points are higher than this
+    float faceHeightFraction = 0.5F; ///< points above this fraction of minHeightM support a positive cluster ...
+    int minTallVotes = 6;            ///< ... which needs this many votes above minHeightM to be an obstacle
+    float minDepthM = 0.10F;         ///< [m] negative obstacle points are deeper than this
+    float minDropDepthM = 0.03F;     ///< [m] ... or deeper than this when the ground they hide is long:
+    float minDropGapM = 0.25F;       ///< [m] the ray to the point crosses the ground this far before it
+                                     ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
+                                     ///< view beyond 4 m, a few centimetres below the ground, behind a gap
+    float maxRangeM = 12.0F;         ///< [m] points farther away are ignored (disparity too coarse)
+    float rangeBinM = 0.02F;         ///< [m] histogram resolution
+    int minSupport = 40;             ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
+                                     ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float dropSupportRangeM = 5.0F;  ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
+    int minDropSupport = 20;         ///< ... but at least this many votes
+    int maxStrayVotes = 8;           ///< positive votes outside any cluster at or above which a sector cannot be Clear
+                           ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
+    int maxStrayDropVotes = 20;        ///< the same for negative votes (far ground is noisier below the plane: 10 would
+                                       ///< turn 52 -> 38 sectors of empty ground Unknown)
+    float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
+    float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
+    float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
     float dropRangePercentile = 0.05F; ///< the same for negative votes: their rim ranges spread from the rim
                                        ///< to the far wall (only the nearest are the rim)
     float clearGroundFraction = 0.25F; ///< ground support (fraction of the sector's pixels) needed for Clear
@@ -125,7 +130,9 @@ private:
         int votes = 0;
         float rangeM = 0.0F;
     };
-    [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram, float percentile, bool drop) const noexcept;
+    /// @param[in] tall  votes above minHeightM per bin (positive clusters), or nullptr (drops)
+    [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram, const std::uint32_t* tall, float percentile,
+                                         bool drop) const noexcept;
     BuildStatus buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
                           std::uint64_t sequence, std::int64_t stampNs, bool reference) noexcept;
 
@@ -137,6 +144,7 @@ private:
     float hfovDeg_ = 0.0F;
     ObstacleSectors sectors_;
     std::vector<std::uint32_t> histograms_;      ///< [sector][kind 0 positive, 1 negative][bin] votes
+    std::vector<std::uint32_t> tallVotes_;       ///< [sector][bin] positive votes above minHeightM
     std::vector<float> extremes_;                ///< [sector][kind][bin] max height / depth [m]
     std::vector<std::uint32_t> groundVotes_;     ///< [sector]
     std::vector<std::uint32_t> farGroundVotes_;  ///< [sector] ground votes at or beyond clearRangeM
