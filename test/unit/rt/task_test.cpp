@@ -124,7 +124,9 @@ TEST(ValidateTask, EmptyName)
 
 TEST(ValidateTaskTable, DuplicateNamesAreRejected)
 {
-    const std::array<TaskSpec, 3> table{kGoodFifo, {"other", SchedPolicy::Other, 0, -1, 0ns, 65536}, kGoodFifo};
+    // The middle row is valid on every target: PTHREAD_STACK_MIN is 16 KiB on x86-64 but 128 KiB on aarch64.
+    const std::array<TaskSpec, 3> table{
+        kGoodFifo, {"other", SchedPolicy::Other, 0, -1, 0ns, ugv::rt::kDefaultStackBytes}, kGoodFifo};
     const auto result = ugv::rt::validateTaskTable(table, kCpus);
     ASSERT_FALSE(result.has_value());
     EXPECT_EQ(result.error().where, "task table: task 'cam'");
