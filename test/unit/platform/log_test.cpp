@@ -14,48 +14,14 @@
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
+#include "captured_log.hpp"
 
 namespace {
 
 using ugv::LogCategory;
 using ugv::LogLevel;
 
-/// Sends the log output to a memory file for the lifetime of the object; text() returns what was written.
-class CapturedLog {
-public:
-    CapturedLog() : fd_(::memfd_create("ugv-log-test", 0))
-    {
-        // O_APPEND: concurrent writers each append whole lines, as on a pipe or the journal's stream.
-        ::fcntl(fd_, F_SETFL, O_APPEND);
-        previous_ = ugv::setLogOutputFd(fd_);
-    }
-    ~CapturedLog()
-    {
-        ugv::setLogOutputFd(previous_);
-        ::close(fd_);
-    }
-    CapturedLog(const CapturedLog&) = delete;
-    CapturedLog& operator=(const CapturedLog&) = delete;
-    CapturedLog(CapturedLog&&) = delete;
-    CapturedLog& operator=(CapturedLog&&) = delete;
-
-    [[nodiscard]] std::string text() const
-    {
-        std::string out;
-        std::array<char, 4096> buffer{};
-        ssize_t got = 0;
-        off_t offset = 0;
-        while ((got = ::pread(fd_, buffer.data(), buffer.size(), offset)) > 0) {
-            out.append(buffer.data(), static_cast<std::size_t>(got));
-            offset += got;
-        }
-        return out;
-    }
-
-private:
-    int fd_;
-    int previous_ = 2;
-};
+using ugv::test::CapturedLog;
 
 std::vector<std::string> lines(const std::string& text)
 {

@@ -5,11 +5,9 @@
 // - Allocations: 300 frames through the service with the default matcher (our census SGM): the capture, vision
 //   and publish threads allocate nothing.
 
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
+#include "captured_log.hpp"
 #include "runner.hpp"
 #include "service.hpp"
 #include "sim/renderer.hpp"
@@ -74,38 +73,6 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
     }
     return out;
 }
-
-/// The log output in a memory file while the object lives (the service's RT log lines arrive through its drain).
-class CapturedLog {
-public:
-    CapturedLog() : fd_(::memfd_create("ugv-service-log", 0)) { previous_ = setLogOutputFd(fd_); }
-    ~CapturedLog()
-    {
-        setLogOutputFd(previous_);
-        ::close(fd_);
-    }
-    CapturedLog(const CapturedLog&) = delete;
-    CapturedLog& operator=(const CapturedLog&) = delete;
-    CapturedLog(CapturedLog&&) = delete;
-    CapturedLog& operator=(CapturedLog&&) = delete;
-
-    [[nodiscard]] std::string text() const
-    {
-        std::string out;
-        std::array<char, 4096> buffer{};
-        ssize_t got = 0;
-        off_t offset = 0;
-        while ((got = ::pread(fd_, buffer.data(), buffer.size(), offset)) > 0) {
-            out.append(buffer.data(), static_cast<std::size_t>(got));
-            offset += got;
-        }
-        return out;
-    }
-
-private:
-    int fd_;
-    int previous_ = 2;
-};
 
 class ServiceTest : public ::testing::Test {
 protected:
@@ -377,7 +344,7 @@ TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEv
     options.maxFrames = 60;
     options.deadlineFactor = 0.1;
     options.spinBeforeFrame = std::chrono::microseconds(0); // the sleeping hand-over (the others poll)
-    const CapturedLog log;
+    const test::CapturedLog log;                            // the service's RT log lines arrive through its drain
     auto service = makeService(course, replay, options);
     ASSERT_NE(service, nullptr);
     service->start();
@@ -474,7 +441,7 @@ TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
     auto calibration = bringup::parseCalibration(course.calibration, "course").value();
     ServiceOptions options;
     options.maxFrames = 30;
-    const CapturedLog log;
+    const test::CapturedLog log; // the service's RT log lines arrive through its drain
     auto service = Service::create(bringup::ServiceConfig{}, calibration,
                                    std::make_unique<FlakyCamera>(std::move(*inner)), options);
     ASSERT_TRUE(service.has_value()) << service.error().message();
