@@ -132,7 +132,7 @@ start_sender ugv-3 "$work/ugv-3.jsonl" ugv-3
 start_sender uav "$work/uav.jsonl" uav
 # Kill UGV 2's process once it is under way, and start it again: it replays its file from the first line.
 for _ in $(seq 600); do grep -q "^sending" "$work/ugv-2.log" && break; sleep 0.1; done # discovered the station
-sleep 2 # about 80 of its 250 observations sent at 40/s
+sleep 4 # about 160 of its 250 observations sent at 40/s (2 s was too early on a loaded machine: no repeats)
 kill -9 "${sender_pid[ugv-2]}"
 wait "${sender_pid[ugv-2]}" 2>/dev/null
 start_sender ugv-2 "$work/ugv-2.jsonl" ugv-2.restarted

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -176,27 +178,26 @@ Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationP
     for (int round = 0; round < config.maxOutlierRounds; ++round) {
         const double medianPx = median(run.pairErrorsPx);
         const double limitPx = std::max(config.outlierFactor * medianPx, config.outlierFloorPx);
-        std::vector<Detection> kept;
-        std::vector<RejectedPair> dropped;
-        for (std::size_t i = 0; i < detections.size(); ++i) {
-            if (run.pairErrorsPx[i] > limitPx) {
-                dropped.push_back({detections[i].name, "outlier: error " + formatPx(run.pairErrorsPx[i]) + " px > " +
-                                                           formatPx(config.outlierFactor) + " x median " +
-                                                           formatPx(medianPx) + " px"});
-            } else {
-                kept.push_back(detections[i]);
-            }
-        }
-        if (dropped.empty() || kept.size() < static_cast<std::size_t>(config.minPairs)) {
+        // Only the worst pair goes each round: a bad pair bends the calibration and inflates the others' errors,
+        // which are judged again after recalibrating without it (on aarch64 a good pair crossed the limit beside
+        // a shifted one when every pair above it went at once).
+        const auto worst = static_cast<std::size_t>(std::max_element(run.pairErrorsPx.begin(), run.pairErrorsPx.end()) -
+                                                    run.pairErrorsPx.begin());
+        if (run.pairErrorsPx[worst] <= limitPx || detections.size() - 1 < static_cast<std::size_t>(config.minPairs)) {
             break;
         }
+        RejectedPair dropped{detections[worst].name, "outlier: error " + formatPx(run.pairErrorsPx[worst]) + " px > " +
+                                                         formatPx(config.outlierFactor) + " x median " +
+                                                         formatPx(medianPx) + " px"};
+        std::vector<Detection> kept = detections;
+        kept.erase(kept.begin() + static_cast<std::ptrdiff_t>(worst));
         StereoRun candidate = runStereo(kept, board, imageSize);
         if (candidate.calib.rmsPx >= run.calib.rmsPx) {
             break; // dropping did not help: keep every pair
         }
         run = std::move(candidate);
         detections = std::move(kept);
-        report.rejected.insert(report.rejected.end(), dropped.begin(), dropped.end());
+        report.rejected.push_back(std::move(dropped));
         ++report.outlierRounds;
     }
     for (std::size_t i = 0; i < detections.size(); ++i) {
