@@ -18,7 +18,13 @@ set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 # Libraries from dpkg-shlibdeps; iox-roudi (a program, not linked) and adduser (postinst) by hand.
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser, iceoryx (>= 2.0)")
 if(CMAKE_CROSSCOMPILING)
-    set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE arm64) # dpkg-shlibdeps cannot read the target's package database
+    # dpkg-shlibdeps cannot read the sysroot (an extract has no package database): the libraries by name, as
+    # dpkg-shlibdeps gives them for the native package (bookworm's names are the same on every architecture).
+    set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE arm64)
+    string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS
+           ", libc6 (>= 2.35), libstdc++6 (>= 11), libgcc-s1, libcamera0.0.3, libfastcdr1, libfastrtps2.9,"
+           " libgeographiclib23, libiceoryx-hoofs2, libiceoryx-posh2, libiceoryx-posh-roudi2, libopencv-core406,"
+           " libopencv-imgproc406, libopencv-calib3d406, libopencv-imgcodecs406, libsystemd0, libyaml-cpp0.7, zlib1g")
 else()
     set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 endif()
