@@ -266,13 +266,13 @@ void Service::captureLoop(const std::atomic<bool>& stop) noexcept
             cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Streaming), std::memory_order_relaxed);
             const hal::CameraStats stats = camera_->stats();
             cameraGaps_.store(stats.sequenceGaps, std::memory_order_relaxed);
-            // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written
-            // before the frame becomes visible to the vision task.
             if (stalled) {
                 captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: frames again (sequence %lld)",
                                 static_cast<std::int64_t>(frame.sequence));
                 stalled = false;
             }
+            // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written
+            // before the frame becomes visible to the vision task.
             if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
                                     &ringStampNs_[frame.sequence % kPublishSlots])) {
                 lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
