@@ -46,17 +46,21 @@ void readEnvOnce()
 {
     // NOLINTNEXTLINE(concurrency-mt-unsafe) NOLINTJUSTIFICATION: read once under call_once; nobody sets it.
     const char* spec = std::getenv(kEnvName);
+    // NOLINTNEXTLINE(concurrency-mt-unsafe) NOLINTJUSTIFICATION: read once under call_once; nobody sets it.
+    gJournal.store(isJournalStream(gOutputFd.load(), std::getenv("JOURNAL_STREAM")), std::memory_order_relaxed);
     if (spec != nullptr) {
         const LogLevelsParse parsed = parseLogLevels(spec);
         for (std::size_t i = 0; i < kLogCategoryCount; ++i) {
             gThresholds[i].store(parsed.thresholds[i], std::memory_order_relaxed);
         }
         for (const std::string& error : parsed.errors) {
-            writeLogLine("[platform] warn: " + error + " (item ignored)\n");
+            // journalPrefix() would wait for this call_once: the prefix straight from gJournal.
+            const char* prefix = gJournal.load(std::memory_order_relaxed)
+                                     ? kJournalPrefixes[static_cast<std::size_t>(LogLevel::Warn)]
+                                     : "";
+            writeLogLine(prefix + std::string("[platform] warn: ") + error + " (item ignored)\n");
         }
     }
-    // NOLINTNEXTLINE(concurrency-mt-unsafe) NOLINTJUSTIFICATION: read once under call_once; nobody sets it.
-    gJournal.store(isJournalStream(gOutputFd.load(), std::getenv("JOURNAL_STREAM")), std::memory_order_relaxed);
     gEnvRead.store(true, std::memory_order_release);
 }
 
