@@ -2,6 +2,7 @@
 // (bringup/sim/README.md); (b) --middlebury: our matcher and OpenCV's default StereoSGBM against Middlebury ground
 // truth (../shared/data, or $UGV_SHARED_DATA, or --data DIR).
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -65,6 +66,7 @@ struct SimOptions {
     int emptySeeds = 10;
     std::vector<double> doorwayRanges;  ///< [m]
     std::vector<double> overhangRanges; ///< [m]
+    std::vector<std::string> types;     ///< obstacle types to run (empty: all)
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
 };
 
@@ -156,7 +158,8 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
 
     std::vector<std::string> types;
     for (const std::string& name : sim::sceneNames()) {
-        if (name != "empty" && name != "overhang") {
+        if (name != "empty" && name != "overhang" &&
+            (o.types.empty() || std::find(o.types.begin(), o.types.end(), name) != o.types.end())) {
             types.push_back(name);
         }
     }
@@ -202,6 +205,7 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     int emptyFrames = 0;
     int emptyFalseFrames = 0;
     int emptyFalseSectors = 0;
+    int emptyObstacleSectors = 0; ///< any range: a spurious far obstacle is not red/blue but still wrong
     for (const sim::GroundTexture texture : o.textures) {
         for (int seed = 1; seed <= o.emptySeeds; ++seed) {
             auto scene = sim::makeScene("empty", 5.0, 0.0, texture, static_cast<std::uint64_t>(seed));
@@ -212,6 +216,10 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             ++emptyFrames;
             const int n = countRedBlue(det.sectors());
             emptyFalseSectors += n;
+            for (int i = 0; i < det.sectors().count; ++i) {
+                emptyObstacleSectors +=
+                    det.sectors().sectors[static_cast<std::size_t>(i)].state == SectorState::Obstacle ? 1 : 0;
+            }
             emptyFalseFrames += n > 0 ? 1 : 0;
         }
     }
@@ -297,9 +305,11 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     }
     const double falseRate = emptyFrames > 0 ? double(emptyFalseFrames) / emptyFrames : 0.0;
     const bool emptyOk = falseRate < kTargetFalseRate;
-    std::printf("empty ground: %d frames, %d with a false red/blue sector (%.2f%%), %.3f false sectors per frame\n",
+    std::printf("empty ground: %d frames, %d with a false red/blue sector (%.2f%%), %.3f false red/blue sectors and "
+                "%.3f obstacle sectors at any range per frame\n",
                 emptyFrames, emptyFalseFrames, 100.0 * falseRate,
-                emptyFrames > 0 ? double(emptyFalseSectors) / emptyFrames : 0.0);
+                emptyFrames > 0 ? double(emptyFalseSectors) / emptyFrames : 0.0,
+                emptyFrames > 0 ? double(emptyObstacleSectors) / emptyFrames : 0.0);
     std::printf("overhang (underside 1.5 m): %d frames, %d with a red/blue sector -> %s\n", overhangFrames,
                 overhangFalseFrames, overhangFalseFrames == 0 ? "PASS" : "FAIL");
     bool doorwayOk = true;
@@ -321,7 +331,8 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
                 detectionOk ? "PASS" : "FAIL", emptyOk ? "PASS" : "FAIL", rangeOk ? "PASS" : "FAIL",
                 overhangFalseFrames == 0 ? "PASS" : "FAIL", doorwayOk ? "PASS" : "FAIL");
     json << "\n    ],\n    \"empty\": {\"frames\": " << emptyFrames << ", \"false_frames\": " << emptyFalseFrames
-         << ", \"false_sectors\": " << emptyFalseSectors << ", \"false_frame_rate\": " << jsonNumber(falseRate)
+         << ", \"false_sectors\": " << emptyFalseSectors << ", \"obstacle_sectors\": " << emptyObstacleSectors
+         << ", \"false_frame_rate\": " << jsonNumber(falseRate)
          << "},\n    \"overhang\": {\"frames\": " << overhangFrames << ", \"false_frames\": " << overhangFalseFrames
          << "},\n    \"verdicts\": {\"detection\": " << (detectionOk ? "true" : "false")
          << ", \"empty_false_rate\": " << (emptyOk ? "true" : "false")
@@ -445,11 +456,13 @@ int runEval(int argc, char** argv)
 {
     Args args(
         "eval",
-        "[--sim] [--middlebury] [--quick] [--frames-per-case N] [--matcher MODE] [--json OUT] [--data DIR] "
+        "[--sim] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] [--json OUT] [--data "
+        "DIR] "
         "[--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
          {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
          {"quick", "", "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0)", false},
+         {"types", "LIST", "simulator: only these obstacle types, comma-separated (ugvsense sim --list)", false},
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
          {"json", "OUT", "write all figures as JSON", false},
@@ -525,6 +538,19 @@ int runEval(int argc, char** argv)
             o.overhangRanges = {2.0, 3.0, 4.0};
         }
         o.seeds = static_cast<int>(*seeds);
+        if (args.has("types")) {
+            std::stringstream list(args.get("types"));
+            for (std::string name; std::getline(list, name, ',');) {
+                const auto& names = sim::sceneNames();
+                if (name == "empty" || name == "overhang" ||
+                    std::find(names.begin(), names.end(), name) == names.end()) {
+                    return reportUsageError("eval",
+                                            Error{"ugvsense eval --types", "unknown obstacle type '" + name + "'",
+                                                  "see 'ugvsense sim --list'"});
+                }
+                o.types.push_back(name);
+            }
+        }
         o.matcher = matcher;
         if (const int rc = runSimSuite(o, json); rc != 0) {
             return rc;

@@ -56,6 +56,14 @@ WindowCost zsad(ConstImageViewU8 left, ConstImageViewU8 right, int x, int v, int
     return out;
 }
 
+/// True when the window of half width `hw` at column x and disparity d16 lies inside both images of width w.
+bool windowInside(int x, int d16, int hw, int w) noexcept
+{
+    const int lo = (x - hw) * kSub - d16;
+    const int hi = (x + hw) * kSub - d16;
+    return x - hw >= 0 && x + hw < w && lo >= 0 && (hi >> 4) + 1 < w;
+}
+
 } // namespace
 
 Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierConfig& config)
@@ -64,10 +72,15 @@ Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierC
         return Unexpected(
             configError("ROI " + std::to_string(config.width) + "x" + std::to_string(config.height) + " is empty"));
     }
-    if (config.windowHalfWidth < 1 || config.windowHalfWidth > kMaxHalfWidth || config.windowHalfHeight < 0 ||
-        config.windowHalfHeight > kMaxHalfHeight) {
+    const auto windowOk = [](int hw, int hh) {
+        return hw >= 1 && hw <= kMaxHalfWidth && hh >= 0 && hh <= kMaxHalfHeight;
+    };
+    if (!windowOk(config.windowHalfWidth, config.windowHalfHeight) ||
+        !windowOk(config.belowHalfWidth, config.belowHalfHeight)) {
         return Unexpected(configError("window half sizes " + std::to_string(config.windowHalfWidth) + " x " +
-                                      std::to_string(config.windowHalfHeight) + " are not in 1..7 x 0..4"));
+                                      std::to_string(config.windowHalfHeight) + " and below ground " +
+                                      std::to_string(config.belowHalfWidth) + " x " +
+                                      std::to_string(config.belowHalfHeight) + " must be in 1..7 x 0..4"));
     }
     if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
         !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F)) {
@@ -102,20 +115,18 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
     // cost(d) < ratio * cost(d_g), in integers: cost(d) * 1024 < ratio1024 * cost(d_g).
     const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
     // A window at disparity d16 reads right columns floor(((x - hw) 16 - d16) / 16) .. that of (x + hw) + 1.
-    const auto inside = [w, hw](int x, int d16) {
-        const int lo = (x - hw) * kSub - d16;
-        const int hi = (x + hw) * kSub - d16;
-        return lo >= 0 && (hi >> 4) + 1 < w;
-    };
+    const int bhw = config_.belowHalfWidth;
+    const int margin = std::max(hh, config_.belowHalfHeight);
+    const auto inside = [w, hw](int x, int d16) { return windowInside(x, d16, hw, w); };
     for (int v = 0; v < h; ++v) {
         const std::int16_t* in = disparity16.row(v);
         std::int16_t* dst = out.row(v);
         std::copy(in, in + w, dst);
-        if (v < hh || v >= h - hh) {
+        if (v < margin || v >= h - margin) {
             continue; // the window leaves the ROI: kept as matched
         }
         const double rowGround = ground.b * (y0 + v) + ground.c;
-        for (int x = hw; x < w - hw; ++x) {
+        for (int x = std::min(hw, bhw); x < w - std::min(hw, bhw); ++x) {
             const int d16 = in[x];
             if (d16 < 0) {
                 continue;
@@ -129,6 +140,10 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
                 continue;
             }
             ++counts_.tested;
+            if (d16 < dg16) {
+                dst[x] = refineBelow(left, right, x, v, d16, dg16);
+                continue;
+            }
             if (!inside(x, d16) || !inside(x, dg16)) {
                 ++counts_.undecided;
                 continue;
@@ -147,6 +162,56 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
         }
     }
     return VerifyStatus::Ok;
+}
+
+std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageViewU8 right, int x, int v, int d16,
+                                           int dg16) noexcept
+{
+    const int hw = config_.belowHalfWidth;
+    const int hh = config_.belowHalfHeight;
+    const int n = (2 * hw + 1) * (2 * hh + 1);
+    const int w = config_.width;
+    const auto minResidual16 = static_cast<int>(std::lround(config_.minResidualPx * kSub));
+    const auto minContrast16 = static_cast<int>(std::lround(config_.minContrastBelow * kSub * static_cast<float>(n)));
+    const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
+    const int lo = std::max(0, d16 - kSub);
+    const int hi = dg16 - minResidual16 / 2;
+    if (hi < lo || !windowInside(x, lo, hw, w) || !windowInside(x, dg16, hw, w)) {
+        ++counts_.undecided;
+        return static_cast<std::int16_t>(d16); // the window leaves the image: kept as matched
+    }
+    const WindowCost atGround = zsad(left, right, x, v, dg16, hw, hh);
+    if (atGround.contrast < minContrast16) {
+        ++counts_.undecided;
+        return kInvalid; // no texture to tell
+    }
+    // Coarse search in 1/2 px steps, then 1/8 px steps around the coarse best.
+    int best = lo;
+    int bestCost = zsad(left, right, x, v, lo, hw, hh).cost;
+    for (int d = lo + kSub / 2; d <= hi; d += kSub / 2) {
+        const int cost = zsad(left, right, x, v, d, hw, hh).cost;
+        if (cost < bestCost) {
+            bestCost = cost;
+            best = d;
+        }
+    }
+    const int coarse = best;
+    for (int d = std::max(lo, coarse - 6); d <= std::min(hi, coarse + 6); d += 2) {
+        if (d == coarse) {
+            continue;
+        }
+        const int cost = zsad(left, right, x, v, d, hw, hh).cost;
+        if (cost < bestCost) {
+            bestCost = cost;
+            best = d;
+        }
+    }
+    if (static_cast<long>(bestCost) * 1024 >= ratio1024 * atGround.cost) {
+        ++counts_.rejected;
+        return kInvalid;
+    }
+    ++counts_.refined;
+    return static_cast<std::int16_t>(best);
 }
 
 } // namespace ugv::vision

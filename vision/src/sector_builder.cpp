@@ -63,7 +63,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.confidenceSupport > 0.0F) || !(config.minDropDepthM > 0.0F) || !(config.minDropGapM >= 0.0F) ||
         !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
         !(config.faceHeightFraction > 0.0F && config.faceHeightFraction <= 1.0F) || config.minTallVotes < 1 ||
-        !(config.dangerDistanceM <= config.cautionDistanceM)) {
+        !(config.dangerDistanceM <= config.cautionDistanceM) || !(config.dropProfileMinRangeM > 0.0F) ||
+        !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1) {
         return Unexpected(configError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
@@ -92,6 +93,10 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     sut.tallVotes_.assign(n * static_cast<std::size_t>(sut.bins_), 0U);
     sut.groundVotes_.assign(n, 0U);
     sut.farGroundVotes_.assign(n, 0U);
+    sut.profileRows_ = roi.y + roi.height - firstRow;
+    sut.rowCount_.assign(n * static_cast<std::size_t>(sut.profileRows_), 0U);
+    sut.rowResidual_.assign(sut.rowCount_.size(), 0.0F);
+    sut.rowCrossing_.assign(sut.rowCount_.size(), 0.0F);
     sut.kindVotes_.assign(n * kKinds, 0U);
     sut.pixelsPerSector_.assign(n, 0U);
     const float binDeg = sut.hfovDeg_ / static_cast<float>(config.sectorCount);
@@ -169,6 +174,64 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
     return Cluster{};
 }
 
+SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
+{
+    const int first = std::max(0, s - 1);
+    const int last = std::min(config_.sectorCount - 1, s + 1);
+    const auto rows = static_cast<std::size_t>(profileRows_);
+    struct Row {
+        std::uint32_t count = 0;
+        float residual = 0.0F; ///< mean [px]
+        float crossing = 0.0F; ///< mean [m]
+    };
+    const auto rowOf = [&](int v) noexcept {
+        Row r;
+        for (int k = first; k <= last; ++k) {
+            const std::size_t i = static_cast<std::size_t>(k) * rows + static_cast<std::size_t>(v);
+            r.count += rowCount_[i];
+            r.residual += rowResidual_[i];
+            r.crossing += rowCrossing_[i];
+        }
+        if (r.count > 0) {
+            r.residual /= static_cast<float>(r.count);
+            r.crossing /= static_cast<float>(r.count);
+        }
+        return r;
+    };
+    const auto minPixels = static_cast<std::uint32_t>(config_.dropProfileMinPixels);
+    const float tau = config_.dropProfileResidualPx;
+    // From the nearest row up: the first rim beyond dropProfileMinRangeM.
+    for (int v = profileRows_ - 1; v >= 2; --v) {
+        const Row rim = rowOf(v);
+        if (rim.count < minPixels || rim.crossing < config_.dropProfileMinRangeM) {
+            continue;
+        }
+        if (rim.crossing >= config_.maxRangeM) {
+            break;
+        }
+        if (!(rim.residual > -0.5F * tau)) {
+            continue;
+        }
+        const Row wall1 = rowOf(v - 1);
+        const Row wall2 = rowOf(v - 2);
+        if (wall1.count < minPixels || wall2.count < minPixels || !(wall1.residual < -tau) ||
+            !(wall2.residual < -tau)) {
+            continue;
+        }
+        // The sector itself must see the wall, not only a neighbour.
+        const std::size_t own = static_cast<std::size_t>(s) * rows;
+        const std::uint32_t ownCount =
+            rowCount_[own + static_cast<std::size_t>(v - 1)] + rowCount_[own + static_cast<std::size_t>(v - 2)];
+        const float ownResidual =
+            rowResidual_[own + static_cast<std::size_t>(v - 1)] + rowResidual_[own + static_cast<std::size_t>(v - 2)];
+        if (ownCount == 0 || !(ownResidual < -tau * static_cast<float>(ownCount) * 0.5F)) {
+            continue;
+        }
+        return Cluster{static_cast<int>(wall1.count + wall2.count), 0.5F * (rim.crossing + wall1.crossing)};
+    }
+    return Cluster{};
+}
+
 BuildStatus SectorBuilder::build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
                                  const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs) noexcept
 {
@@ -202,6 +265,9 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     std::fill(groundVotes_.begin(), groundVotes_.end(), 0U);
     std::fill(farGroundVotes_.begin(), farGroundVotes_.end(), 0U);
     std::fill(kindVotes_.begin(), kindVotes_.end(), 0U);
+    std::fill(rowCount_.begin(), rowCount_.end(), 0U);
+    std::fill(rowResidual_.begin(), rowResidual_.end(), 0.0F);
+    std::fill(rowCrossing_.begin(), rowCrossing_.end(), 0.0F);
 
     const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
     // Disparities below minDisparity16 are farther than maxRangeM even straight ahead: skipped early.
@@ -212,7 +278,14 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
 
     const auto groundHeight = static_cast<float>(ground.heightM);
     const float faceHeight = config_.faceHeightFraction * config_.minHeightM;
-    const auto vote = [&](int s, float range, float z, const std::uint8_t* label, int u) noexcept {
+    const auto vote = [&](int s, int v, float range, float z, int d16, const std::uint8_t* label, int u) noexcept {
+        // Row profile: residual d - d_g = d z / h (d / d_g = h / (h - z) along one ray) and the ray's ground
+        // crossing, range h / (h - z) (a function of the pixel only).
+        const std::size_t row =
+            static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_) + static_cast<std::size_t>(v);
+        ++rowCount_[row];
+        rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * z / groundHeight;
+        rowCrossing_[row] += range * groundHeight / (groundHeight - z);
         int kind = -1;
         if (z > faceHeight) {
             kind = 0;
@@ -271,7 +344,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
                 if (s < 0 || s >= config_.sectorCount) {
                     continue;
                 }
-                vote(s, range, static_cast<float>(p.z), label, u);
+                vote(s, v - (firstRow_ - roi_.y), range, static_cast<float>(p.z), d16[u], label, u);
             }
         }
     } else {
@@ -329,7 +402,8 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
                 if (range >= config_.maxRangeM) {
                     continue;
                 }
-                vote(s, range, static_cast<float>(ground.heightM + z * (up0 + up1 * uu)), label, u);
+                vote(s, v - (firstRow_ - roi_.y), range, static_cast<float>(ground.heightM + z * (up0 + up1 * uu)),
+                     d16[u], label, u);
             }
         }
     }
@@ -345,8 +419,11 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         const Cluster positive =
             nearestCluster(&histograms_[slot0 * bins], &tallVotes_[static_cast<std::size_t>(s) * bins],
                            config_.rangePercentile, false);
-        const Cluster negative =
-            nearestCluster(&histograms_[(slot0 + 1) * bins], nullptr, config_.dropRangePercentile, true);
+        Cluster negative = nearestCluster(&histograms_[(slot0 + 1) * bins], nullptr, config_.dropRangePercentile, true);
+        if (const Cluster far = profileDrop(s);
+            far.votes > 0 && (negative.votes == 0 || far.rangeM < negative.rangeM)) {
+            negative = far;
+        }
         const bool havePositive = positive.votes > 0;
         const bool haveNegative = negative.votes > 0;
         if (havePositive || haveNegative) {

@@ -84,6 +84,12 @@ int countInvalidInBox(ImageView<const std::int16_t> d)
 
 TEST(ObstacleVerifier, CreateRejectsInvalidConfig)
 {
+    ObstacleVerifierConfig badBelow = config();
+    badBelow.belowHalfWidth = 0;
+    EXPECT_FALSE(ObstacleVerifier::create(badBelow).has_value());
+    badBelow = config();
+    badBelow.belowHalfHeight = 5;
+    EXPECT_FALSE(ObstacleVerifier::create(badBelow).has_value());
     ObstacleVerifierConfig empty = config();
     empty.width = 0;
     ObstacleVerifierConfig window = config();
@@ -211,6 +217,51 @@ TEST(ObstacleVerifier, FaintSurfaceBelowTheGroundIsKeptAboveItIsUndecided)
     // Inside the box, where the window holds only the faint surface (the edges see the textured ground too).
     for (int y = 2; y < kHeight - 2; ++y) {
         for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
+            ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
+        }
+    }
+}
+
+TEST(ObstacleVerifier, BelowTheGroundTheDisparityIsReestimated)
+{
+    // A textured surface 3 px below the ground (a far wall); the matcher says 1.5 px lower still (its window
+    // straddled the rim). The flat window re-matches it: within 1/4 px of the truth, and kept.
+    auto sut = ObstacleVerifier::create(config()).value();
+    const DisparityPlane ground{0.0, 0.0, 30.0};
+    Pair wall = makeFaintSurface(30, 27, 60);
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = kBoxX0; x < kBoxX1; ++x) {
+            wall.disparity.view().row(y)[x] = static_cast<std::int16_t>(16 * 27 - 24);
+        }
+    }
+    ASSERT_EQ(sut.run(wall.left.view(), wall.right.view(), wall.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    EXPECT_GT(sut.counts().refined, 0);
+    for (int y = 2; y < kHeight - 2; ++y) {
+        for (int x = kBoxX0 + 8; x < kBoxX1 - 8; ++x) {
+            ASSERT_NEAR(sut.disparity().row(y)[x], 16 * 27, 4) << x << "," << y;
+        }
+    }
+}
+
+TEST(ObstacleVerifier, BelowTheGroundDisparityTheGroundExplainsIsRejected)
+{
+    // All ground, but the matcher put a strip 3 px below it: no disparity in [d - 1, d_g - 1/2] explains the
+    // images better than the ground, so the strip is invalid (never a drop).
+    const Pair p = makePair(false);
+    Image<std::int16_t> disparity(kWidth, kHeight);
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = 0; x < kWidth; ++x) {
+            disparity.view().row(y)[x] = p.disparity.view().row(y)[x];
+        }
+        for (int x = kBoxX0; x < kBoxX1; ++x) {
+            disparity.view().row(y)[x] = static_cast<std::int16_t>(16 * (kGroundD - 3));
+        }
+    }
+    auto sut = ObstacleVerifier::create(config()).value();
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), disparity.view(), kGround, kY0), VerifyStatus::Ok);
+    EXPECT_EQ(sut.counts().refined, 0);
+    for (int y = 2; y < kHeight - 2; ++y) {
+        for (int x = kBoxX0; x < kBoxX1; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
         }
     }

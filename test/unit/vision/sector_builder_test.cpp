@@ -140,6 +140,9 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropRangePercentile = 1.0F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropSupport = 0; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropSupportRangeM = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileMinRangeM = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileResidualPx = -1.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileMinPixels = 0; }));
 }
 
 TEST(SectorBuilder, FlatGroundIsClearEverywhere)
@@ -281,6 +284,70 @@ TEST(SectorBuilder, FarWallOfADropSeenOverAGapIsNegativeAtTheRim)
     EXPECT_EQ(ahead.state, SectorState::Obstacle);
     EXPECT_EQ(ahead.kind, ObstacleKind::Negative);
     EXPECT_NEAR(ahead.rangeM, 7.0, 0.03 * 7.0);
+}
+
+/// The default config with the per-pixel drop votes switched off (depth thresholds of 1 m): only the row profile
+/// can report a drop.
+SectorBuilderConfig profileOnly()
+{
+    SectorBuilderConfig config;
+    config.minDepthM = 1.0F;
+    config.minDropDepthM = 1.0F;
+    return config;
+}
+
+void expectNoObstacle(const ObstacleSectors& sectors)
+{
+    for (int i = 0; i < sectors.count; ++i) {
+        EXPECT_NE(sectors.sectors[static_cast<std::size_t>(i)].state, SectorState::Obstacle) << "sector " << i;
+    }
+}
+
+TEST(SectorBuilder, FarWallTooShallowForPixelVotesIsFoundByTheRowProfile)
+{
+    // A 1 m trench at 9 m: its far wall is 4 rows at 1.1..1.7 px below the ground disparity. With the per-pixel
+    // drop votes switched off (thresholds of 1 m), only the row profile can find it: at the rim, within 3 %.
+    SectorBuilderConfig config = profileOnly();
+    auto sut = makeBuilder(config);
+    cv::Mat d16 = groundDisparity();
+    paintFarWall(d16, 9.0, 10.0);
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Obstacle);
+    EXPECT_EQ(ahead.kind, ObstacleKind::Negative);
+    EXPECT_NEAR(ahead.rangeM, 9.0, 0.03 * 9.0);
+
+    // The same scene with the profile limited to rims beyond 10 m: nothing else could have found it.
+    config.dropProfileMinRangeM = 10.0F;
+    auto without = makeBuilder(config);
+    ASSERT_EQ(without.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    EXPECT_NE(without.sectors().sectors[static_cast<std::size_t>(sectorOf(without.sectors(), 0.0))].state,
+              SectorState::Obstacle);
+}
+
+TEST(SectorBuilder, OneLowRowIsNoFarDrop)
+{
+    // A matcher streak: a single row 2 px below the ground at 9 m (a wall needs two rows below the ground above a
+    // rim row on it), and two low rows without a ground row below them (the rows below are invalid).
+    auto sut = makeBuilder(profileOnly());
+    cv::Mat d16 = groundDisparity();
+    const int row = roiRow(0.0, 9.0);
+    for (int u = 0; u < d16.cols; ++u) {
+        d16.at<std::int16_t>(row, u) = static_cast<std::int16_t>(d16.at<std::int16_t>(row, u) - 32);
+    }
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    expectNoObstacle(sut.sectors());
+
+    cv::Mat gap = groundDisparity();
+    for (int v = row; v < row + 2; ++v) {
+        for (int u = 0; u < gap.cols; ++u) {
+            gap.at<std::int16_t>(v, u) = static_cast<std::int16_t>(gap.at<std::int16_t>(v, u) - 32);
+            gap.at<std::int16_t>(v + 2, u) = -16;
+        }
+    }
+    ASSERT_EQ(sut.build(view16(gap), {}, kGround, 1U, 0), BuildStatus::Ok);
+    expectNoObstacle(sut.sectors());
 }
 
 TEST(SectorBuilder, ShallowDipWithoutAGapIsGround)

@@ -42,6 +42,14 @@ struct ObstacleVerifierConfig {
     /// textured, but the ratio test still decides there (the fill-in this guards against is a strong
     /// surface's larger disparity spreading over the ground: above it) [grey]
     float minContrastBelow = 1.0F;
+    /// Below the ground the matcher's disparity is re-estimated, not only tested. The visible part of a drop at
+    /// range is a strip a few rows high (a 1 m trench at 9 m: 4 rows, 0.2..1.3 px below d_g), which a 5-row
+    /// window straddles: the matcher returns no or a wrong disparity there (2 px low), and the ground wins the
+    /// 7 x 5 test. So a pixel below the ground is matched again with a flat window (2 bhw + 1) x (2 bhh + 1) over
+    /// [d - 1 px, d_g - minResidualPx / 2], coarse (1/2 px) then fine (1/8 px); the best disparity replaces the
+    /// matcher's when its cost < acceptRatio * cost(d_g), else the pixel is invalid.
+    int belowHalfWidth = 7;  ///< [px] 15 x 1 by default
+    int belowHalfHeight = 1; ///< [px]
 };
 
 enum class VerifyStatus : std::uint8_t {
@@ -53,6 +61,7 @@ enum class VerifyStatus : std::uint8_t {
 struct VerifyCounts {
     int tested = 0;    ///< off-ground pixels re-matched
     int rejected = 0;  ///< the ground explained them at least as well: invalidated
+    int refined = 0;   ///< below the ground, re-estimated and kept
     int undecided = 0; ///< too little contrast (invalidated) or the window leaves the image (kept)
 };
 
@@ -81,6 +90,8 @@ private:
     explicit ObstacleVerifier(const ObstacleVerifierConfig& config) : config_(config), out_(config.width, config.height)
     {
     }
+    /// The below-ground re-estimate of pixel (x, v) (see belowHalfWidth): the new disparity x16, or invalid.
+    std::int16_t refineBelow(ConstImageViewU8 left, ConstImageViewU8 right, int x, int v, int d16, int dg16) noexcept;
 
     ObstacleVerifierConfig config_;
     Image<std::int16_t> out_;

@@ -16,6 +16,12 @@
 ///    votes (weight 1); a pixel that the label image also marks (1 positive, 2 negative) votes with weight 1 +
 ///    labelWeight. Without the dense cue only labelled pixels vote (unlabelled ones still forbid Clear).
 ///  - ground support: every other point.
+///  - far drops by the row profile: beyond ~6 m a trench's far wall is 3..5 rows at 0.2..1.8 px below the ground
+///    disparity, as deep as the noise of single pixels (a 1 m trench at 9 m: 0..6 cm; empty ground gives as
+///    many per-pixel drop votes). Its rows are told apart by their mean: per sector and row, the mean residual
+///    d - d_g (= d z / h) over the sector and its neighbours; a rim is a row on the ground with the two rows
+///    above it below the ground (dropProfile*). Its range is where the rim row and the first wall row meet: the
+///    mean of their rays' ground crossings.
 /// The range of a positive vote is the point's horizontal range; that of a negative vote is where the ray to it
 /// crosses the ground plane (the near rim of the drop, where the vehicle must stop), as the simulator's truth.
 /// Per sector and kind, the votes go into a range histogram (rangeBinM bins up to maxRangeM). The nearest
@@ -62,8 +68,15 @@ struct SectorBuilderConfig {
     int minDropSupport = 20;         ///< ... but at least this many votes
     int maxStrayVotes = 8;           ///< positive votes outside any cluster at or above which a sector cannot be Clear
                            ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
-    int maxStrayDropVotes = 20;        ///< the same for negative votes (far ground is noisier below the plane: 10 would
-                                       ///< turn 52 -> 38 sectors of empty ground Unknown)
+    int maxStrayDropVotes = 20; ///< the same for negative votes (far ground is noisier below the plane: 10 would
+                                ///< turn 52 -> 38 sectors of empty ground Unknown)
+    /// Far drops by their row profile (see the file comment): a rim beyond dropProfileMinRangeM is a row whose
+    /// mean residual disparity is above -dropProfileResidualPx / 2 with the two rows above it (the far wall)
+    /// below -dropProfileResidualPx, over the sector and its two neighbours, each row with at least
+    /// dropProfileMinPixels valid pixels.
+    float dropProfileMinRangeM = 5.0F;  ///< [m] nearer drops are left to the per-pixel votes
+    float dropProfileResidualPx = 1.0F; ///< [px] (empty ground: row means within +-0.7 px at 9 m measured)
+    int dropProfileMinPixels = 6;
     float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
     float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
     float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
@@ -152,7 +165,14 @@ private:
     std::vector<std::uint32_t> pixelsPerSector_; ///< analysed pixels whose column bearing is in the sector
     std::vector<double> boundaryCos_;            ///< [sectorCount + 1] cos / sin of the sector boundary bearings
     std::vector<double> boundarySin_;
-    std::vector<double> boundary0_; ///< [sectorCount + 1] per-row boundary functions g_k(u) = b0 + b1 u
+    /// Nearest far drop of sector s by the row profile, or a Cluster with no votes.
+    [[nodiscard]] Cluster profileDrop(int s) const noexcept;
+
+    int profileRows_ = 0;                 ///< analysed rows (firstRow .. roi bottom)
+    std::vector<std::uint32_t> rowCount_; ///< [sector][row] valid pixels
+    std::vector<float> rowResidual_;      ///< [sector][row] sum of d - d_g [px]
+    std::vector<float> rowCrossing_;      ///< [sector][row] sum of the ranges where the pixels' rays meet the ground
+    std::vector<double> boundary0_;       ///< [sectorCount + 1] per-row boundary functions g_k(u) = b0 + b1 u
     std::vector<double> boundary1_;
 };
 
