@@ -429,6 +429,9 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
         s = observation();
         s.track("");
         ok = ok && send(w.observations, s, 0, "empty track name");
+        s = observation();
+        s.track(std::string(dds::kMaxNameLength + 36, 't')); // arrives with kMaxNameLength + 1 characters
+        ok = ok && send(w.observations, s, 0, "track name of 100 characters");
     }
     {
         auto s = uavFix();
@@ -466,6 +469,9 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
         s = confirm();
         s.source("");
         ok = ok && send(w.confirmations, s, 2, "empty source name");
+        s = confirm();
+        s.id(std::string(dds::kMaxNameLength + 36, 'i'));
+        ok = ok && send(w.confirmations, s, 2, "object id of 100 characters");
     }
     {
         auto s = correction();
@@ -655,6 +661,12 @@ int runBusSend(int argc, char** argv)
     }
     if ((args.has("source") && args.get("source").empty()) || (args.has("only-ugv") && args.get("only-ugv").empty())) {
         return reportUsageError(kCommand, Error{where, "an empty --source or --only-ugv name", "give a name"});
+    }
+    if (args.get("source", "").size() > dds::kMaxNameLength || args.get("only-ugv", "").size() > dds::kMaxNameLength) {
+        return reportUsageError(kCommand, Error{where,
+                                                "a --source or --only-ugv name longer than " +
+                                                    std::to_string(dds::kMaxNameLength) + " characters",
+                                                "shorten it (the bus's name bound)"});
     }
     const auto rate = args.number("rate", args.has("poses") ? kDefaultPoseRateHz : 0.0, 0.001, kMaxRateHz);
     const auto duration = args.number("duration", kDefaultPoseDurationS, 0.0, 1e7);

@@ -100,6 +100,11 @@ Result<void, Error> validate(const BusConfig& config, const std::string& where)
         return Unexpected(Error{where + " vehicle", "vehicle name '" + config.rosNamespace + "' is not a ROS 2 name",
                                 "letters, digits, _ and inner /, e.g. ugv1"});
     }
+    if (config.rosNamespace.size() > kMaxNameLength) {
+        return Unexpected(Error{where + " vehicle",
+                                "vehicle name of " + std::to_string(config.rosNamespace.size()) + " characters",
+                                "at most " + std::to_string(kMaxNameLength) + " (the bus's name bound)"});
+    }
     for (const std::string& p : config.partitions) {
         if (p.empty()) {
             return Unexpected(Error{where + " partitions", "an empty partition name", "remove it or name it"});

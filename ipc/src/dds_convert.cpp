@@ -42,7 +42,8 @@ bool lonOk(double v) noexcept
 template <std::size_t N>
 bool named(const eprosima::fastrtps::fixed_string<N>& s) noexcept
 {
-    return s.size() > 0;
+    static_assert(N == kMaxNameLength + 1, "names are bounded one above kMaxNameLength (ugvsense.idl)");
+    return s.size() > 0 && s.size() <= kMaxNameLength;
 }
 
 float centreRad(const Sector& s) noexcept

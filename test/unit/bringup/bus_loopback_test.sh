@@ -3,7 +3,7 @@
 #   1. a short correlate-sim scenario sent with bus-send --input: every line arrives on its topic (observations,
 #      uav, pose_corrections) and each sample's sequence_number is its line number in the file;
 #   2. --only-ugv sends that UGV's observations and nothing else;
-#   3. bus-send --hostile: listen refuses the 9 hostile observations (stderr "refused: ...", counted) and prints
+#   3. bus-send --hostile: listen refuses the 10 hostile observations (stderr "refused: ...", counted) and prints
 #      the 5000 valid ones of the flood;
 #   4. listen with nobody publishing: exit 1 after --timeout, saying what to check.
 # A domain id and partition of its own (150 + pid % 80), so parallel runs and other DDS users do not cross-talk.
@@ -81,14 +81,14 @@ out=$("$tool" bus-send --hostile --flood 5000 "${bus[@]}" 2>&1) || fail "bus-sen
 echo "$out"
 for want in "observations      NaN time: 1" "observations      latitude 91: 1" "observations      latitude -91: 1" \
     "observations      longitude 200: 1" "observations      unknown class 9: 1" "observations      empty ugv name: 1" \
-    "uav               empty source name: 1" "confirmations     unknown confirmation state 7: 1" \
+    "observations      track name of 100 characters: 1" "uav               empty source name: 1" "confirmations     unknown confirmation state 7: 1" \
     "pose_corrections  since_t > until_t: 1" "flood: 5000 valid observation(s)"; do
     grep -qF -- "$want" <<<"$out" || fail "bus-send --hostile: missing '$want'"
 done
 wait $l5 || fail "listen (hostile) exited $?"
 cat "$work/hostile.err"
-[ "$(grep -c '^refused: ' "$work/hostile.err")" -eq 9 ] || fail "expected 9 refused observations"
-grep -qF "5000 sample(s) printed, 9 refused" "$work/hostile.err" || fail "listen's refused count"
+[ "$(grep -c '^refused: ' "$work/hostile.err")" -eq 10 ] || fail "expected 10 refused observations"
+grep -qF "5000 sample(s) printed, 10 refused" "$work/hostile.err" || fail "listen's refused count"
 [ "$(wc -l <"$work/hostile.out")" -eq 5000 ] || fail "expected the 5000 valid observations of the flood"
 grep -q '"t":"nan"\|"ugv_lat_deg":91' "$work/hostile.out" && fail "a hostile sample was printed"
 

@@ -74,6 +74,18 @@ TEST(BusConfig, BadRosNamespaceIsRefused)
     }
 }
 
+TEST(BusConfig, AVehicleNameOverTheBusBoundIsRefused)
+{
+    BusConfig c = good();
+    c.rosNamespace = std::string(kMaxNameLength, 'u');
+    EXPECT_TRUE(validate(c, "dds"));
+
+    c.rosNamespace += 'u';
+    const auto sut = validate(c, "dds");
+    ASSERT_FALSE(sut);
+    EXPECT_NE(sut.error().what.find("65 characters"), std::string::npos) << sut.error().message();
+}
+
 TEST(BusConfig, EmptyPartitionIsRefused)
 {
     BusConfig c = good();

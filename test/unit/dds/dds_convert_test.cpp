@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <fastcdr/Cdr.h>
+#include <fastcdr/FastBuffer.h>
 #include <gtest/gtest.h>
 
 namespace ugv::ipc::dds {
@@ -225,11 +227,41 @@ TEST(DdsCheck, ObservationRefusesEachBrokenField)
     expectRefused<O>(good, "unknown class 9", [](O& o) { o.cls(9); });
     expectRefused<O>(good, "empty ugv", [](O& o) { o.ugv(""); });
     expectRefused<O>(good, "empty track", [](O& o) { o.track(""); });
+    expectRefused<O>(good, "ugv name of 65 characters", [](O& o) { o.ugv(std::string(65, 'u')); });
+    expectRefused<O>(good, "track name of 100 characters", [](O& o) { o.track(std::string(100, 't')); });
     O edge = good; // the edges of the ranges are valid
+    edge.ugv(std::string(64, 'u'));
     edge.ugv_lat_deg(90.0);
     edge.ugv_lon_deg(-180.0);
     edge.cls(3);
     EXPECT_EQ(check(edge), nullptr);
+}
+
+TEST(DdsCheck, ANameLongerThanTheBoundIsTruncatedOnReceiptAndRefused)
+{
+    // The wire as another participant's IDL could write it: the observation with a 99-character ugv name. The
+    // generated code reads it whole and truncates it to the bound (kMaxNameLength + 1); check() refuses it.
+    const msg::OoiObservation good = goodObservation(); // "ugv-1": 4 + 6 bytes, padded to 16 before the uint64
+    std::vector<char> original(msg::OoiObservation::getCdrSerializedSize(good));
+    eprosima::fastcdr::FastBuffer originalBuffer(original.data(), original.size());
+    eprosima::fastcdr::Cdr writer(originalBuffer);
+    good.serialize(writer);
+    ASSERT_EQ(writer.getSerializedDataLength() % 8, 0U);
+
+    std::vector<char> wire(original.size() + 128);
+    eprosima::fastcdr::FastBuffer wireBuffer(wire.data(), wire.size());
+    eprosima::fastcdr::Cdr longName(wireBuffer);
+    longName << std::string(99, 'u'); // 4 + 100 bytes: the next field is 8-aligned again
+    ASSERT_EQ(longName.getSerializedDataLength(), 104U);
+    std::memcpy(wire.data() + 104, original.data() + 16, writer.getSerializedDataLength() - 16);
+
+    eprosima::fastcdr::FastBuffer readBuffer(wire.data(), 104 + writer.getSerializedDataLength() - 16);
+    eprosima::fastcdr::Cdr reader(readBuffer);
+    msg::OoiObservation received;
+    received.deserialize(reader);
+    EXPECT_EQ(received.ugv().size(), kMaxNameLength + 1);
+    EXPECT_EQ(received.track(), good.track()); // the rest of the sample is intact
+    EXPECT_NE(check(received), nullptr);
 }
 
 TEST(DdsCheck, UavConfirmationAndCorrectionRefuseBrokenFields)

@@ -28,6 +28,7 @@
 
 #include <array>
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -51,6 +52,10 @@ namespace ugv::ipc::dds {
 
 namespace msg = ::ugvsense::msg;
 namespace ros = ::sensor_msgs::msg::dds_;
+
+/// Longest vehicle, source or object name on the bus [characters]; the IDL bounds names at one more, so that a
+/// longer name arrives truncated to kMaxNameLength + 1 and is refused (ugvsense.idl, ipc::dds::check).
+inline constexpr std::size_t kMaxNameLength = 64;
 
 struct BusConfig {
     int domainId = 42; ///< 0..232 (the UDP port formula's limit)
