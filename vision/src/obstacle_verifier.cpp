@@ -176,7 +176,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
     const int lo = std::max(0, d16 - kSub);
     const int hi = dg16 - minResidual16 / 2;
-    if (hi < lo || !windowInside(x, lo, hw, w) || !windowInside(x, dg16, hw, w)) {
+    if (hi < lo || !windowInside(x, lo, hw, w) || !windowInside(x, dg16 + kSub / 2, hw, w)) {
         ++counts_.undecided;
         return static_cast<std::int16_t>(d16); // the window leaves the image: kept as matched
     }
@@ -206,7 +206,17 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
             best = d;
         }
     }
-    if (static_cast<long>(bestCost) * 1024 >= ratio1024 * atGround.cost) {
+    // The ground gets the same freedom as the drop: its best cost within +-1/2 px of d_g (1/8 px steps). The
+    // minimum of many noisy costs beats a single one by chance on weak texture (a painted floor). Searched only
+    // when the drop beats d_g itself (the search can only lower the ground's cost).
+    const auto beatsGround = [&](int groundCost) {
+        return static_cast<long>(bestCost) * 1024 < ratio1024 * groundCost;
+    };
+    bool accepted = beatsGround(atGround.cost);
+    for (int d = dg16 - kSub / 2; accepted && d <= dg16 + kSub / 2; d += 2) {
+        accepted = d == dg16 || beatsGround(zsad(left, right, x, v, d, hw, hh).cost);
+    }
+    if (!accepted) {
         ++counts_.rejected;
         return kInvalid;
     }

@@ -47,7 +47,10 @@ struct ObstacleVerifierConfig {
     /// window straddles: the matcher returns no or a wrong disparity there (2 px low), and the ground wins the
     /// 7 x 5 test. So a pixel below the ground is matched again with a flat window (2 bhw + 1) x (2 bhh + 1) over
     /// [d - 1 px, d_g - minResidualPx / 2], coarse (1/2 px) then fine (1/8 px); the best disparity replaces the
-    /// matcher's when its cost < acceptRatio * cost(d_g), else the pixel is invalid.
+    /// matcher's when its cost < acceptRatio * the ground's best cost within d_g +- 1/2 px, else the pixel is
+    /// invalid. The ground gets a search of its own because the least of many noisy costs beats one cost by
+    /// chance on weak texture. Empty simulator ground, 20 frames per texture, false drop sectors per frame with
+    /// the ground at d_g alone / with its search: painted floor 1.9 / 0.35, asphalt, grass and gravel 0.22 / 0.017.
     int belowHalfWidth = 7;  ///< [px] 15 x 1 by default
     int belowHalfHeight = 1; ///< [px]
 };
