@@ -280,12 +280,14 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     const float faceHeight = config_.faceHeightFraction * config_.minHeightM;
     const auto vote = [&](int s, int v, float range, float z, int d16, const std::uint8_t* label, int u) noexcept {
         // Row profile: residual d - d_g = d z / h (d / d_g = h / (h - z) along one ray) and the ray's ground
-        // crossing, range h / (h - z) (a function of the pixel only).
-        const std::size_t row =
-            static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_) + static_cast<std::size_t>(v);
-        ++rowCount_[row];
-        rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * z / groundHeight;
-        rowCrossing_[row] += range * groundHeight / (groundHeight - z);
+        // crossing, range h / (h - z) (a function of the pixel only; only rays that meet the ground ahead).
+        if (z < groundHeight) {
+            const std::size_t row =
+                static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_) + static_cast<std::size_t>(v);
+            ++rowCount_[row];
+            rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * z / groundHeight;
+            rowCrossing_[row] += range * groundHeight / (groundHeight - z);
+        }
         int kind = -1;
         if (z > faceHeight) {
             kind = 0;
