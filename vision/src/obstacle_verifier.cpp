@@ -83,7 +83,7 @@ Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierC
                                       std::to_string(config.belowHalfHeight) + " must be in 1..7 x 0..4"));
     }
     if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
-        !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F)) {
+        !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F) || !(config.refineMaxGroundPx >= 0.0F)) {
         return Unexpected(
             configError("minResidualPx, minContrast and minContrastBelow must be >= 0 and acceptRatio in (0, 1]"));
     }
@@ -116,6 +116,7 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
     const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
     // A window at disparity d16 reads right columns floor(((x - hw) 16 - d16) / 16) .. that of (x + hw) + 1.
     const int bhw = config_.belowHalfWidth;
+    const auto refineMaxGround16 = static_cast<int>(std::lround(config_.refineMaxGroundPx * kSub));
     const int margin = std::max(hh, config_.belowHalfHeight);
     const auto inside = [w, hw](int x, int d16) { return windowInside(x, d16, hw, w); };
     for (int v = 0; v < h; ++v) {
@@ -140,7 +141,7 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
                 continue;
             }
             ++counts_.tested;
-            if (d16 < dg16) {
+            if (d16 < dg16 && dg16 <= refineMaxGround16) {
                 dst[x] = refineBelow(left, right, x, v, d16, dg16);
                 continue;
             }
@@ -174,8 +175,10 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     const auto minResidual16 = static_cast<int>(std::lround(config_.minResidualPx * kSub));
     const auto minContrast16 = static_cast<int>(std::lround(config_.minContrastBelow * kSub * static_cast<float>(n)));
     const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
+    // [d - 1, d + 3] px, below d_g - 1/2 px: the matcher is off by ~2 px at a far wall, and a bounded search keeps
+    // the cost per pixel bounded (a pixel 40 px below the ground would otherwise search 80 steps).
     const int lo = std::max(0, d16 - kSub);
-    const int hi = dg16 - minResidual16 / 2;
+    const int hi = std::min(d16 + 3 * kSub, dg16 - minResidual16 / 2);
     if (hi < lo || !windowInside(x, lo, hw, w) || !windowInside(x, dg16 + kSub / 2, hw, w)) {
         ++counts_.undecided;
         return static_cast<std::int16_t>(d16); // the window leaves the image: kept as matched

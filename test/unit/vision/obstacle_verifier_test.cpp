@@ -92,6 +92,9 @@ TEST(ObstacleVerifier, CreateRejectsInvalidConfig)
     badBelow = config();
     badBelow.belowHalfHeight = 5;
     EXPECT_FALSE(ObstacleVerifier::create(badBelow).has_value());
+    badBelow = config();
+    badBelow.refineMaxGroundPx = -1.0F;
+    EXPECT_FALSE(ObstacleVerifier::create(badBelow).has_value());
     ObstacleVerifierConfig empty = config();
     empty.width = 0;
     ObstacleVerifierConfig window = config();
@@ -243,6 +246,13 @@ TEST(ObstacleVerifier, BelowTheGroundTheDisparityIsReestimated)
             ASSERT_NEAR(sut.disparity().row(y)[x], 16 * 27, 4) << x << "," << y;
         }
     }
+
+    // The same wall where the ground is nearer than refineMaxGroundPx: not re-matched (the 7 x 5 test decides).
+    ObstacleVerifierConfig nearConfig = config();
+    nearConfig.refineMaxGroundPx = 29.0F;
+    auto near = ObstacleVerifier::create(nearConfig).value();
+    ASSERT_EQ(near.run(wall.left.view(), wall.right.view(), wall.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    EXPECT_EQ(near.counts().refined, 0);
 }
 
 TEST(ObstacleVerifier, BelowTheGroundDisparityTheGroundExplainsIsRejected)
