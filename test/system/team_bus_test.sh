@@ -89,7 +89,10 @@ dds:
 correlator:
   enabled: true
   period_s: 1
-  reorder_ms: 3000
+  # Above the worst repair time of this scenario: UGV 2's restarted process first replays ~160 duplicates at
+  # 40/s (4 s) before its new messages, which must still be put in time order with the others' (3 s was a race:
+  # its last 89 arrived after the others' end had been applied, and were refused as late).
+  reorder_ms: 10000
   log_dir: $work/gcs
 YAML
 
@@ -137,7 +140,7 @@ kill -9 "${sender_pid[ugv-2]}"
 wait "${sender_pid[ugv-2]}" 2>/dev/null
 start_sender ugv-2 "$work/ugv-2.jsonl" ugv-2.restarted
 wait_acked ugv-1 ugv-2.restarted ugv-3 uav
-sleep 5 # the reorder window (3 s) and the last poll
+sleep 12 # the reorder window (10 s) and the last poll
 stop_gcs
 
 [ -s "$work/gcs/inputs.jsonl" ] || fail "the ground station logged no inputs"
