@@ -1,6 +1,7 @@
 #include "ugv/vision/sector_builder.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -64,7 +65,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
         !(config.faceHeightFraction > 0.0F && config.faceHeightFraction <= 1.0F) || config.minTallVotes < 1 ||
         !(config.dangerDistanceM <= config.cautionDistanceM) || !(config.dropProfileMinRangeM > 0.0F) ||
-        !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1) {
+        !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1 || config.dropEdgeSectors < 0) {
         return Unexpected(configError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
@@ -459,7 +460,43 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         }
         out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
     }
+    widenDrops();
     return BuildStatus::Ok;
+}
+
+void SectorBuilder::widenDrops() noexcept
+{
+    // A hole's rim runs out at a grazing angle at its lateral ends: there its far wall shows only a sliver, too
+    // few pixels to vote, so the detected drop is narrower than the true one. A Clear sector next to a negative
+    // obstacle is therefore reported as that drop (the nearer neighbour's range), never as Clear. Decided on the
+    // sectors as built, so a drop widens by dropEdgeSectors and no more.
+    const int n = config_.sectorCount;
+    std::array<bool, kMaxSectors> drop{};
+    for (int s = 0; s < n; ++s) {
+        const Sector& c = sectors_.sectors[static_cast<std::size_t>(s)];
+        drop[static_cast<std::size_t>(s)] = c.state == SectorState::Obstacle && c.kind == ObstacleKind::Negative;
+    }
+    for (int s = 0; s < n; ++s) {
+        Sector& out = sectors_.sectors[static_cast<std::size_t>(s)];
+        if (out.state != SectorState::Clear) {
+            continue;
+        }
+        const Sector* nearest = nullptr;
+        for (int k = std::max(0, s - config_.dropEdgeSectors); k <= std::min(n - 1, s + config_.dropEdgeSectors); ++k) {
+            const Sector& c = sectors_.sectors[static_cast<std::size_t>(k)];
+            if (drop[static_cast<std::size_t>(k)] && (nearest == nullptr || c.rangeM < nearest->rangeM)) {
+                nearest = &c;
+            }
+        }
+        if (nearest != nullptr) {
+            out.state = SectorState::Obstacle;
+            out.kind = ObstacleKind::Negative;
+            out.rangeM = nearest->rangeM;
+            out.heightM = nearest->heightM;
+            out.confidence = 0.5F * nearest->confidence; // inferred from the neighbour, not seen
+            out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
+        }
+    }
 }
 
 } // namespace ugv::vision

@@ -143,6 +143,7 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileMinRangeM = 0.0F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileResidualPx = -1.0F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileMinPixels = 0; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropEdgeSectors = -1; }));
 }
 
 TEST(SectorBuilder, FlatGroundIsClearEverywhere)
@@ -254,6 +255,59 @@ TEST(SectorBuilder, NegativeFloorGivesNegativeKind)
     // The range of a drop is its near rim: the ray that sees the floor at 4 m crosses the ground at 4 h / (h + depth).
     EXPECT_NEAR(ahead.rangeM, 4.0 * kHeightM / (kHeightM + kDepthM), 0.12);
     EXPECT_NEAR(ahead.heightM, kDepthM, 0.03);
+}
+
+TEST(SectorBuilder, ClearSectorsBesideADropReportItAndNoFurther)
+{
+    // A hole's floor 0.3 m deep seen over 4..5 m, 0.3 m either side of the axis: the sectors it covers are
+    // negative; the dropEdgeSectors on each side take over the nearer neighbour's drop; farther ones stay Clear.
+    cv::Mat d16 = groundDisparity();
+    paintSunkenGround(d16, 0.3, 4.0, 5.0, 0.3);
+    const auto build = [&d16](int edge) {
+        SectorBuilderConfig config;
+        config.dropEdgeSectors = edge;
+        auto sut = makeBuilder(config);
+        EXPECT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+        return sut.sectors();
+    };
+    const ObstacleSectors seen = build(0);
+    const ObstacleSectors widened = build(2);
+    int first = -1;
+    int last = -1;
+    for (int i = 0; i < seen.count; ++i) {
+        const Sector& s = seen.sectors[static_cast<std::size_t>(i)];
+        if (s.state == SectorState::Obstacle && s.kind == ObstacleKind::Negative) {
+            first = first < 0 ? i : first;
+            last = i;
+        }
+    }
+    ASSERT_GE(first, 2);
+    ASSERT_LE(last, seen.count - 3);
+    for (int i = first; i <= last; ++i) {
+        EXPECT_EQ(widened.sectors[static_cast<std::size_t>(i)].rangeM,
+                  seen.sectors[static_cast<std::size_t>(i)].rangeM);
+    }
+    // Only Clear sectors change (the one beside the drop may be Unknown from the rim's stray votes).
+    int widenedCount = 0;
+    for (const int i : {first - 2, first - 1, last + 1, last + 2}) {
+        const Sector& before = seen.sectors[static_cast<std::size_t>(i)];
+        const Sector& after = widened.sectors[static_cast<std::size_t>(i)];
+        const Sector& edge = seen.sectors[static_cast<std::size_t>(i < first ? first : last)];
+        if (before.state != SectorState::Clear) {
+            EXPECT_EQ(after.state, before.state) << i;
+            continue;
+        }
+        ++widenedCount;
+        EXPECT_EQ(after.state, SectorState::Obstacle) << i;
+        EXPECT_EQ(after.kind, ObstacleKind::Negative) << i;
+        EXPECT_EQ(after.rangeM, edge.rangeM) << i;
+        EXPECT_EQ(after.danger, edge.danger) << i;
+        EXPECT_LT(after.confidence, edge.confidence) << i;
+    }
+    EXPECT_GE(widenedCount, 2);
+    for (const int i : {first - 3, last + 3}) {
+        EXPECT_EQ(widened.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << i;
+    }
 }
 
 /// Rows where a trench whose near rim is at `rimM` shows its far wall at `wallM`: from the ground (z = 0) down to
@@ -500,7 +554,8 @@ void expectMatchesGroundTruth(const char* name, double rangeM, double bearingDeg
             }
         }
     }
-    const SectorBuilderConfig config;
+    SectorBuilderConfig config;
+    config.dropEdgeSectors = 0; // perfect inputs show a hole's rim to its ends: no widening beyond the truth
     auto sut = makeBuilder(config);
 
     ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 9U, 0), BuildStatus::Ok);

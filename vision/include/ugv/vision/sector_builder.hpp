@@ -77,6 +77,8 @@ struct SectorBuilderConfig {
     float dropProfileMinRangeM = 5.0F;  ///< [m] nearer drops are left to the per-pixel votes
     float dropProfileResidualPx = 1.0F; ///< [px] (empty ground: row means within +-0.7 px at 9 m measured)
     int dropProfileMinPixels = 6;
+    int dropEdgeSectors = 2;           ///< Clear sectors this near a negative obstacle report it (a hole's rim
+                                       ///< thins out at its lateral ends); 0 disables
     float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
     float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
     float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
@@ -167,6 +169,8 @@ private:
     std::vector<double> boundarySin_;
     /// Nearest far drop of sector s by the row profile, or a Cluster with no votes.
     [[nodiscard]] Cluster profileDrop(int s) const noexcept;
+    /// Clear sectors within dropEdgeSectors of a negative obstacle take it over (see the definition).
+    void widenDrops() noexcept;
 
     int profileRows_ = 0;                 ///< analysed rows (firstRow .. roi bottom)
     std::vector<std::uint32_t> rowCount_; ///< [sector][row] valid pixels
