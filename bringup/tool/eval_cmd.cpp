@@ -70,6 +70,7 @@ struct SimOptions {
     std::vector<double> overhangRanges; ///< [m]
     std::vector<std::string> types;     ///< obstacle types to run (empty: all)
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
+    bool groundPrior = false; ///< RoiMatcherConfig::groundPrior
 };
 
 const char* textureName(sim::GroundTexture t)
@@ -90,7 +91,7 @@ const char* textureName(sim::GroundTexture t)
 /// One detector for the default rig (level, 0.59 m), fed with rendered frames; the ground prior is the rig mount.
 class SimDetector {
 public:
-    static Result<SimDetector, Error> create(vision::MatcherMode matcher)
+    static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior)
     {
         const sim::Rig rig;
         vision::StereoCalibration calib = vision::makeRectifiedCalibration(
@@ -98,6 +99,7 @@ public:
         calib.mount = vision::Mount{rig.heightM, rig.pitchDeg, rig.rollDeg};
         vision::DetectorConfig config = detectorConfig(DetectionOptions{});
         config.matcher.mode = matcher;
+        config.matcher.groundPrior = groundPrior;
         vision::RectifierConfig rectConfig;
         rectConfig.roiMarginRows = config.marginRows;
         auto rectifier = vision::Rectifier::create(calib, rectConfig);
@@ -148,7 +150,7 @@ bool honoursBearing(const std::string& type)
 /// @return 0 when everything ran, 1 on a render/detector failure.
 int runSimSuite(const SimOptions& o, std::ostringstream& json)
 {
-    auto detectorResult = SimDetector::create(o.matcher);
+    auto detectorResult = SimDetector::create(o.matcher, o.groundPrior);
     if (!detectorResult) {
         std::cerr << "ugvsense eval: error: " << detectorResult.error().message() << '\n';
         return 1;
@@ -459,15 +461,16 @@ int runEval(int argc, char** argv)
 {
     Args args(
         "eval",
-        "[--sim] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] [--json OUT] [--data "
-        "DIR] "
-        "[--skip-missing]",
+        "[--sim] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] [--ground-prior] "
+        "[--json OUT] [--data DIR] [--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
          {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
          {"quick", "", "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0)", false},
          {"types", "LIST", "simulator: only these obstacle types, comma-separated (ugvsense sim --list)", false},
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
+         {"ground-prior", "", "simulator: census SGM's top path follows the ground (RoiMatcherConfig::groundPrior)",
+          false},
          {"json", "OUT", "write all figures as JSON", false},
          {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
          {"skip-missing", "", "exit 77 (skipped) when the Middlebury data are missing", false}});
@@ -556,6 +559,7 @@ int runEval(int argc, char** argv)
             }
         }
         o.matcher = matcher;
+        o.groundPrior = args.has("ground-prior");
         if (const int rc = runSimSuite(o, json); rc != 0) {
             return rc;
         }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -161,6 +162,10 @@ Result<CensusSgm, Error> CensusSgm::create(const CensusSgmConfig& config, cv::Si
     if (config.paths != 2 && config.paths != 3 && config.paths != 5) {
         return Unexpected(configError("paths " + std::to_string(config.paths) + " is not 2, 3 or 5"));
     }
+    if (!(config.groundPriorTolerancePx >= 0.0 && config.groundPriorTolerancePx <= 16.0)) {
+        return Unexpected(configError("groundPriorTolerancePx " + std::to_string(config.groundPriorTolerancePx) +
+                                      " is not in [0, 16]"));
+    }
     if (size.width <= d || size.height < 1) {
         return Unexpected(configError("image " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                                       " is not wider than numDisparities " + std::to_string(d)));
@@ -257,7 +262,19 @@ void CensusSgm::costRow(int y) noexcept
     }
 }
 
-void CensusSgm::aggregateRow(std::int16_t* disp) noexcept
+void CensusSgm::setGroundPrior(double a, double b, double c) noexcept
+{
+    if (!(std::isfinite(a) && std::isfinite(b) && std::isfinite(c)) || std::abs(b) > 4.0) {
+        groundPrior_ = false; // a step over 4 px a row would leave the path's pads
+        return;
+    }
+    groundPrior_ = true;
+    groundA_ = a;
+    groundB_ = b;
+    groundC_ = c;
+}
+
+void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int y) noexcept
 {
     const bool useSimd = config_.simd;
     const bool vertical = config_.paths >= 3;
@@ -276,6 +293,13 @@ void CensusSgm::aggregateRow(std::int16_t* disp) noexcept
         return static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
     };
     std::uint8_t* border = horizontal_.data() + kPad; // never written: all 255
+    // The ground's step from the row above to this one (see setGroundPrior); the row above's ground at column x is
+    // aboveGround0 + groundA_ x.
+    const int groundStep = groundPrior_ && above != nullptr
+                               ? static_cast<int>(std::lround(groundB_ * y) - std::lround(groundB_ * (y - 1)))
+                               : 0;
+    const double aboveGround0 = groundB_ * (y - 1) + groundC_;
+    const double tolerance16 = config_.groundPriorTolerancePx * kScale;
     const auto horizontal = [this](int i) { return horizontal_.data() + (1 + (i & 1)) * stride_ + kPad; };
 
     // Forward: left-to-right, top, top-left and top-right; their sum into sum_.
@@ -290,7 +314,15 @@ void CensusSgm::aggregateRow(std::int16_t* disp) noexcept
         const std::uint8_t* top = zeros_.data();
         if (vertical) {
             std::uint8_t* t = pathEntry(cur, 0, e);
-            pathMin_[minIndex(cur, 0, e)] = step(pathEntry(prev, 0, e), pathMin_[minIndex(prev, 0, e)], cost, t);
+            int shift = 0;
+            if (groundStep != 0) {
+                const int x = x0_ + i;
+                const double onGround = above[x] >= 0 ? above[x] - kScale * (aboveGround0 + groundA_ * x) : 1e9;
+                shift = std::abs(onGround) < tolerance16 ? groundStep : 0;
+            }
+            // Entry k continues entry k - shift of the row above; the pads (255) stand in past the range ends.
+            pathMin_[minIndex(cur, 0, e)] =
+                step(pathEntry(prev, 0, e) - shift, pathMin_[minIndex(prev, 0, e)], cost, t);
             top = t;
         }
         const std::uint8_t* topLeft = zeros_.data();
@@ -421,7 +453,7 @@ bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& di
         auto* disp = disp16.ptr<std::int16_t>(y);
         std::fill(disp, disp + x0_, kInvalid);
         costRow(y);
-        aggregateRow(disp);
+        aggregateRow(disp, y > 0 ? disp16.ptr<std::int16_t>(y - 1) : nullptr, y);
         leftRightCheck(disp);
     }
     if (config_.speckleWindowSize > 0) {

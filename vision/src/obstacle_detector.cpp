@@ -7,6 +7,16 @@
 
 namespace ugv::vision {
 
+namespace {
+
+/// The matcher's ground prior (RoiMatcher::setGroundPrior) from a full-frame disparity plane.
+void setGroundPrior(RoiMatcher& matcher, const DisparityPlane& p, Rect roi) noexcept
+{
+    matcher.setGroundPrior(p.a, p.b, p.c + p.a * roi.x + p.b * roi.y);
+}
+
+} // namespace
+
 Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& config,
                                                          const RectifiedProjection& projection, Rect roi,
                                                          const GroundPlane& configuredGround)
@@ -67,6 +77,7 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
     sut.projection_ = projection;
     sut.ground_ = configuredGround;
     sut.roi_ = roi;
+    setGroundPrior(sut.matcher_, configuredGround.disparityPlane(projection), roi);
     return sut;
 }
 
@@ -89,6 +100,7 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
     }
     const GroundEstimate& estimate = estimator_.update(matcher_.disparityView());
     ground_ = estimate.plane;
+    setGroundPrior(matcher_, estimate.disparity, roi_); // for the next frame's top path
     ConstImageViewU8 labels;
     if (warpGround(rectLeftRoi, estimate.disparity, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok &&
         mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, estimate.disparity, roi_.y) ==

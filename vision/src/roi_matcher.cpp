@@ -94,6 +94,13 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
     return sut;
 }
 
+void RoiMatcher::setGroundPrior(double a, double b, double c) noexcept
+{
+    if (census_ && config_.groundPrior) {
+        census_->setGroundPrior(a, b, c - a * pad_); // padded column x_p = x + pad_
+    }
+}
+
 MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right) noexcept
 {
     const auto sizeOk = [this](ConstImageViewU8 v) {

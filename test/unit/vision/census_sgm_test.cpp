@@ -10,6 +10,7 @@
 #include "alloc_counter.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
+#include "ugv/vision/ground_plane.hpp"
 
 namespace ugv::vision {
 namespace {
@@ -62,6 +63,7 @@ TEST(CensusSgm, CreateRejectsInvalidConfig)
     EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.p1 = 0; }));
     EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.uniquenessRatio = 100; }));
     EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.speckleRange = -1; }));
+    EXPECT_TRUE(rejects([](CensusSgmConfig& c) { c.groundPriorTolerancePx = -1.0; }));
     EXPECT_TRUE(rejects([](CensusSgmConfig&) {}, cv::Size(64, kHeight))); // not wider than the search range
     const auto error = CensusSgm::create(CensusSgmConfig{.p2 = 5}, cv::Size(kWidth, kHeight)).error();
     EXPECT_NE(error.message().find("p2"), std::string::npos) << error.message();
@@ -141,6 +143,56 @@ TEST(CensusSgm, SimdMatchesScalar)
 
     EXPECT_EQ(cv::countNonZero(a != b), 0);
     EXPECT_GT(cv::countNonZero(a >= 0), roi.area() / 2); // a real disparity map, not two empty ones
+}
+
+/// Mean error [px] of `disp` against the simulator's truth over ground pixels of full-frame rows [y0, y1).
+double meanGroundError(const cv::Mat& disp, const sim::RenderResult& truth, int y0, int y1)
+{
+    double sum = 0.0;
+    int n = 0;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = 140; x < disp.cols; ++x) {
+            const std::int16_t d = disp.at<std::int16_t>(y, x);
+            if (d >= 0 && truth.height.at<float>(y, x) == 0.0F && truth.disparity.at<float>(y, x) > 0.0F) {
+                sum += d / 16.0 - truth.disparity.at<float>(y, x);
+                ++n;
+            }
+        }
+    }
+    EXPECT_GT(n, 1000);
+    return n > 0 ? sum / n : 0.0;
+}
+
+TEST(CensusSgm, GroundPriorRemovesTheTopPathsLagOnTheGround)
+{
+    auto scene = sim::makeScene("empty", 5.0, 0.0, sim::GroundTexture::Asphalt, 1);
+    ASSERT_TRUE(scene.has_value());
+    auto frame = sim::render(*scene);
+    ASSERT_TRUE(frame.has_value());
+    const sim::Rig rig;
+    const DisparityPlane ground =
+        GroundPlane::fromMount(Mount{rig.heightM, rig.pitchDeg, rig.rollDeg})
+            .disparityPlane(RectifiedProjection{rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM});
+    const cv::Size size = frame->left.size();
+    cv::Mat plain(size, CV_16SC1);
+    cv::Mat followed(size, CV_16SC1);
+    cv::Mat refused(size, CV_16SC1);
+    auto sut = makeSut(CensusSgmConfig{}, size);
+    ASSERT_TRUE(sut.match(viewOf(frame->left), viewOf(frame->right), plain));
+    sut.setGroundPrior(ground.a, ground.b, ground.c);
+    ASSERT_TRUE(sut.match(viewOf(frame->left), viewOf(frame->right), followed));
+    sut.setGroundPrior(ground.a, std::nan(""), ground.c); // refused: the plain top path
+    ASSERT_TRUE(sut.match(viewOf(frame->left), viewOf(frame->right), refused));
+
+    for (const auto& [y0, y1] : {std::pair{260, 300}, std::pair{300, 470}}) {
+        const double before = meanGroundError(plain, *frame, y0, y1);
+        const double after = meanGroundError(followed, *frame, y0, y1);
+        std::printf("[ MEASURED ] rows %d..%d: mean error on the ground %+.3f px plain, %+.3f px with the prior\n", y0,
+                    y1, before, after);
+        EXPECT_LT(before, -0.1); // the lag this fixes
+        EXPECT_LT(std::abs(after), 0.08);
+    }
+    EXPECT_EQ(cv::countNonZero(plain != refused), 0);
 }
 
 TEST(CensusSgm, NoAllocationPerMatch)
