@@ -5,6 +5,7 @@
 
 #include "ugv/bringup/correlate_io.hpp"
 #include "ugv/bringup/correlator_dds.hpp"
+#include "ugv/ipc/dds_convert.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/platform/log.hpp"
 
@@ -68,9 +69,9 @@ Result<std::unique_ptr<LiveCorrelator>, Error> LiveCorrelator::create(ipc::dds::
                                                                       const LiveCorrelatorOptions& options)
 {
     if (!(options.periodS > 0.0) || !(options.reorderMs >= 0.0) || !(options.startupHoldMs >= 0.0) ||
-        !(options.maxRatePerSource > 0.0)) {
-        return Unexpected(Error{"correlator", "period, reorder time or rate out of range",
-                                "period_s > 0, reorder_ms >= 0, max_rate_per_source > 0"});
+        !(options.maxRatePerSource > 0.0) || !(options.maxClockSkewMs >= 0.0)) {
+        return Unexpected(Error{"correlator", "period, reorder time, rate or clock skew out of range",
+                                "period_s > 0, reorder_ms >= 0, max_rate_per_source > 0, max_clock_skew_ms >= 0"});
     }
     std::unique_ptr<LiveCorrelator> c(new LiveCorrelator(options));
     auto obs = bus.reader<msg::OoiObservation>();
@@ -131,6 +132,17 @@ bool LiveCorrelator::admit(const std::string& sender, std::uint64_t sequence,
     const std::string participant(reinterpret_cast<const char*>(prefix.value), sizeof(prefix.value));
     Bucket& b = buckets_[participant];
     const std::int64_t sourceNs = info.source_timestamp.to_ns();
+    const std::int64_t aheadNs = sourceNs - ipc::dds::realtimeNowNs();
+    if (static_cast<double>(aheadNs) > options_.maxClockSkewMs * 1e6) {
+        ++stats_.flooded;
+        if (++stats_.aheadOfClock == 1) {
+            warn("correlator: '" + sender + "' stamps its samples " + std::to_string(aheadNs / 1'000'000) +
+                 " ms ahead of this host's clock, more than correlator.max_clock_skew_ms (" +
+                 std::to_string(options_.maxClockSkewMs) +
+                 "): they are refused and counted; synchronise the hosts' clocks (chrony) or raise the skew");
+        }
+        return false; // not marked as seen, as below
+    }
     if (b.lastSourceNs == 0) {
         b.tokens = options_.maxRatePerSource;
     } else if (sourceNs > b.lastSourceNs) {

@@ -22,7 +22,11 @@
 ///
 /// Flood guard: a token bucket per participant over the samples' source timestamps (`maxRatePerSource` per
 /// second, a burst of one second's worth). A writer's history replayed to a late or restarted reader keeps its
-/// original timestamps and passes; a participant writing faster than the rate is refused beyond it, counted.
+/// original timestamps and passes; a participant writing faster than the rate is refused beyond it, counted. A
+/// sample stamped more than `maxClockSkewMs` ahead of this host's clock is refused too (counted apart): a sender
+/// could otherwise buy itself tokens by stamping its samples far apart, so the guard bounds what any participant
+/// gets through by the rate times the real time elapsed (plus the skew). Hosts must keep their clocks within the
+/// skew of each other (chrony / NTP); a warning names a sender that does not.
 ///
 /// Thread-safety: thread-bound (one task). RT-safe: no; it runs at the lowest priority, never on the frame path.
 
@@ -53,17 +57,19 @@ struct LiveCorrelatorOptions {
     /// team's transient-local histories, which come all at once and, on a lossy link, repaired over seconds.
     double startupHoldMs = 10000.0;
     double maxRatePerSource = 2000.0;
-    std::string logDir;         ///< empty: no logs
-    bool publish = true;        ///< publish ugvsense/ooi/correlated (false: a viewer such as correlate --from-dds)
-    std::string source = "gcs"; ///< the source name of the published list
+    double maxClockSkewMs = 5000.0; ///< [ms] samples stamped further ahead of this host's clock are refused
+    std::string logDir;             ///< empty: no logs
+    bool publish = true;            ///< publish ugvsense/ooi/correlated (false: a viewer such as correlate --from-dds)
+    std::string source = "gcs";     ///< the source name of the published list
 };
 
 struct LiveCorrelatorStats {
-    std::uint64_t received = 0;   ///< samples taken from the readers
-    std::uint64_t rejected = 0;   ///< refused by the checks (malformed, hostile)
-    std::uint64_t duplicates = 0; ///< (sender, sequence) seen before
-    std::uint64_t flooded = 0;    ///< refused by the flood guard
-    std::uint64_t refused = 0;    ///< given to the correlator and refused (out of time order, unknown id)
+    std::uint64_t received = 0;     ///< samples taken from the readers
+    std::uint64_t rejected = 0;     ///< refused by the checks (malformed, hostile)
+    std::uint64_t duplicates = 0;   ///< (sender, sequence) seen before
+    std::uint64_t flooded = 0;      ///< refused by the flood guard (aheadOfClock included)
+    std::uint64_t aheadOfClock = 0; ///< of them: stamped more than maxClockSkewMs ahead of this host's clock
+    std::uint64_t refused = 0;      ///< given to the correlator and refused (out of time order, unknown id)
     std::uint64_t applied = 0;
     std::uint64_t published = 0; ///< correlated lists written
     std::size_t waiting = 0;     ///< in the reorder buffer now

@@ -103,11 +103,12 @@ std::string formatBusReport(const RunResult& r)
         const LiveCorrelatorStats& c = *r.correlator;
         std::snprintf(line, sizeof(line),
                       "correlator: %llu input(s) received, %llu applied, %llu refused as malformed, %llu duplicate(s), "
-                      "%llu refused by the flood guard, %llu refused by the correlator; %llu list(s) published\n",
+                      "%llu refused by the flood guard (%llu stamped ahead of this host's clock), %llu refused by the "
+                      "correlator; %llu list(s) published\n",
                       static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.applied),
                       static_cast<unsigned long long>(c.rejected), static_cast<unsigned long long>(c.duplicates),
-                      static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.refused),
-                      static_cast<unsigned long long>(c.published));
+                      static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.aheadOfClock),
+                      static_cast<unsigned long long>(c.refused), static_cast<unsigned long long>(c.published));
         out += line;
     }
     return out;
@@ -123,6 +124,7 @@ LiveCorrelatorOptions correlatorOptions(const bringup::ServiceConfig& config)
     o.reorderMs = config.correlator.reorderMs;
     o.startupHoldMs = config.correlator.startupHoldMs;
     o.maxRatePerSource = config.correlator.maxRatePerSource;
+    o.maxClockSkewMs = config.correlator.maxClockSkewMs;
     o.logDir = config.correlator.logDir;
     o.source = config.vehicleId;
     return o;

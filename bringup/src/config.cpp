@@ -195,6 +195,10 @@ std::vector<KeySpec> baseKeys()
         numberKey("correlator.max_rate_per_source", Kind::Double, 1, 1e6,
                   "inputs per second one participant may send; beyond it they are refused and counted (a flood)",
                   UGV_REF(correlator.maxRatePerSource)),
+        numberKey("correlator.max_clock_skew_ms", Kind::Double, 0, 3600000,
+                  "inputs stamped further ahead of this host's clock are refused and counted (keep the hosts' clocks "
+                  "synchronised) [ms]",
+                  UGV_REF(correlator.maxClockSkewMs)),
     };
     return keys;
 }

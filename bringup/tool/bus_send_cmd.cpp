@@ -326,7 +326,8 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, int waitReaders, d
 }
 
 /// --hostile: what a broken or malicious participant could send, then a flood.
-int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS, std::uint64_t flood)
+int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS, std::uint64_t flood,
+                std::uint64_t aheadFlood)
 {
     const std::string source = args.get("source", "bus-send");
     auto writers = InputWriters::create(bus);
@@ -515,8 +516,29 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
     std::printf("flood: %llu valid observation(s) of ugv '%s' in %.2f s (%.0f per second)\n",
                 static_cast<unsigned long long>(flooded), source.c_str(), seconds,
                 seconds > 0.0 ? static_cast<double>(flooded) / seconds : 0.0);
+    // A sender faking its clock: source stamps one second apart from now on, written as fast as possible. A guard
+    // metering source time alone would see one sample per second.
+    const std::int64_t stamp0 = dds::realtimeNowNs();
+    std::uint64_t ahead = 0;
+    for (; flooded == flood && ahead < aheadFlood; ++ahead) {
+        auto s = observation();
+        s.track("ahead");
+        const auto until = Clock::now() + kRefusedWriteTimeout;
+        bool written = false;
+        while (!(written = w.observations.writeStamped(s, stamp0 + static_cast<std::int64_t>(ahead) * 1'000'000'000)) &&
+               !bus::g_stop.load() && Clock::now() < until) {
+        }
+        if (!written) {
+            break;
+        }
+        ++w.sent[0];
+    }
+    if (aheadFlood > 0) {
+        std::printf("ahead-flood: %llu valid observation(s) stamped 1 s apart from now on\n",
+                    static_cast<unsigned long long>(ahead));
+    }
     std::fflush(stdout);
-    if (flooded < flood) {
+    if (flooded < flood || ahead < aheadFlood) {
         return bus::g_stop.load()
                    ? 1
                    : fail(Error{"ugvsense " + std::string(kCommand) + " --flood",
@@ -614,24 +636,27 @@ int runBusSend(int argc, char** argv)
          false},
         {"duration", "S", "--poses: how long, default 10", false},
         {"flood", "N", "--hostile: valid observations sent as fast as possible, default 5000", false},
+        {"ahead-flood", "N",
+         "--hostile: then N valid observations stamped 1 s apart from now on (a faked clock), default 0", false},
         {"wait-readers", "N", "wait up to 20 s for N readers of the observation (--poses: pose) topic, default 1",
          false},
         {"linger", "S", "stay S more seconds after the acknowledgements (late readers get the history)", false}};
     for (auto& spec : bus::options()) {
         specs.push_back(std::move(spec));
     }
-    Args args(kCommand,
-              "(--input OBS.jsonl [--source NAME] [--only-ugv NAME] [--rate HZ] | --hostile [--flood N] | "
-              "--poses VEHICLE [--rate HZ] [--duration S]) [--wait-readers N] [--linger S] [--domain N] "
-              "[--partition P] [--ros-namespace NS] [--discovery-server LIST]\n"
-              "  A test sender for the DDS bus. --input publishes each line of a correlator input file on its topic\n"
-              "  (observations, uav, confirmations, pose_corrections) with sequence_number = its line number, so a\n"
-              "  restarted sender's repeats are duplicates. --hostile sends samples that break the input checks (NaN\n"
-              "  time/range/latitude, latitude +-91, longitude 200, class 9, state 7, empty names, since_t > until_t)\n"
-              "  and then floods valid observations. --poses publishes poses (stamp = CLOCK_REALTIME) of a vehicle\n"
-              "  on a 10 m circle. The reliable modes end when every matched reader acknowledged everything (60 s\n"
-              "  at most, else exit 1).",
-              specs);
+    Args args(
+        kCommand,
+        "(--input OBS.jsonl [--source NAME] [--only-ugv NAME] [--rate HZ] | --hostile [--flood N] [--ahead-flood N] | "
+        "--poses VEHICLE [--rate HZ] [--duration S]) [--wait-readers N] [--linger S] [--domain N] "
+        "[--partition P] [--ros-namespace NS] [--discovery-server LIST]\n"
+        "  A test sender for the DDS bus. --input publishes each line of a correlator input file on its topic\n"
+        "  (observations, uav, confirmations, pose_corrections) with sequence_number = its line number, so a\n"
+        "  restarted sender's repeats are duplicates. --hostile sends samples that break the input checks (NaN\n"
+        "  time/range/latitude, latitude +-91, longitude 200, class 9, state 7, empty names, since_t > until_t)\n"
+        "  and then floods valid observations (--ahead-flood: then more, stamped 1 s apart). --poses publishes\n"
+        "  poses (stamp = CLOCK_REALTIME) of a vehicle on a 10 m circle. The reliable modes end when every\n"
+        "  matched reader acknowledged everything (60 s at most, else exit 1).",
+        specs);
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }
@@ -651,7 +676,8 @@ int runBusSend(int argc, char** argv)
     };
     for (const auto& e :
          {only("only-ugv", "--input", args.has("input")), only("flood", "--hostile", args.has("hostile")),
-          only("duration", "--poses", args.has("poses")), only("rate", "--input or --poses", !args.has("hostile"))}) {
+          only("ahead-flood", "--hostile", args.has("hostile")), only("duration", "--poses", args.has("poses")),
+          only("rate", "--input or --poses", !args.has("hostile"))}) {
         if (e) {
             return reportUsageError(kCommand, *e);
         }
@@ -673,7 +699,8 @@ int runBusSend(int argc, char** argv)
     const auto linger = args.number("linger", 0.0, 0.0, kMaxLingerS);
     const auto readers = wholeNumber(args, "wait-readers", 1, 0, kMaxReaders);
     const auto flood = wholeNumber(args, "flood", 5000, 0, kMaxFlood);
-    for (const auto* n : {&rate, &duration, &linger, &readers, &flood}) {
+    const auto aheadFlood = wholeNumber(args, "ahead-flood", 0, 0, kMaxFlood);
+    for (const auto* n : {&rate, &duration, &linger, &readers, &flood, &aheadFlood}) {
         if (!*n) {
             return reportUsageError(kCommand, n->error());
         }
@@ -693,7 +720,8 @@ int runBusSend(int argc, char** argv)
         return sendInput(b, args, args.has("rate") ? *rate : 0.0, waitReaders, *linger);
     }
     if (args.has("hostile")) {
-        return sendHostile(b, args, waitReaders, *linger, static_cast<std::uint64_t>(*flood));
+        return sendHostile(b, args, waitReaders, *linger, static_cast<std::uint64_t>(*flood),
+                           static_cast<std::uint64_t>(*aheadFlood));
     }
     return sendPoses(b, args.get("poses"), *rate, *duration, waitReaders, *linger);
 }

@@ -97,6 +97,7 @@ struct CorrelatorTaskConfig {
     double startupHoldMs = 10000.0; ///< [ms] after the first input nothing is applied this long (the team's histories)
     std::string logDir;             ///< inputs.jsonl (every accepted input, in processing order) and snapshots.jsonl
     double maxRatePerSource = 2000.0; ///< [1/s] inputs from one participant beyond this rate are refused (a flood)
+    double maxClockSkewMs = 5000.0;   ///< [ms] inputs stamped further ahead of this host's clock are refused
 };
 
 struct ServiceConfig {

@@ -122,6 +122,16 @@ public:
     explicit Writer(eprosima::fastdds::dds::DataWriter* writer) : writer_(writer) {}
     /// False when Fast DDS refused the sample (a full keep-all history past its blocking time, or no writer).
     bool write(const T& sample) { return writer_ != nullptr && writer_->write(const_cast<T*>(&sample)); }
+    /// write() with the given source timestamp instead of this host's clock [ns since the epoch] (tests: a sender
+    /// whose clock runs ahead).
+    bool writeStamped(const T& sample, std::int64_t sourceNs)
+    {
+        const eprosima::fastrtps::Time_t stamp(static_cast<std::int32_t>(sourceNs / 1'000'000'000),
+                                               static_cast<std::uint32_t>(sourceNs % 1'000'000'000));
+        return writer_ != nullptr &&
+               writer_->write_w_timestamp(const_cast<T*>(&sample), eprosima::fastdds::dds::HANDLE_NIL, stamp) ==
+                   eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+    }
     /// Readers matched now.
     [[nodiscard]] int matched() const;
     /// Waits until every matched reliable reader acknowledged every sample written so far.
