@@ -25,36 +25,61 @@ struct WindowCost {
     int contrast = 0; ///< sum |L - mean L|, 1/16 grey
 };
 
-WindowCost zsad(ConstImageViewU8 left, ConstImageViewU8 right, int x, int v, int d16, int hw, int hh) noexcept
-{
-    int l16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
-    int r16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
-    int n = 0;
-    int sumL = 0;
-    int sumR = 0;
-    for (int j = -hh; j <= hh; ++j) {
-        const std::uint8_t* l = left.row(v + j);
-        const std::uint8_t* r = right.row(v + j);
-        for (int i = -hw; i <= hw; ++i) {
-            const int xr16 = (x + i) * kSub - d16;
-            const int xi = xr16 >> 4;
-            const int f = xr16 & (kSub - 1);
-            l16[n] = kSub * l[x + i];
-            r16[n] = (kSub - f) * r[xi] + f * r[xi + 1];
-            sumL += l16[n];
-            sumR += r16[n];
-            ++n;
+/// The left window of one pixel, zero-mean, prepared once for the costs at several disparities.
+class LeftWindow {
+public:
+    LeftWindow(ConstImageViewU8 left, int x, int v, int hw, int hh) noexcept : x_(x), v_(v), hw_(hw), hh_(hh)
+    {
+        int sum = 0;
+        for (int j = -hh; j <= hh; ++j) {
+            const std::uint8_t* l = left.row(v + j);
+            for (int i = -hw; i <= hw; ++i) {
+                l16_[n_] = kSub * l[x + i];
+                sum += l16_[n_++];
+            }
+        }
+        const int mean = sum / n_;
+        for (int k = 0; k < n_; ++k) {
+            l16_[k] -= mean;
+            contrast_ += std::abs(l16_[k]);
         }
     }
-    const int meanL = sumL / n;
-    const int meanR = sumR / n;
-    WindowCost out;
-    for (int k = 0; k < n; ++k) {
-        out.cost += std::abs((l16[k] - meanL) - (r16[k] - meanR));
-        out.contrast += std::abs(l16[k] - meanL);
+    [[nodiscard]] int contrast() const noexcept { return contrast_; }
+
+    /// The window's zero-mean SAD against the right image at disparity d16 (with the left's contrast).
+    [[nodiscard]] WindowCost at(ConstImageViewU8 right, int d16) const noexcept
+    {
+        int r16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
+        int n = 0;
+        int sum = 0;
+        for (int j = -hh_; j <= hh_; ++j) {
+            const std::uint8_t* r = right.row(v_ + j);
+            for (int i = -hw_; i <= hw_; ++i) {
+                const int xr16 = (x_ + i) * kSub - d16;
+                const int xi = xr16 >> 4;
+                const int f = xr16 & (kSub - 1);
+                r16[n] = (kSub - f) * r[xi] + f * r[xi + 1];
+                sum += r16[n++];
+            }
+        }
+        const int mean = sum / n;
+        WindowCost out;
+        out.contrast = contrast_;
+        for (int k = 0; k < n; ++k) {
+            out.cost += std::abs(l16_[k] - (r16[k] - mean));
+        }
+        return out;
     }
-    return out;
-}
+
+private:
+    int l16_[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
+    int n_ = 0;
+    int contrast_ = 0;
+    int x_;
+    int v_;
+    int hw_;
+    int hh_;
+};
 
 /// True when the window of half width `hw` at column x and disparity d16 lies inside both images of width w.
 bool windowInside(int x, int d16, int hw, int w) noexcept
@@ -149,13 +174,14 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
                 ++counts_.undecided;
                 continue;
             }
-            const WindowCost atD = zsad(left, right, x, v, d16, hw, hh);
-            if (atD.contrast < (d16 < dg16 ? minContrastBelow16 : minContrast16)) {
+            const LeftWindow window(left, x, v, hw, hh);
+            if (window.contrast() < (d16 < dg16 ? minContrastBelow16 : minContrast16)) {
                 dst[x] = kInvalid; // no texture to tell: the disparity is the matcher's guess
                 ++counts_.undecided;
                 continue;
             }
-            const WindowCost atGround = zsad(left, right, x, v, dg16, hw, hh);
+            const WindowCost atD = window.at(right, d16);
+            const WindowCost atGround = window.at(right, dg16);
             if (static_cast<long>(atD.cost) * 1024 >= ratio1024 * atGround.cost) {
                 dst[x] = kInvalid;
                 ++counts_.rejected;
@@ -183,16 +209,17 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
         ++counts_.undecided;
         return static_cast<std::int16_t>(d16); // the window leaves the image: kept as matched
     }
-    const WindowCost atGround = zsad(left, right, x, v, dg16, hw, hh);
-    if (atGround.contrast < minContrast16) {
+    const LeftWindow window(left, x, v, hw, hh);
+    if (window.contrast() < minContrast16) {
         ++counts_.undecided;
         return kInvalid; // no texture to tell
     }
     // Coarse search in 1/2 px steps, then 1/8 px steps around the coarse best.
     int best = lo;
-    int bestCost = zsad(left, right, x, v, lo, hw, hh).cost;
+    const WindowCost atGround = window.at(right, dg16);
+    int bestCost = window.at(right, lo).cost;
     for (int d = lo + kSub / 2; d <= hi; d += kSub / 2) {
-        const int cost = zsad(left, right, x, v, d, hw, hh).cost;
+        const int cost = window.at(right, d).cost;
         if (cost < bestCost) {
             bestCost = cost;
             best = d;
@@ -203,7 +230,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
         if (d == coarse) {
             continue;
         }
-        const int cost = zsad(left, right, x, v, d, hw, hh).cost;
+        const int cost = window.at(right, d).cost;
         if (cost < bestCost) {
             bestCost = cost;
             best = d;
@@ -217,7 +244,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     };
     bool accepted = beatsGround(atGround.cost);
     for (int d = dg16 - kSub / 2; accepted && d <= dg16 + kSub / 2; d += 2) {
-        accepted = d == dg16 || beatsGround(zsad(left, right, x, v, d, hw, hh).cost);
+        accepted = d == dg16 || beatsGround(window.at(right, d).cost);
     }
     if (!accepted) {
         ++counts_.rejected;
