@@ -107,6 +107,18 @@ TEST(Config, OutOfRangeValueNamesKeyValueAndRange)
     EXPECT_NE(errors[0].fix.find("[1, 11]"), std::string::npos);
 }
 
+TEST(Config, CorrelatorClockSkewIsReadAndBounded)
+{
+    const auto sut =
+        parseConfig(std::string(kValidMinimal) + "correlator:\n  max_clock_skew_ms: 250\n", "test.yaml", "/");
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+    EXPECT_DOUBLE_EQ(sut->correlator.maxClockSkewMs, 250.0);
+
+    const auto errors = parseErrors(std::string(kValidMinimal) + "correlator:\n  max_clock_skew_ms: -1\n");
+    ASSERT_EQ(errors.size(), 1u) << joined(errors);
+    EXPECT_EQ(errors[0].where, "test.yaml:5 (correlator.max_clock_skew_ms)");
+}
+
 TEST(Config, NonNumbersNanAndFractionalIntegersAreRejected)
 {
     for (const char* bad :
