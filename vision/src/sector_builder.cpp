@@ -65,7 +65,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.clearRangeM > 0.0F) || config.minClearFarVotes < 0 ||
         !(config.faceHeightFraction > 0.0F && config.faceHeightFraction <= 1.0F) || config.minTallVotes < 1 ||
         !(config.dangerDistanceM <= config.cautionDistanceM) || !(config.dropProfileMinRangeM > 0.0F) ||
-        !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1 || config.dropEdgeSectors < 0) {
+        !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1 || config.dropEdgeSectors < 0 ||
+        !(config.faceSupportRangeM > 0.0F) || config.minFaceSupport < 1 || config.minFarTallVotes < 1) {
         return Unexpected(configError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
@@ -146,12 +147,23 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
             votes += histogram[b];
             tallVotes += tall != nullptr ? tall[b] : 0U;
         }
-        if (tall != nullptr && tallVotes < static_cast<std::uint32_t>(config_.minTallVotes)) {
+        // A face's pixels in a sector shrink with its range (its rows do; the sector's columns do not): beyond
+        // faceSupportRangeM it needs proportionally fewer votes and tall votes, never fewer than minFaceSupport
+        // and minFarTallVotes.
+        std::uint32_t minSupport = static_cast<std::uint32_t>(config_.minSupport);
+        std::uint32_t minTall = static_cast<std::uint32_t>(config_.minTallVotes);
+        if (!drop && r0 > config_.faceSupportRangeM) {
+            const float scale = config_.faceSupportRangeM / r0;
+            minSupport = static_cast<std::uint32_t>(
+                std::max(static_cast<float>(config_.minFaceSupport), static_cast<float>(config_.minSupport) * scale));
+            minTall = static_cast<std::uint32_t>(std::max(static_cast<float>(config_.minFarTallVotes),
+                                                          static_cast<float>(config_.minTallVotes) * scale));
+        }
+        if (tall != nullptr && tallVotes < minTall) {
             continue; // a face that never rises above minHeightM: a bump, not an obstacle
         }
         // A drop's visible part shrinks with the square of its range (a strip of wall, not a face): beyond
         // dropSupportRangeM it needs proportionally fewer votes, never fewer than minDropSupport.
-        std::uint32_t minSupport = static_cast<std::uint32_t>(config_.minSupport);
         if (drop && r0 > config_.dropSupportRangeM) {
             const float scale = config_.dropSupportRangeM / r0;
             minSupport = static_cast<std::uint32_t>(std::max(static_cast<float>(config_.minDropSupport),

@@ -211,6 +211,32 @@ TEST(SectorBuilder, ACurbFarAwayIsAnObstacleThroughItsFaceBelowTheTop)
     EXPECT_NE(topOnlySut.sectors().sectors[ahead].state, SectorState::Obstacle);
 }
 
+TEST(SectorBuilder, AFarFaceNeedsFewerVotesThanANearOne)
+{
+    // A face's rows in a sector shrink with its range: a 12 cm curb at 9 m gives about 40 votes a sector. With
+    // minSupport raised to 60 it stands only because beyond faceSupportRangeM (5 m) the support needed falls as
+    // 5 / r (to 33 at 9 m); with the scaling moved out of reach it is no obstacle.
+    constexpr double kRangeM = 9.0;
+    cv::Mat d16 = groundDisparity();
+    paintFace(d16, kRangeM, -2.0, 2.0, 0.12);
+    SectorBuilderConfig scaled;
+    scaled.minSupport = 60;
+    SectorBuilderConfig flat = scaled;
+    flat.faceSupportRangeM = 100.0F;
+    auto scaledSut = makeBuilder(scaled);
+    auto flatSut = makeBuilder(flat);
+
+    ASSERT_EQ(scaledSut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    ASSERT_EQ(flatSut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const auto ahead = static_cast<std::size_t>(sectorOf(scaledSut.sectors(), 0.0));
+    const Sector& curb = scaledSut.sectors().sectors[ahead];
+    EXPECT_EQ(curb.state, SectorState::Obstacle);
+    EXPECT_EQ(curb.kind, ObstacleKind::Positive);
+    EXPECT_NEAR(curb.rangeM, kRangeM, 0.15);
+    EXPECT_NE(flatSut.sectors().sectors[ahead].state, SectorState::Obstacle);
+}
+
 TEST(SectorBuilder, ABumpBelowMinHeightIsNoObstacleHoweverLarge)
 {
     // An 8 cm bump at 4 m: a large face above half of minHeightM, but nothing above minHeightM.
@@ -237,6 +263,13 @@ TEST(SectorBuilder, CreateRejectsInvalidFaceRule)
     EXPECT_FALSE(SectorBuilder::create(noFace, kProjection, kRoi, kFirstRow).has_value());
     EXPECT_FALSE(SectorBuilder::create(faceAboveTop, kProjection, kRoi, kFirstRow).has_value());
     EXPECT_FALSE(SectorBuilder::create(noTallVotes, kProjection, kRoi, kFirstRow).has_value());
+    for (const auto set : {+[](SectorBuilderConfig& c) { c.faceSupportRangeM = 0.0F; },
+                           +[](SectorBuilderConfig& c) { c.minFaceSupport = 0; },
+                           +[](SectorBuilderConfig& c) { c.minFarTallVotes = 0; }}) {
+        SectorBuilderConfig c;
+        set(c);
+        EXPECT_FALSE(SectorBuilder::create(c, kProjection, kRoi, kFirstRow).has_value());
+    }
 }
 
 TEST(SectorBuilder, NegativeFloorGivesNegativeKind)

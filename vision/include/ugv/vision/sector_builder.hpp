@@ -62,6 +62,9 @@ struct SectorBuilderConfig {
                                      ///< view beyond 4 m, a few centimetres below the ground, behind a gap
     float maxRangeM = 12.0F;         ///< [m] points farther away are ignored (disparity too coarse)
     float rangeBinM = 0.02F;         ///< [m] histogram resolution
+    float faceSupportRangeM = 5.0F;  ///< [m] a positive cluster farther than r needs minSupport (this / r) votes ...
+    int minFaceSupport = 20;         ///< ... but at least this many ...
+    int minFarTallVotes = 3;         ///< ... and minTallVotes (this / r) tall votes, at least this many
     int minSupport = 40;             ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
                                      ///< mismatch blobs on empty ground through: 23..33 votes measured)
     float dropSupportRangeM = 5.0F;  ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
