@@ -18,14 +18,9 @@ Error configError(const std::string& what)
     return Error{"ObstacleVerifierConfig", what, "see vision/include/ugv/vision/obstacle_verifier.hpp"};
 }
 
-/// Zero-mean SAD of the left window at (x, v) against the right image shifted by d16 / 16 px (linear
-/// interpolation along x), in 1/16 grey levels summed over the window. The caller checks the bounds.
-struct WindowCost {
-    int cost = 0;
-    int contrast = 0; ///< sum |L - mean L|, 1/16 grey
-};
-
-/// The left window of one pixel, zero-mean, prepared once for the costs at several disparities.
+/// The left window of one pixel, zero-mean, prepared once for its costs at several disparities: the zero-mean SAD
+/// against the right image shifted by d16 / 16 px (linear interpolation along x), in 1/16 grey levels summed over
+/// the window. The caller checks the bounds.
 class LeftWindow {
 public:
     LeftWindow(ConstImageViewU8 left, int x, int v, int hw, int hh) noexcept : x_(x), v_(v), hw_(hw), hh_(hh)
@@ -44,10 +39,11 @@ public:
             contrast_ += std::abs(l16_[k]);
         }
     }
+    /// Sum of |L - mean L| over the window [1/16 grey].
     [[nodiscard]] int contrast() const noexcept { return contrast_; }
 
-    /// The window's zero-mean SAD against the right image at disparity d16 (with the left's contrast).
-    [[nodiscard]] WindowCost at(ConstImageViewU8 right, int d16) const noexcept
+    /// The window's zero-mean SAD against the right image at disparity d16.
+    [[nodiscard]] int costAt(ConstImageViewU8 right, int d16) const noexcept
     {
         int r16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
         int n = 0;
@@ -63,12 +59,11 @@ public:
             }
         }
         const int mean = sum / n;
-        WindowCost out;
-        out.contrast = contrast_;
+        int cost = 0;
         for (int k = 0; k < n; ++k) {
-            out.cost += std::abs(l16_[k] - (r16[k] - mean));
+            cost += std::abs(l16_[k] - (r16[k] - mean));
         }
-        return out;
+        return cost;
     }
 
 private:
@@ -180,9 +175,9 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
                 ++counts_.undecided;
                 continue;
             }
-            const WindowCost atD = window.at(right, d16);
-            const WindowCost atGround = window.at(right, dg16);
-            if (static_cast<long>(atD.cost) * 1024 >= ratio1024 * atGround.cost) {
+            const int atD = window.costAt(right, d16);
+            const int atGround = window.costAt(right, dg16);
+            if (static_cast<long>(atD) * 1024 >= ratio1024 * atGround) {
                 dst[x] = kInvalid;
                 ++counts_.rejected;
             }
@@ -216,10 +211,10 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     }
     // Coarse search in 1/2 px steps, then 1/8 px steps around the coarse best.
     int best = lo;
-    const WindowCost atGround = window.at(right, dg16);
-    int bestCost = window.at(right, lo).cost;
+    const int atGround = window.costAt(right, dg16);
+    int bestCost = window.costAt(right, lo);
     for (int d = lo + kSub / 2; d <= hi; d += kSub / 2) {
-        const int cost = window.at(right, d).cost;
+        const int cost = window.costAt(right, d);
         if (cost < bestCost) {
             bestCost = cost;
             best = d;
@@ -230,7 +225,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
         if (d == coarse) {
             continue;
         }
-        const int cost = window.at(right, d).cost;
+        const int cost = window.costAt(right, d);
         if (cost < bestCost) {
             bestCost = cost;
             best = d;
@@ -242,9 +237,9 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     const auto beatsGround = [&](int groundCost) {
         return static_cast<long>(bestCost) * 1024 < ratio1024 * groundCost;
     };
-    bool accepted = beatsGround(atGround.cost);
+    bool accepted = beatsGround(atGround);
     for (int d = dg16 - kSub / 2; accepted && d <= dg16 + kSub / 2; d += 2) {
-        accepted = d == dg16 || beatsGround(window.at(right, d).cost);
+        accepted = d == dg16 || beatsGround(window.costAt(right, d));
     }
     if (!accepted) {
         ++counts_.rejected;

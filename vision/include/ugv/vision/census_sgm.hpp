@@ -72,9 +72,8 @@ public:
     /// column whose winner in the row above lies on the ground (within groundPriorTolerancePx), the top path
     /// continues that row's disparity plus the ground's step (0 or 1 px, rounding b y); elsewhere (obstacle
     /// faces, constant disparity) it is unchanged. RT-safe (no allocation); takes effect from the next match().
+    /// Non-finite values (or |b| > 4 px per row) turn the prior off: the plain top path.
     void setGroundPrior(double a, double b, double c) noexcept;
-    /// Back to the plain top path.
-    void clearGroundPrior() noexcept { groundPrior_ = false; }
 
     [[nodiscard]] cv::Size size() const noexcept { return {width_, height_}; }
     [[nodiscard]] const CensusSgmConfig& config() const noexcept { return config_; }
