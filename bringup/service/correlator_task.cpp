@@ -61,7 +61,7 @@ std::string senderOf(const msg::PoseCorrection& s)
 } // namespace
 
 LiveCorrelator::LiveCorrelator(const LiveCorrelatorOptions& options)
-    : options_(options), feed_(options.improved, options.periodS)
+    : options_(options), feed_(options.improved, options.periodS, options.lateWindowS)
 {
 }
 
@@ -69,9 +69,10 @@ Result<std::unique_ptr<LiveCorrelator>, Error> LiveCorrelator::create(ipc::dds::
                                                                       const LiveCorrelatorOptions& options)
 {
     if (!(options.periodS > 0.0) || !(options.reorderMs >= 0.0) || !(options.startupHoldMs >= 0.0) ||
-        !(options.maxRatePerSource > 0.0) || !(options.maxClockSkewMs >= 0.0)) {
-        return Unexpected(Error{"correlator", "period, reorder time, rate or clock skew out of range",
-                                "period_s > 0, reorder_ms >= 0, max_rate_per_source > 0, max_clock_skew_ms >= 0"});
+        !(options.maxRatePerSource > 0.0) || !(options.maxClockSkewMs >= 0.0) || !(options.lateWindowS >= 0.0)) {
+        return Unexpected(Error{"correlator", "period, reorder time, late window, rate or clock skew out of range",
+                                "period_s > 0, reorder_ms >= 0, late_window_s >= 0, max_rate_per_source > 0, "
+                                "max_clock_skew_ms >= 0"});
     }
     std::unique_ptr<LiveCorrelator> c(new LiveCorrelator(options));
     auto obs = bus.reader<msg::OoiObservation>();
@@ -112,6 +113,11 @@ void LiveCorrelator::warn(const std::string& text)
     }
 }
 
+void LiveCorrelator::warnOnce(const std::string& text)
+{
+    warnings_.push_back(text);
+}
+
 std::vector<std::string> LiveCorrelator::takeWarnings()
 {
     std::vector<std::string> out;
@@ -136,10 +142,10 @@ bool LiveCorrelator::admit(const std::string& sender, std::uint64_t sequence,
     if (static_cast<double>(aheadNs) > options_.maxClockSkewMs * 1e6) {
         ++stats_.flooded;
         if (++stats_.aheadOfClock == 1) {
-            warn("correlator: '" + sender + "' stamps its samples " + std::to_string(aheadNs / 1'000'000) +
-                 " ms ahead of this host's clock, more than correlator.max_clock_skew_ms (" +
-                 std::to_string(options_.maxClockSkewMs) +
-                 "): they are refused and counted; synchronise the hosts' clocks (chrony) or raise the skew");
+            warnOnce("correlator: '" + sender + "' stamps its samples " + std::to_string(aheadNs / 1'000'000) +
+                     " ms ahead of this host's clock, more than correlator.max_clock_skew_ms (" +
+                     std::to_string(options_.maxClockSkewMs) +
+                     "): they are refused and counted; synchronise the hosts' clocks (chrony) or raise the skew");
         }
         return false; // not marked as seen, as below
     }
@@ -153,8 +159,8 @@ bool LiveCorrelator::admit(const std::string& sender, std::uint64_t sequence,
     if (b.tokens < 1.0) {
         ++stats_.flooded;
         if (stats_.flooded == 1) {
-            warn("correlator: '" + sender + "' sends faster than correlator.max_rate_per_source (" +
-                 std::to_string(options_.maxRatePerSource) + "/s): inputs beyond it are refused and counted");
+            warnOnce("correlator: '" + sender + "' sends faster than correlator.max_rate_per_source (" +
+                     std::to_string(options_.maxRatePerSource) + "/s): inputs beyond it are refused and counted");
         }
         return false; // not marked as seen: a repaired resend can still come in
     }
@@ -180,8 +186,7 @@ void LiveCorrelator::drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs)
         if (!admit(sender, s.sequence_number(), info)) {
             continue;
         }
-        const double t = std::visit([](const auto& m) { return m.t; }, *message);
-        reorder_.emplace(std::make_tuple(t, std::move(sender), s.sequence_number()),
+        reorder_.emplace(std::make_tuple(correlator::orderKey(*message), std::move(sender), s.sequence_number()),
                          Pending{std::move(*message), nowNs});
     }
 }
@@ -201,18 +206,23 @@ void LiveCorrelator::onSnapshot(const correlator::Snapshot& s)
     }
 }
 
-void LiveCorrelator::apply(const correlator::Message& message)
+void LiveCorrelator::apply(std::span<const correlator::Message> batch)
 {
+    if (batch.empty()) {
+        return;
+    }
     if (inputsLog_.is_open()) {
-        inputsLog_ << bringup::toJsonLine(message) << '\n';
+        for (const correlator::Message& m : batch) {
+            inputsLog_ << bringup::toJsonLine(m) << '\n';
+        }
     }
-    auto done = feed_.add(message, [this](const correlator::Snapshot& s) { onSnapshot(s); });
-    if (done) {
-        ++stats_.applied;
-    } else {
-        ++stats_.refused;
-        warn("correlator: the correlator refused an input: " + done.error().message());
-    }
+    stats_.applied += feed_.add(
+        batch, [this](const correlator::Snapshot& s) { onSnapshot(s); },
+        [this](const correlator::Message& /*message*/, const Error& e) {
+            ++stats_.refused;
+            warn("correlator: the correlator refused an input: " + e.message());
+        });
+    stats_.resequenced = feed_.resequenced();
 }
 
 void LiveCorrelator::waitForInput(std::chrono::milliseconds timeout)
@@ -234,10 +244,12 @@ void LiveCorrelator::poll(std::int64_t nowNs)
     }
     const auto reorderNs = static_cast<std::int64_t>(options_.reorderMs * 1e6);
     // Release in time order while the earliest has waited long enough (a later-arriving earlier one holds the rest).
+    batch_.clear();
     while (!reorder_.empty() && nowNs - reorder_.begin()->second.arrivalNs >= reorderNs) {
-        apply(reorder_.begin()->second.message);
+        batch_.push_back(std::move(reorder_.begin()->second.message));
         reorder_.erase(reorder_.begin());
     }
+    apply(batch_);
     inputsLog_.flush();
     snapshotsLog_.flush();
 }
@@ -245,10 +257,12 @@ void LiveCorrelator::poll(std::int64_t nowNs)
 std::optional<correlator::Snapshot> LiveCorrelator::finish()
 {
     poll(0); // take what arrived (nothing is old enough at time 0)
-    for (const auto& [key, pending] : reorder_) {
-        apply(pending.message);
+    batch_.clear();
+    for (auto& [key, pending] : reorder_) {
+        batch_.push_back(std::move(pending.message));
     }
     reorder_.clear();
+    apply(batch_);
     auto last = feed_.finish([this](const correlator::Snapshot& s) { onSnapshot(s); });
     if (out_.valid()) {
         out_.waitForAcks(std::chrono::milliseconds(2000));

@@ -17,8 +17,10 @@
 /// duplicate (a restarted sender replaying its file, a writer's history replayed to this reader). Reliable
 /// delivery is in order per writer, so nothing new is dropped; numbers must grow across a sender's restarts.
 ///
-/// An input that arrives more than `reorderMs` after later-stamped ones were applied is refused by the correlator
-/// (out of time order), counted and logged: choose reorder_ms above the worst repair time of the link.
+/// An input that arrives after later-stamped ones were applied (a UGV back from a radio dropout, a repair slower than
+/// `reorderMs`) is put in its place by the feed when it is at most `lateWindowS` older than the latest: the
+/// correlator is rolled back to a checkpoint and replayed (CorrelatorFeed), so the list does not depend on arrival
+/// order. Older ones are refused, counted and logged. What one poll releases is one batch: one replay at most.
 ///
 /// Flood guard: a token bucket per participant over the samples' source timestamps (`maxRatePerSource` per
 /// second, a burst of one second's worth). A writer's history replayed to a late or restarted reader keeps its
@@ -37,6 +39,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <tuple>
 #include <unordered_map>
@@ -53,6 +56,7 @@ struct LiveCorrelatorOptions {
     bool improved = true;
     double periodS = 1.0;
     double reorderMs = 2000.0;
+    double lateWindowS = 300.0; ///< [s] CorrelatorFeed's late window
     /// After the first input arrives, nothing is applied for this long: a (re)started station first gathers the
     /// team's transient-local histories, which come all at once and, on a lossy link, repaired over seconds.
     double startupHoldMs = 10000.0;
@@ -69,7 +73,8 @@ struct LiveCorrelatorStats {
     std::uint64_t duplicates = 0;   ///< (sender, sequence) seen before
     std::uint64_t flooded = 0;      ///< refused by the flood guard (aheadOfClock included)
     std::uint64_t aheadOfClock = 0; ///< of them: stamped more than maxClockSkewMs ahead of this host's clock
-    std::uint64_t refused = 0;      ///< given to the correlator and refused (out of time order, unknown id)
+    std::uint64_t refused = 0;      ///< given to the correlator and refused (older than the window, unknown id)
+    std::uint64_t resequenced = 0;  ///< applied after later-stamped inputs (put in place by a replay)
     std::uint64_t applied = 0;
     std::uint64_t published = 0; ///< correlated lists written
     std::size_t waiting = 0;     ///< in the reorder buffer now
@@ -109,9 +114,12 @@ private:
     template <class Sample>
     void drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs);
     bool admit(const std::string& sender, std::uint64_t sequence, const eprosima::fastdds::dds::SampleInfo& info);
-    void apply(const correlator::Message& message);
+    void apply(std::span<const correlator::Message> batch);
     void onSnapshot(const correlator::Snapshot& s);
+    /// A problem with one input: the first kMaxWarnings are kept for the log, the rest only counted.
     void warn(const std::string& text);
+    /// A condition reported once per run (a flood, a sender's clock): always kept, apart from the cap.
+    void warnOnce(const std::string& text);
 
     LiveCorrelatorOptions options_;
     bringup::CorrelatorFeed feed_;
@@ -120,9 +128,10 @@ private:
     ipc::dds::Reader<ipc::dds::msg::ConfirmationState> confirmations_;
     ipc::dds::Reader<ipc::dds::msg::PoseCorrection> corrections_;
     ipc::dds::Writer<ipc::dds::msg::CorrelatedOoiList> out_;
-    /// By mission time, then sender and sequence number: the same inputs come out in the same order whatever the
-    /// order they arrived in (a restarted ground station replays them as the first one did).
-    std::map<std::tuple<double, std::string, std::uint64_t>, Pending> reorder_;
+    /// In the correlator's order (correlator::orderKey), then sender and sequence number: the same inputs come out
+    /// in the same order whatever the order they arrived in (a restarted ground station replays them as the first
+    /// one did).
+    std::map<std::tuple<correlator::OrderKey, std::string, std::uint64_t>, Pending> reorder_;
     std::unordered_map<std::string, std::uint64_t> highestSeq_; ///< per sender
     std::unordered_map<std::string, Bucket> buckets_;           ///< per participant (GUID prefix)
     std::ofstream inputsLog_;
@@ -131,6 +140,7 @@ private:
     ipc::dds::msg::CorrelatedOoiList sample_;
     LiveCorrelatorStats stats_;
     std::vector<std::string> warnings_;
+    std::vector<correlator::Message> batch_; ///< released by one poll
     std::uint64_t warned_ = 0;
     std::int64_t firstArrivalNs_ = 0;
 };

@@ -102,13 +102,15 @@ std::string formatBusReport(const RunResult& r)
     if (r.correlator) {
         const LiveCorrelatorStats& c = *r.correlator;
         std::snprintf(line, sizeof(line),
-                      "correlator: %llu input(s) received, %llu applied, %llu refused as malformed, %llu duplicate(s), "
+                      "correlator: %llu input(s) received, %llu applied (%llu late, put in place), %llu refused as "
+                      "malformed, %llu duplicate(s), "
                       "%llu refused by the flood guard (%llu stamped ahead of this host's clock), %llu refused by the "
                       "correlator; %llu list(s) published\n",
                       static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.applied),
-                      static_cast<unsigned long long>(c.rejected), static_cast<unsigned long long>(c.duplicates),
-                      static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.aheadOfClock),
-                      static_cast<unsigned long long>(c.refused), static_cast<unsigned long long>(c.published));
+                      static_cast<unsigned long long>(c.resequenced), static_cast<unsigned long long>(c.rejected),
+                      static_cast<unsigned long long>(c.duplicates), static_cast<unsigned long long>(c.flooded),
+                      static_cast<unsigned long long>(c.aheadOfClock), static_cast<unsigned long long>(c.refused),
+                      static_cast<unsigned long long>(c.published));
         out += line;
     }
     return out;
@@ -122,6 +124,7 @@ LiveCorrelatorOptions correlatorOptions(const bringup::ServiceConfig& config)
     o.improved = config.correlator.improved;
     o.periodS = config.correlator.periodS;
     o.reorderMs = config.correlator.reorderMs;
+    o.lateWindowS = config.correlator.lateWindowS;
     o.startupHoldMs = config.correlator.startupHoldMs;
     o.maxRatePerSource = config.correlator.maxRatePerSource;
     o.maxClockSkewMs = config.correlator.maxClockSkewMs;

@@ -185,6 +185,10 @@ std::vector<KeySpec> baseKeys()
         numberKey("correlator.reorder_ms", Kind::Double, 0, 60000,
                   "a received input waits this long to be put in time order with the others [ms]",
                   UGV_REF(correlator.reorderMs)),
+        numberKey("correlator.late_window_s", Kind::Double, 0, 3600,
+                  "an input up to this much older than the latest applied one is still put in its place (the state "
+                  "is rolled back and replayed: a UGV back from a radio dropout); 0 = refused [s]",
+                  UGV_REF(correlator.lateWindowS)),
         numberKey("correlator.startup_hold_ms", Kind::Double, 0, 600000,
                   "after the first input nothing is applied this long: a (re)started station gathers the team's "
                   "histories first [ms]",

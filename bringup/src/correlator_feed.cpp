@@ -1,75 +1,253 @@
 #include "ugv/bringup/correlator_feed.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 namespace ugv::bringup {
 
 using namespace correlator;
 
-CorrelatorFeed::CorrelatorFeed(bool improved, double periodS) : periodS_(periodS), nextSnapshotT_(NAN)
+namespace {
+constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
+} // namespace
+
+CorrelatorFeed::CorrelatorFeed(bool improved, double periodS, double lateWindowS)
+    : periodS_(periodS), lateWindowS_(std::max(0.0, lateWindowS)),
+      checkpointS_(std::min(lateWindowS_ / 4.0, kCheckpointSpacingS))
 {
     if (improved) {
-        correlator_.emplace<ImprovedCorrelator>();
+        state_.correlator.emplace<ImprovedCorrelator>();
     }
 }
 
 const char* CorrelatorFeed::mode() const noexcept
 {
-    return std::holds_alternative<ImprovedCorrelator>(correlator_) ? "improved" : "original";
+    return std::holds_alternative<ImprovedCorrelator>(state_.correlator) ? "improved" : "original";
 }
 
 std::size_t CorrelatorFeed::storedPoints() const
 {
-    return std::visit([](const auto& c) { return c.storedPoints(); }, correlator_);
+    return std::visit([](const auto& c) { return c.storedPoints(); }, state_.correlator);
 }
 
-Snapshot CorrelatorFeed::take(double t, const OnSnapshot& onSnapshot)
+double CorrelatorFeed::timeOf(const Message& m) noexcept
+{
+    return std::visit([](const auto& x) { return x.t; }, m);
+}
+
+double CorrelatorFeed::earliestAccepted() const noexcept
+{
+    if (state_.lastT <= -1e300) {
+        return kMinusInf; // nothing yet
+    }
+    if (checkpoints_.empty()) {
+        return state_.lastT;
+    }
+    return std::max(state_.lastT - lateWindowS_, checkpoints_.front().t);
+}
+
+bool CorrelatorFeed::isLate(const Message& message) const
+{
+    if (!state_.last) {
+        return false;
+    }
+    // Without a window only an earlier time is out of order (equal times are taken as they come).
+    return lateWindowS_ > 0.0 ? appliedBefore(message, *state_.last) : timeOf(message) < state_.lastT;
+}
+
+Error CorrelatorFeed::tooLate(double t) const
+{
+    if (lateWindowS_ <= 0.0) {
+        return Error{"",
+                     "time " + std::to_string(t) + " is before the previous message's " + std::to_string(state_.lastT),
+                     "sort the input by time"};
+    }
+    if (t >= state_.lastT - lateWindowS_) {
+        return Error{"",
+                     "time " + std::to_string(t) + " is before the earliest time held for a replay (" +
+                         std::to_string(earliestAccepted()) + ": the first message's, or " +
+                         std::to_string(kMaxHeldMessages) + " messages held at most)",
+                     "sort the input by time"};
+    }
+    return Error{"",
+                 "time " + std::to_string(t) + " is more than the late window (" + std::to_string(lateWindowS_) +
+                     " s) before the latest message's " + std::to_string(state_.lastT),
+                 "sort the input by time, or raise the late window (correlator.late_window_s, correlate "
+                 "--late-window-s)"};
+}
+
+Snapshot CorrelatorFeed::take(double t, const OnSnapshot& onSnapshot, double emitFrom)
 {
     const auto t0 = std::chrono::steady_clock::now();
-    Snapshot s = std::visit([t](auto& c) { return c.snapshot(t); }, correlator_);
+    Snapshot s = std::visit([t](auto& c) { return c.snapshot(t); }, state_.correlator);
     snapshotBusy_ += std::chrono::steady_clock::now() - t0;
-    ++snapshots_;
-    if (onSnapshot) {
+    ++state_.snapshots;
+    if (onSnapshot && t >= emitFrom) {
         onSnapshot(s);
     }
     return s;
 }
 
-Result<void, Error> CorrelatorFeed::add(const Message& message, const OnSnapshot& onSnapshot)
+void CorrelatorFeed::checkpoint(double t)
 {
-    const double t = std::visit([](const auto& m) { return m.t; }, message);
-    if (t < lastT_) {
-        return Unexpected(
-            Error{"", "time " + std::to_string(t) + " is before the previous message's " + std::to_string(lastT_),
-                  "sort the input by time"});
+    checkpoints_.push_back(Checkpoint{t, heldBase_ + held_.size(), state_});
+}
+
+Result<void, Error> CorrelatorFeed::applyInOrder(const Message& message, double t, const OnSnapshot& onSnapshot,
+                                                 double emitFrom)
+{
+    if (lateWindowS_ > 0.0) {
+        if (std::isnan(state_.nextCheckpointT)) {
+            state_.nextCheckpointT = std::floor(t / checkpointS_) * checkpointS_;
+        }
+        if (t >= state_.nextCheckpointT) {
+            // The copy holds nextCheckpointT = its own time: a replay from it takes it again at the same place.
+            checkpoint(state_.nextCheckpointT);
+            state_.nextCheckpointT = (std::floor(t / checkpointS_) + 1.0) * checkpointS_;
+        }
     }
-    lastT_ = t;
-    if (std::isnan(nextSnapshotT_)) {
-        nextSnapshotT_ = (std::floor(t / periodS_) + 1.0) * periodS_;
+    state_.lastT = t;
+    state_.last = message;
+    if (std::isnan(state_.nextSnapshotT)) {
+        state_.nextSnapshotT = (std::floor(t / periodS_) + 1.0) * periodS_;
     }
-    while (t >= nextSnapshotT_) {
-        take(nextSnapshotT_, onSnapshot);
-        nextSnapshotT_ += periodS_;
+    while (t >= state_.nextSnapshotT) {
+        take(state_.nextSnapshotT, onSnapshot, emitFrom);
+        state_.nextSnapshotT += periodS_;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    auto done = std::visit([&message](auto& c) { return c.add(message); }, correlator_);
+    auto done = std::visit([&message](auto& c) { return c.add(message); }, state_.correlator);
     addBusy_ += std::chrono::steady_clock::now() - t0;
-    if (!done) {
-        return done;
+    if (done) {
+        ++state_.applied;
+        if (const auto* o = std::get_if<Observation>(&message)) {
+            state_.ugvs[o->ugv] = UgvPose{o->ugvLat, o->ugvLon, o->ugvHeadingDeg};
+        }
     }
-    ++applied_;
-    if (const auto* o = std::get_if<Observation>(&message)) {
-        ugvs_[o->ugv] = UgvPose{o->ugvLat, o->ugvLon, o->ugvHeadingDeg};
+    if (lateWindowS_ > 0.0) {
+        held_.push_back(Held{t, message, static_cast<bool>(done), Held::kReplayed});
     }
-    return {};
+    return done;
+}
+
+void CorrelatorFeed::prune()
+{
+    const double horizon = state_.lastT - lateWindowS_;
+    while (checkpoints_.size() >= 2 && checkpoints_[1].t <= horizon) {
+        checkpoints_.pop_front();
+    }
+    if (held_.size() > kMaxHeldMessages) {
+        // Too much to replay: drop the oldest checkpoints (the window shrinks), all of them if need be.
+        while (!checkpoints_.empty() && heldBase_ + held_.size() - checkpoints_.front().heldIndex > kMaxHeldMessages) {
+            checkpoints_.pop_front();
+        }
+    }
+    const std::size_t keepFrom = checkpoints_.empty() ? heldBase_ + held_.size() : checkpoints_.front().heldIndex;
+    while (heldBase_ < keepFrom) {
+        held_.pop_front();
+        ++heldBase_;
+    }
+}
+
+std::size_t CorrelatorFeed::add(std::span<const Message> batch, const OnSnapshot& onSnapshot,
+                                const OnRefused& onRefused)
+{
+    const auto refuse = [&onRefused](const Message& m, const Error& e) {
+        if (onRefused) {
+            onRefused(m, e);
+        }
+    };
+    // In the correlator's order (stable: equal keys keep the batch's order); too-late ones refused first (also a late
+    // one with no checkpoint to go back to: all dropped by the cap).
+    const double earliest = earliestAccepted();
+    std::vector<Held> accepted;
+    accepted.reserve(batch.size());
+    for (std::size_t k = 0; k < batch.size(); ++k) {
+        const double t = timeOf(batch[k]);
+        if (t < earliest || (checkpoints_.empty() && isLate(batch[k]))) {
+            refuse(batch[k], tooLate(t));
+        } else {
+            accepted.push_back(Held{t, batch[k], false, k});
+        }
+    }
+    std::stable_sort(accepted.begin(), accepted.end(),
+                     [](const Held& a, const Held& b) { return appliedBefore(a.message, b.message); });
+    if (accepted.empty()) {
+        return 0;
+    }
+    std::size_t applied = 0;
+    const auto applyFresh = [&](const Held& h, double emitFrom) {
+        if (auto done = applyInOrder(h.message, h.t, onSnapshot, emitFrom); done) {
+            ++applied;
+        } else {
+            refuse(batch[h.origin], done.error());
+        }
+    };
+    if (!isLate(accepted.front().message)) {
+        for (const Held& h : accepted) {
+            applyFresh(h, kMinusInf);
+        }
+        prune();
+        return applied;
+    }
+
+    // Re-sequencing: back to the newest checkpoint before the earliest message, then its later messages again,
+    // merged with the batch. Boundaries given out before are not given out again.
+    const double emitFrom = std::isnan(state_.nextSnapshotT) ? kMinusInf : state_.nextSnapshotT;
+    auto from = std::find_if(checkpoints_.rbegin(), checkpoints_.rend(),
+                             [&](const Checkpoint& c) { return c.t <= accepted.front().t; });
+    // earliestAccepted() guarantees one (the oldest checkpoint is at or before it).
+    for (const Held& h : accepted) {
+        resequenced_ += isLate(h.message) ? 1U : 0U;
+    }
+    Checkpoint restored = std::move(*from);
+    checkpoints_.erase(std::prev(from.base()), checkpoints_.end());
+    const auto tailBegin = held_.begin() + static_cast<std::ptrdiff_t>(restored.heldIndex - heldBase_);
+    std::vector<Held> tail(std::make_move_iterator(tailBegin), std::make_move_iterator(held_.end()));
+    held_.erase(tailBegin, held_.end());
+    state_ = std::move(restored.state);
+    std::size_t i = 0;
+    std::size_t j = 0;
+    while (i < tail.size() || j < accepted.size()) {
+        // On equal keys the message applied before stays first.
+        if (j == accepted.size() || (i < tail.size() && !appliedBefore(accepted[j].message, tail[i].message))) {
+            const Held& h = tail[i++];
+            ++replayed_;
+            auto done = applyInOrder(h.message, h.t, onSnapshot, emitFrom);
+            if (!done && h.applied) {
+                refuse(h.message, done.error());
+            }
+        } else {
+            applyFresh(accepted[j++], emitFrom);
+        }
+    }
+    prune();
+    return applied;
+}
+
+Result<void, Error> CorrelatorFeed::add(const Message& message, const OnSnapshot& onSnapshot)
+{
+    std::optional<Error> error;
+    const std::size_t applied =
+        add(std::span<const Message>(&message, 1), onSnapshot, [&error, &message](const Message& m, const Error& e) {
+            if (&m == &message) { // not a replayed message's refusal
+                error = e;
+            }
+        });
+    if (applied == 1) {
+        return {};
+    }
+    return Unexpected(error.value_or(Error{"", "refused", ""}));
 }
 
 std::optional<Snapshot> CorrelatorFeed::finish(const OnSnapshot& onSnapshot)
 {
-    if (applied_ == 0) {
+    if (state_.applied == 0) {
         return std::nullopt;
     }
-    return take(lastT_, onSnapshot);
+    return take(state_.lastT, onSnapshot, kMinusInf);
 }
 
 } // namespace ugv::bringup

@@ -136,7 +136,7 @@ void onSignal(int /*signal*/)
 }
 
 /// --from-dds: the live correlator on the bus as a viewer (it publishes nothing), until --duration or SIGINT.
-int correlateFromDds(const Args& args, bool improved, double period, std::ofstream& out)
+int correlateFromDds(const Args& args, bool improved, double period, double lateWindow, std::ofstream& out)
 {
     const auto duration = args.number("duration", 0.0, 0.0, 1e7);
     const auto domain = args.number(
@@ -161,6 +161,7 @@ int correlateFromDds(const Args& args, bool improved, double period, std::ofstre
     o.improved = improved;
     o.periodS = period;
     o.reorderMs = *reorder;
+    o.lateWindowS = lateWindow;
     // The station's default hold: the histories of the team come first.
     o.publish = false;
     o.logDir = args.get("log-dir");
@@ -192,12 +193,13 @@ int correlateFromDds(const Args& args, bool improved, double period, std::ofstre
         std::cerr << w << '\n';
     }
     const service::LiveCorrelatorStats st = (*live)->stats();
-    std::printf("received %llu input(s): %llu applied, %llu malformed, %llu duplicate(s), %llu flood, %llu refused; "
-                "%zu object(s) at t %.1f\n",
+    std::printf("received %llu input(s): %llu applied (%llu late, put in place), %llu malformed, %llu duplicate(s), "
+                "%llu flood, %llu refused; %zu object(s) at t %.1f\n",
                 static_cast<unsigned long long>(st.received), static_cast<unsigned long long>(st.applied),
-                static_cast<unsigned long long>(st.rejected), static_cast<unsigned long long>(st.duplicates),
-                static_cast<unsigned long long>(st.flooded), static_cast<unsigned long long>(st.refused),
-                last ? last->objects.size() : std::size_t{0}, last ? last->t : 0.0);
+                static_cast<unsigned long long>(st.resequenced), static_cast<unsigned long long>(st.rejected),
+                static_cast<unsigned long long>(st.duplicates), static_cast<unsigned long long>(st.flooded),
+                static_cast<unsigned long long>(st.refused), last ? last->objects.size() : std::size_t{0},
+                last ? last->t : 0.0);
     if (last) {
         out << toJsonLine(*last) << '\n';
     }
@@ -238,13 +240,18 @@ int runCorrelate(int argc, char** argv)
                {"discovery-server", "LIST", "--from-dds: IP:PORT[;IP:PORT] of Fast DDS discovery servers", false},
                {"no-shm", "", "--from-dds: UDP only, no Fast DDS shared memory", false},
                {"reorder-ms", "MS", "--from-dds: wait this long to put inputs in time order (default 2000)", false},
+               {"late-window-s", "S",
+                "an input up to S older than the latest is still put in its place (replayed; default 300, as "
+                "correlator.late_window_s); 0: refused",
+                false},
                {"log-dir", "DIR", "--from-dds: write inputs.jsonl and snapshots.jsonl there", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }
     const auto period = args.number("period", 1.0, 0.01, 3600.0);
-    if (!period) {
-        return reportUsageError(kCommand, period.error());
+    const auto lateWindow = args.number("late-window-s", 300.0, 0.0, 3600.0);
+    if (!period || !lateWindow) {
+        return reportUsageError(kCommand, !period ? period.error() : lateWindow.error());
     }
     const std::string mode = args.get("mode", "improved");
     if (mode != "original" && mode != "improved") {
@@ -271,10 +278,10 @@ int runCorrelate(int argc, char** argv)
         return fail(Error{args.get("output"), "cannot create the output", "check the folder"});
     }
     if (args.has("from-dds")) {
-        return correlateFromDds(args, mode == "improved", *period, out);
+        return correlateFromDds(args, mode == "improved", *period, *lateWindow, out);
     }
 
-    bringup::CorrelatorFeed feed(mode == "improved", *period);
+    bringup::CorrelatorFeed feed(mode == "improved", *period, *lateWindow);
     std::string line;
     std::size_t lineNumber = 0;
     std::size_t bad = 0;
@@ -315,13 +322,14 @@ int runCorrelate(int argc, char** argv)
     const double snapshotSeconds = std::chrono::duration<double>(feed.snapshotTime()).count();
     const std::size_t messages = feed.applied();
     const std::size_t snapshots = feed.snapshots();
-    std::printf("correlated %zu message(s), %zu bad line(s) skipped, %zu snapshot(s) to %s; %zu object(s) at t %.1f\n"
+    std::printf("correlated %zu message(s) (%zu late, put in place by replaying %zu), %zu bad line(s) skipped, %zu "
+                "snapshot(s) to %s; %zu object(s) at t %.1f\n"
                 "correlator: %.3f s in add() (%.0f messages/s), %.3f s in snapshot() (%.1f us each); "
                 "mode %s; %zu observation points held\n",
-                messages, bad, snapshots, args.get("output").c_str(), last.objects.size(), last.t, seconds,
-                seconds > 0.0 ? static_cast<double>(messages) / seconds : 0.0, snapshotSeconds,
-                snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0, feed.mode(),
-                feed.storedPoints());
+                messages, feed.resequenced(), feed.replayed(), bad, snapshots, args.get("output").c_str(),
+                last.objects.size(), last.t, seconds, seconds > 0.0 ? static_cast<double>(messages) / seconds : 0.0,
+                snapshotSeconds, snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0,
+                feed.mode(), feed.storedPoints());
     if (args.has("map")) {
         if (auto drawn = drawMap(args.get("map"), last, feed.ugvs()); !drawn) {
             return fail(drawn.error());

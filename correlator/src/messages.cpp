@@ -2,6 +2,22 @@
 
 namespace ugv::correlator {
 
+OrderKey orderKey(const Message& message)
+{
+    struct Visitor {
+        OrderKey operator()(const Observation& m) const { return OrderKey{m.t, 0, m.ugv, 1}; }
+        OrderKey operator()(const PoseCorrection& m) const { return OrderKey{m.t, 0, m.ugv, 0}; }
+        OrderKey operator()(const UavFix& m) const { return OrderKey{m.t, 1, "", 0}; }
+        OrderKey operator()(const Confirm& m) const { return OrderKey{m.t, 2, m.id, 0}; }
+    };
+    return std::visit(Visitor{}, message);
+}
+
+bool appliedBefore(const Message& a, const Message& b)
+{
+    return orderKey(a) < orderKey(b);
+}
+
 const char* toString(OoiClass c) noexcept
 {
     switch (c) {

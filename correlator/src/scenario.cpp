@@ -86,11 +86,6 @@ std::size_t gridCount(double end, double step)
     return end < 0.0 ? 0 : static_cast<std::size_t>(std::floor(end / step + kTimeSlackS)) + 1;
 }
 
-double messageTime(const Message& message)
-{
-    return std::visit([](const auto& m) { return m.t; }, message);
-}
-
 std::string numberedId(const char* prefix, std::size_t number)
 {
     char text[32];
@@ -691,8 +686,7 @@ Result<Scenario, Error> generateScenario(const ScenarioConfig& config)
         UgvSensor(config, world, frame, i).run(scenario.messages);
     }
     addUavFixes(config, world, frame, scenario.messages);
-    std::stable_sort(scenario.messages.begin(), scenario.messages.end(),
-                     [](const Message& a, const Message& b) { return messageTime(a) < messageTime(b); });
+    std::stable_sort(scenario.messages.begin(), scenario.messages.end(), appliedBefore);
     scenario.truth = makeTruth(config, world, frame);
     return scenario;
 }

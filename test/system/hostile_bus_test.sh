@@ -66,8 +66,14 @@ sent_ahead=$(sed -nE 's/^ahead-flood: ([0-9]+) .*/\1/p' "$work/hostile.log")
 [ "${sent_ahead:-0}" -eq 2000 ] || fail "the intruder sent ${sent_ahead:-no} faked-stamp samples, not 2000"
 # Stamps 1 s apart pass only while they are within 5 s of the station's clock: the first 5 + (sending time) of them.
 [ "$ahead" -ge 1950 ] || fail "only $ahead of 2000 samples stamped up to 2000 s ahead were refused"
+# The once-per-run warnings are logged whatever number of per-input warnings came before them (those are capped).
+grep -q "sends faster than correlator.max_rate_per_source" "$work/gcs.log" || fail "no flood warning in the log"
+grep -q "stamps its samples .* ahead of this host's clock" "$work/gcs.log" || fail "no clock-skew warning in the log"
 missing=$(comm -23 <(sort "$work/scenario.jsonl") <(sort "$work/gcs/inputs.jsonl") | wc -l)
-[ "$missing" -eq 0 ] || fail "$missing of $total scenario messages were not applied"
+[ "$missing" -eq 0 ] || fail "$missing of $total scenario messages were not given to the correlator"
+# ... and it took them all (the intruder's valid observations put the second sending behind in time: the late
+# window puts those in place).
+grep -q " 0 refused by the correlator;" <<<"$line" || fail "the correlator refused inputs"
 "$tool" correlate --input "$work/gcs/inputs.jsonl" --output "$work/offline.jsonl" >"$work/offline.log" 2>&1 ||
     fail "offline correlate"
 cmp -s "$work/offline.jsonl" "$work/gcs/snapshots.jsonl" || fail "live snapshots differ from the offline tool's"

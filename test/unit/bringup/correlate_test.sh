@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `ugvsense correlate` on a small hand-written input: good lines make objects and snapshots; every kind of bad
-# line (malformed JSON, missing field, wrong type, NaN, latitude out of range, unknown kind, unknown id, out of
-# time order) is reported with its line number and skipped while the run goes on; --map writes an image.
+# line (malformed JSON, missing field, wrong type, NaN, latitude out of range, unknown kind, unknown id, before the
+# first line's time) is reported with its line number and skipped while the run goes on; a line out of time order
+# within the late window is put in its place (with --late-window-s 0 it is refused); --map writes an image.
 # Usage: correlate_test.sh UGVSENSE WORKDIR
 set -u
 tool=$1 work=$2
@@ -21,8 +22,9 @@ obs() { # t ugv track class range bearing
     echo '{"t": 1.7, "kind": "teleport"}'                                                     # 9: unknown kind
     echo '{"t": 1.8, "kind": "confirm", "id": "ooi-42", "state": "confirmed_positive"}'       # 10: unknown id
     echo '{"t": 1.9, "kind": "confirm", "id": "ooi-1", "state": "confirmed_positive"}'        # 11: good
-    obs 0.1 ugv-2 b static 10 0                                                               # 12: time order
+    obs 0.1 ugv-2 b static 10 0                                                               # 12: late, in place
     obs 2.5 ugv-2 m mobile 20 10                                                              # 13: good
+    obs -1.0 ugv-2 b static 10 0                                                              # 14: before the first
 } >"$work/obs.jsonl"
 out=$("$tool" correlate --mode original --input "$work/obs.jsonl" --output "$work/snap.jsonl" --map "$work/map.png" 2>&1)
 rc=$?
@@ -31,8 +33,9 @@ echo "$out"
 for want in "obs.jsonl:4: skipped: not valid JSON" "obs.jsonl:5: skipped: missing field 'ugv_lat'" \
     "obs.jsonl:6: skipped: field 'range_m' is not a number" "obs.jsonl:7: skipped: not valid JSON" \
     "obs.jsonl:8: skipped: uav latitude 95.000000 is outside -90..90" "obs.jsonl:9: skipped: unknown kind 'teleport'" \
-    "obs.jsonl:10: skipped: confirm: unknown object id 'ooi-42'" "obs.jsonl:12: skipped: time 0.100000 is before" \
-    "correlated 5 message(s), 8 bad line(s) skipped"; do
+    "obs.jsonl:10: skipped: confirm: unknown object id 'ooi-42'" \
+    "obs.jsonl:14: skipped: time -1.000000 is before the earliest time held for a replay (0.000000" \
+    "correlated 6 message(s) (1 late, put in place by replaying 5), 8 bad line(s) skipped"; do
     grep -qF -- "$want" <<<"$out" || { echo "missing: $want"; exit 1; }
 done
 last=$(tail -n 1 "$work/snap.jsonl")
@@ -44,7 +47,12 @@ grep -q '"id":"ooi-1"' <<<"$last" && grep -q '"state":"confirmed_positive"' <<<"
 # The default mode (improved) reads the same lines the same way.
 out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap-improved.jsonl" 2>&1) || { echo "$out"; exit 1; }
 echo "$out"
-grep -qF "correlated 5 message(s), 8 bad line(s) skipped" <<<"$out" && grep -q "mode improved" <<<"$out" ||
-    { echo "improved mode: unexpected summary"; exit 1; }
+grep -qF "correlated 6 message(s) (1 late, put in place by replaying 5), 8 bad line(s) skipped" <<<"$out" &&
+    grep -q "mode improved" <<<"$out" || { echo "improved mode: unexpected summary"; exit 1; }
+# Without a late window the line out of time order is refused.
+out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap-strict.jsonl" --late-window-s 0 2>&1)
+echo "$out"
+grep -qF "obs.jsonl:12: skipped: time 0.100000 is before the previous message's 1.900000 (fix: sort the input by time)" \
+    <<<"$out" && grep -qF "correlated 5 message(s) (0 late" <<<"$out" || { echo "--late-window-s 0: unexpected"; exit 1; }
 grep -q '"id":"ooi-1"' "$work/snap-improved.jsonl" || { echo "improved mode: no static object"; exit 1; }
 echo "OK"

@@ -146,7 +146,7 @@ TEST(Scenario, SameSeedGivesTheSameScenario)
     EXPECT_NE(messagesOf<Observation>(a).front().track, messagesOf<Observation>(other).front().track);
 }
 
-TEST(Scenario, MessagesAreTimeOrderedWithinTheDuration)
+TEST(Scenario, MessagesAreInTheCorrelatorsOrderWithinTheDuration)
 {
     ScenarioConfig config = shortConfig();
     config.poseCorrections = true;
@@ -154,10 +154,41 @@ TEST(Scenario, MessagesAreTimeOrderedWithinTheDuration)
     const Scenario sut = generated(config);
 
     ASSERT_FALSE(sut.messages.empty());
+    EXPECT_TRUE(std::is_sorted(sut.messages.begin(), sut.messages.end(), appliedBefore));
     EXPECT_TRUE(std::is_sorted(sut.messages.begin(), sut.messages.end(),
                                [](const Message& a, const Message& b) { return messageTime(a) < messageTime(b); }));
     EXPECT_GE(messageTime(sut.messages.front()), 0.0);
     EXPECT_LE(messageTime(sut.messages.back()), config.durationS);
+}
+
+TEST(Messages, EqualTimesGoUgvByUgvCorrectionFirstThenUavFixesThenConfirmations)
+{
+    const auto obs = [](double t, const char* ugv) {
+        Observation o;
+        o.t = t;
+        o.ugv = ugv;
+        return Message{o};
+    };
+    const auto correction = [](double t, const char* ugv) {
+        PoseCorrection c;
+        c.t = t;
+        c.ugv = ugv;
+        return Message{c};
+    };
+    const std::vector<Message> want = {obs(4.0, "ugv-9"),
+                                       correction(5.0, "ugv-1"),
+                                       obs(5.0, "ugv-1"),
+                                       correction(5.0, "ugv-2"),
+                                       obs(5.0, "ugv-2"),
+                                       Message{UavFix{.t = 5.0}},
+                                       Message{Confirm{.t = 5.0, .id = "ooi-1"}},
+                                       Message{Confirm{.t = 5.0, .id = "ooi-2"}},
+                                       obs(5.5, "ugv-0")};
+    for (std::size_t i = 0; i < want.size(); ++i) {
+        for (std::size_t j = 0; j < want.size(); ++j) {
+            EXPECT_EQ(appliedBefore(want[i], want[j]), i < j) << i << " before " << j;
+        }
+    }
 }
 
 TEST(Scenario, ObservationsAreInTheRangeBandAndTheFieldOfView)

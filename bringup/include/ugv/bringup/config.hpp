@@ -94,6 +94,7 @@ struct CorrelatorTaskConfig {
     bool improved = true;           ///< mode improved (default) or original
     double periodS = 1.0;           ///< [s] mission-time period of the correlated list
     double reorderMs = 2000.0;      ///< [ms] how long a received input waits to be put in time order with the others
+    double lateWindowS = 300.0;     ///< [s] older inputs than the latest applied one are re-sequenced within this
     double startupHoldMs = 10000.0; ///< [ms] after the first input nothing is applied this long (the team's histories)
     std::string logDir;             ///< inputs.jsonl (every accepted input, in processing order) and snapshots.jsonl
     double maxRatePerSource = 2000.0; ///< [1/s] inputs from one participant beyond this rate are refused (a flood)

@@ -10,6 +10,7 @@
 ///
 /// Thread-safety: value types. RT-safe: no (strings).
 
+#include <compare>
 #include <string>
 #include <variant>
 #include <vector>
@@ -60,6 +61,22 @@ struct PoseCorrection {
 };
 
 using Message = std::variant<Observation, UavFix, Confirm, PoseCorrection>;
+
+/// Where a message goes in the order the correlator applies messages in: by time; at equal times UGV by UGV (by
+/// name) its pose correction, then its observations; then UAV fixes; then confirmations (by object id). The
+/// scenario generator writes this order, the live task releases it and CorrelatorFeed re-sequences into it, so the
+/// correlated list does not depend on the order of arrival. Messages with equal keys keep the order they came in
+/// (one sender's, which reliable delivery keeps).
+struct OrderKey {
+    double t = 0.0;
+    int group = 0; ///< 0 a UGV's, 1 UAV fixes, 2 confirmations
+    std::string name;
+    int rank = 0; ///< in a UGV's group: 0 pose correction, 1 observation
+    friend auto operator<=>(const OrderKey&, const OrderKey&) = default;
+};
+[[nodiscard]] OrderKey orderKey(const Message& message);
+/// orderKey(a) < orderKey(b)
+[[nodiscard]] bool appliedBefore(const Message& a, const Message& b);
 
 /// Activation (keep-out) zone diameters from the original requirements.
 inline constexpr double kStaticZoneDiameterM = 5.0;

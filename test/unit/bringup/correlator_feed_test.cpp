@@ -1,0 +1,199 @@
+// CorrelatorFeed: late messages put in their place (re-sequencing) give the state of the time order.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "ugv/bringup/correlate_io.hpp"
+#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/correlator/scenario.hpp"
+
+namespace ugv::bringup {
+namespace {
+
+using correlator::Message;
+
+std::vector<Message> scenario()
+{
+    correlator::ScenarioConfig config = correlator::scenarioPreset(correlator::ScenarioSetting::Bias);
+    config.durationS = 300.0;
+    config.poseCorrections = true;
+    auto s = correlator::generateScenario(config);
+    EXPECT_TRUE(s.has_value());
+    return s ? s->messages : std::vector<Message>{};
+}
+
+double timeOf(const Message& m)
+{
+    return std::visit([](const auto& x) { return x.t; }, m);
+}
+
+bool fromLateUgv(const Message& m, double from, double until)
+{
+    const auto* o = std::get_if<correlator::Observation>(&m);
+    return o != nullptr && o->ugv == "ugv-2" && o->t >= from && o->t < until;
+}
+
+/// The messages as a link that was down for [from, until) delivers them: ugv-2's observations of that time come
+/// when the first message at or after `deliverAt` does (its history repaired), all at once.
+std::vector<std::vector<Message>> arrivals(const std::vector<Message>& sorted, double from, double until,
+                                           double deliverAt)
+{
+    std::vector<std::vector<Message>> out;
+    std::vector<Message> held;
+    bool delivered = false;
+    for (const Message& m : sorted) {
+        if (!delivered && timeOf(m) >= deliverAt) {
+            out.push_back(held);
+            delivered = true;
+        }
+        if (fromLateUgv(m, from, until)) {
+            held.push_back(m);
+        } else {
+            out.push_back({m});
+        }
+    }
+    return out;
+}
+
+struct FeedRun {
+    std::vector<std::string> snapshots; ///< given out, as JSON lines
+    std::size_t applied = 0;
+    std::size_t refused = 0;
+};
+
+FeedRun feedAll(CorrelatorFeed& feed, const std::vector<std::vector<Message>>& batches)
+{
+    FeedRun run;
+    const auto give = [&run](const correlator::Snapshot& s) { run.snapshots.push_back(toJsonLine(s)); };
+    for (const auto& batch : batches) {
+        run.applied += feed.add(batch, give, [&run](const Message&, const Error&) { ++run.refused; });
+    }
+    feed.finish(give);
+    return run;
+}
+
+/// The arrival order stably sorted by time: what the feed must equal.
+std::vector<std::vector<Message>> timeOrder(const std::vector<std::vector<Message>>& batches)
+{
+    std::vector<Message> all;
+    for (const auto& b : batches) {
+        all.insert(all.end(), b.begin(), b.end());
+    }
+    std::stable_sort(all.begin(), all.end(), [](const Message& a, const Message& b) { return timeOf(a) < timeOf(b); });
+    std::vector<std::vector<Message>> out;
+    for (const Message& m : all) {
+        out.push_back({m});
+    }
+    return out;
+}
+
+TEST(CorrelatorFeed, LateMessagesInTheWindowGiveTheStateOfTheTimeOrder)
+{
+    const std::vector<Message> sorted = scenario();
+    ASSERT_GT(sorted.size(), 1000U);
+    const auto late = arrivals(sorted, 100.0, 160.0, 200.0); // up to 100 s late
+    std::size_t lateCount = 0;
+    for (const Message& m : sorted) {
+        lateCount += fromLateUgv(m, 100.0, 160.0) ? 1U : 0U;
+    }
+    ASSERT_GT(lateCount, 50U);
+
+    CorrelatorFeed reference(true, 1.0, 0.0);
+    const FeedRun want = feedAll(reference, timeOrder(late));
+    CorrelatorFeed feed(true, 1.0, 120.0);
+    const FeedRun got = feedAll(feed, late);
+
+    EXPECT_EQ(got.refused, want.refused);
+    EXPECT_EQ(got.applied, want.applied);
+    EXPECT_EQ(feed.applied(), reference.applied());
+    EXPECT_EQ(feed.resequenced(), lateCount);
+    EXPECT_GT(feed.replayed(), 0U);
+    // The boundaries before the delivery were given out once, without the late observations; every one from the
+    // delivery on is the time order's, byte for byte (the final snapshot included).
+    ASSERT_EQ(got.snapshots.size(), want.snapshots.size());
+    std::size_t equalFromDelivery = 0;
+    for (std::size_t k = 200; k < want.snapshots.size(); ++k) {
+        EXPECT_EQ(got.snapshots[k], want.snapshots[k]) << "snapshot " << k;
+        ++equalFromDelivery;
+    }
+    EXPECT_GT(equalFromDelivery, 90U);
+    // ... and the late observations changed something before it (else this test proves nothing).
+    std::size_t differentBefore = 0;
+    for (std::size_t k = 100; k < 200; ++k) {
+        differentBefore += got.snapshots[k] != want.snapshots[k] ? 1U : 0U;
+    }
+    EXPECT_GT(differentBefore, 0U);
+}
+
+TEST(CorrelatorFeed, OneByOneEqualsOneBatch)
+{
+    const std::vector<Message> sorted = scenario();
+    const auto batches = arrivals(sorted, 100.0, 160.0, 200.0);
+    std::vector<std::vector<Message>> single;
+    for (const auto& b : batches) {
+        for (const Message& m : b) {
+            single.push_back({m});
+        }
+    }
+    CorrelatorFeed a(true, 1.0, 120.0);
+    CorrelatorFeed b(true, 1.0, 120.0);
+    const FeedRun batched = feedAll(a, batches);
+    const FeedRun oneByOne = feedAll(b, single);
+    EXPECT_EQ(batched.snapshots, oneByOne.snapshots);
+    EXPECT_LT(a.replayed(), b.replayed()); // the batch replays once
+}
+
+TEST(CorrelatorFeed, OlderThanTheWindowIsRefusedAndChangesNothing)
+{
+    const std::vector<Message> sorted = scenario();
+    std::vector<Message> lateOne;
+    std::vector<Message> rest;
+    for (const Message& m : sorted) {
+        (lateOne.empty() && fromLateUgv(m, 100.0, 160.0) ? lateOne : rest).push_back(m);
+    }
+    ASSERT_EQ(lateOne.size(), 1U);
+    const auto give = [](const correlator::Snapshot&) {};
+    CorrelatorFeed without(true, 1.0, 30.0);
+    CorrelatorFeed with(true, 1.0, 30.0);
+    for (const Message& m : rest) {
+        ASSERT_TRUE(without.add(m, give));
+        ASSERT_TRUE(with.add(m, give));
+        if (timeOf(m) >= 140.0 && !lateOne.empty()) { // 40 s late: beyond the 30 s window
+            const auto refused = with.add(lateOne.front(), give);
+            ASSERT_FALSE(refused);
+            EXPECT_NE(refused.error().message().find("more than the late window (30"), std::string::npos)
+                << refused.error().message();
+            EXPECT_NE(refused.error().fix.find("correlator.late_window_s"), std::string::npos);
+            lateOne.clear();
+        }
+    }
+    EXPECT_TRUE(lateOne.empty());
+    EXPECT_EQ(with.applied(), without.applied());
+    EXPECT_EQ(with.resequenced(), 0U);
+    std::string a;
+    std::string b;
+    without.finish([&a](const correlator::Snapshot& s) { a = toJsonLine(s); });
+    with.finish([&b](const correlator::Snapshot& s) { b = toJsonLine(s); });
+    EXPECT_EQ(a, b);
+}
+
+TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
+{
+    CorrelatorFeed feed(true, 1.0);
+    correlator::UavFix fix;
+    fix.t = 10.0;
+    fix.lat = -34.9;
+    fix.lon = 138.6;
+    ASSERT_TRUE(feed.add(fix, nullptr));
+    fix.t = 9.5;
+    const auto refused = feed.add(fix, nullptr);
+    ASSERT_FALSE(refused);
+    EXPECT_EQ(refused.error().fix, "sort the input by time");
+    EXPECT_EQ(feed.applied(), 1U);
+    EXPECT_DOUBLE_EQ(feed.earliestAccepted(), 10.0);
+}
+
+} // namespace
+} // namespace ugv::bringup
