@@ -66,7 +66,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.faceHeightFraction > 0.0F && config.faceHeightFraction <= 1.0F) || config.minTallVotes < 1 ||
         !(config.dangerDistanceM <= config.cautionDistanceM) || !(config.dropProfileMinRangeM > 0.0F) ||
         !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1 || config.dropEdgeSectors < 0 ||
-        !(config.faceSupportRangeM > 0.0F) || config.minFaceSupport < 1 || config.minFarTallVotes < 1) {
+        !(config.closeGapM >= 0.0F) || !(config.faceSupportRangeM > 0.0F) || config.minFaceSupport < 1 ||
+        config.minFarTallVotes < 1) {
         return Unexpected(configError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
@@ -473,6 +474,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
     }
     widenDrops();
+    closeGaps();
     return BuildStatus::Ok;
 }
 
@@ -508,6 +510,48 @@ void SectorBuilder::widenDrops() noexcept
             out.confidence = 0.5F * nearest->confidence; // inferred from the neighbour, not seen
             out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
         }
+    }
+}
+
+void SectorBuilder::closeGaps() noexcept
+{
+    // A far curb's face is a row or two per sector: some sectors get too few votes for a cluster and their ground
+    // is seen free, so they would be Clear between sectors that see the curb. A gap narrower than closeGapM between
+    // two obstacles is not a way through for any vehicle either: it reports the nearer side, at half confidence.
+    // Only runs of Clear sectors: Unknown ones stay Unknown.
+    const int n = config_.sectorCount;
+    const double binRad = static_cast<double>(hfovDeg_) / n * (std::numbers::pi / 180.0);
+    int left = -1; // the last obstacle sector seen
+    for (int s = 0; s < n; ++s) {
+        const Sector& c = sectors_.sectors[static_cast<std::size_t>(s)];
+        if (c.state == SectorState::Unknown) {
+            left = -1;
+            continue;
+        }
+        if (c.state != SectorState::Obstacle) {
+            continue;
+        }
+        if (left >= 0 && s - left > 1) {
+            const Sector& a = sectors_.sectors[static_cast<std::size_t>(left)];
+            // The two obstacles' points nearest each other: at the run's edges, the angle between is the run's.
+            const double angle = (s - left - 1) * binRad;
+            const double ra = a.rangeM;
+            const double rb = c.rangeM;
+            const double gap = std::sqrt(std::max(0.0, ra * ra + rb * rb - 2.0 * ra * rb * std::cos(angle)));
+            if (gap < config_.closeGapM) {
+                const Sector& nearer = ra <= rb ? a : c;
+                for (int k = left + 1; k < s; ++k) {
+                    Sector& out = sectors_.sectors[static_cast<std::size_t>(k)];
+                    out.state = SectorState::Obstacle;
+                    out.kind = nearer.kind;
+                    out.rangeM = nearer.rangeM;
+                    out.heightM = nearer.heightM;
+                    out.confidence = 0.5F * nearer.confidence; // inferred from the neighbours, not seen
+                    out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
+                }
+            }
+        }
+        left = s;
     }
 }
 

@@ -144,6 +144,8 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileResidualPx = -1.0F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropProfileMinPixels = 0; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropEdgeSectors = -1; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.closeGapM = -0.1F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.closeGapM = NAN; }));
 }
 
 TEST(SectorBuilder, FlatGroundIsClearEverywhere)
@@ -345,6 +347,59 @@ TEST(SectorBuilder, ClearSectorsBesideADropReportItAndNoFurther)
 
 /// Rows where a trench whose near rim is at `rimM` shows its far wall at `wallM`: from the ground (z = 0) down to
 /// where the rim ray meets the wall; painted over [-2, 2] m laterally (camera X).
+TEST(SectorBuilder, AGapNarrowerThanCloseGapBetweenObstaclesIsClosedAWiderOneStaysClear)
+{
+    // Two posts 0.4 m wide at 3 m with a gap of `gap` m between them, straight ahead; and two at 2 m and 6 m
+    // whose sectors are as close but whose points are 4 m apart.
+    const auto build = [](double gap, float closeGapM, double nearZ, double farZ) {
+        cv::Mat d16 = groundDisparity();
+        paintFace(d16, nearZ, -gap / 2.0 - 0.4, -gap / 2.0, 0.5);
+        paintFace(d16, farZ, gap / 2.0 * farZ / nearZ, gap / 2.0 * farZ / nearZ + 0.4 * farZ / nearZ, 0.5);
+        SectorBuilderConfig config;
+        config.closeGapM = closeGapM;
+        auto sut = makeBuilder(config);
+        EXPECT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+        return sut.sectors();
+    };
+    const auto gapStates = [](const ObstacleSectors& s) {
+        // The sectors strictly between the two obstacles' runs around bearing 0.
+        int left = sectorOf(s, 0.0);
+        int right = left;
+        while (left < s.count && s.sectors[static_cast<std::size_t>(left)].state != SectorState::Obstacle) {
+            ++left;
+        }
+        while (right >= 0 && s.sectors[static_cast<std::size_t>(right)].state != SectorState::Obstacle) {
+            --right;
+        }
+        std::vector<Sector> out;
+        for (int i = right + 1; i < left; ++i) {
+            out.push_back(s.sectors[static_cast<std::size_t>(i)]);
+        }
+        return out;
+    };
+    const std::vector<Sector> open = gapStates(build(0.2, 0.0F, 3.0, 3.0));
+    ASSERT_GE(open.size(), 2U); // seen as a gap without the rule
+    for (const Sector& s : open) {
+        EXPECT_EQ(s.state, SectorState::Clear);
+    }
+    const ObstacleSectors closedAll = build(0.2, 0.5F, 3.0, 3.0);
+    const Sector& post = closedAll.sectors[static_cast<std::size_t>(sectorOf(closedAll, 5.0))];
+    ASSERT_EQ(post.state, SectorState::Obstacle);
+    const Sector& ahead = closedAll.sectors[static_cast<std::size_t>(sectorOf(closedAll, 0.0))];
+    EXPECT_EQ(ahead.state, SectorState::Obstacle);
+    EXPECT_EQ(ahead.kind, ObstacleKind::Positive);
+    EXPECT_NEAR(ahead.rangeM, 3.0, 0.1);
+    EXPECT_LT(ahead.confidence, post.confidence);
+    for (const Sector& s : gapStates(build(0.8, 0.5F, 3.0, 3.0))) { // wider than closeGapM: stays Clear
+        EXPECT_EQ(s.state, SectorState::Clear);
+    }
+    const std::vector<Sector> apart = gapStates(build(0.2, 0.5F, 2.0, 6.0)); // as close in bearing, 4 m apart
+    ASSERT_GE(apart.size(), 2U);
+    for (const Sector& s : apart) {
+        EXPECT_EQ(s.state, SectorState::Clear);
+    }
+}
+
 void paintFarWall(cv::Mat& d16, double rimM, double wallM)
 {
     const double bottom = kHeightM - wallM * kHeightM / rimM; // z where the rim ray meets the wall (< 0)
@@ -589,6 +644,7 @@ void expectMatchesGroundTruth(const char* name, double rangeM, double bearingDeg
     }
     SectorBuilderConfig config;
     config.dropEdgeSectors = 0; // perfect inputs show a hole's rim to its ends: no widening beyond the truth
+    config.closeGapM = 0.0F;    // ... and every gap as it is
     auto sut = makeBuilder(config);
 
     ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 9U, 0), BuildStatus::Ok);

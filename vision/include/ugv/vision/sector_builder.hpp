@@ -28,6 +28,9 @@
 /// cluster is the first window [r, r (1 + clusterFraction) + clusterWindowM] holding >= minSupport votes;
 /// its range is the rangePercentile-quantile (dropRangePercentile for negative votes) of the votes inside the window
 /// (robust to single outliers).
+/// Afterwards, on the sectors as built: a Clear sector within dropEdgeSectors of a negative obstacle reports that
+/// drop (widenDrops), and a run of Clear sectors between two obstacle sectors whose nearest points are less than
+/// closeGapM apart reports the nearer of the two (closeGaps); both at half the neighbour's confidence.
 /// Sector state: Obstacle (nearer kind wins) when a cluster exists; else Clear (range +inf) when the ground
 /// support is >= clearGroundFraction of the sector's analysed pixels, at least minClearFarVotes of those ground
 /// pixels lie at or beyond clearRangeM (the ground is seen to be free that far) and the stray votes (outside any
@@ -82,6 +85,9 @@ struct SectorBuilderConfig {
     int dropProfileMinPixels = 6;
     int dropEdgeSectors = 2;           ///< Clear sectors this near a negative obstacle report it (a hole's rim
                                        ///< thins out at its lateral ends); 0 disables
+    float closeGapM = 0.5F;            ///< [m] Clear sectors between two obstacle sectors whose points are nearer
+                                       ///< each other than this report the nearer one (a far curb's face gives
+                                       ///< some sectors too few votes; no vehicle passes there); 0 disables
     float clusterWindowM = 0.15F;      ///< [m] cluster window, fixed part
     float clusterFraction = 0.05F;     ///< cluster window, part proportional to the range
     float rangePercentile = 0.20F;     ///< quantile of the cluster's votes reported as the range, [0, 1)
@@ -174,6 +180,8 @@ private:
     [[nodiscard]] Cluster profileDrop(int s) const noexcept;
     /// Clear sectors within dropEdgeSectors of a negative obstacle take it over (see the definition).
     void widenDrops() noexcept;
+    /// Runs of Clear sectors between two obstacle sectors less than closeGapM apart take the nearer one over.
+    void closeGaps() noexcept;
 
     int profileRows_ = 0;                 ///< analysed rows (firstRow .. roi bottom)
     std::vector<std::uint32_t> rowCount_; ///< [sector][row] valid pixels
