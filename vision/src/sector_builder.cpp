@@ -190,6 +190,7 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
 
 SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
 {
+    constexpr int kMaxBlendRows = 2;
     const int first = std::max(0, s - 1);
     const int last = std::min(config_.sectorCount - 1, s + 1);
     const auto rows = static_cast<std::size_t>(profileRows_);
@@ -226,22 +227,36 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
         if (!(rim.residual > -0.5F * tau)) {
             continue;
         }
-        const Row wall1 = rowOf(v - 1);
-        const Row wall2 = rowOf(v - 2);
-        if (wall1.count < minPixels || wall2.count < minPixels || !(wall1.residual < -tau) ||
-            !(wall2.residual < -tau)) {
-            continue;
+        // The wall: two rows below -tau, right above the rim or above up to kMaxBlendRows rows between them that
+        // are halfway down or sparse but not empty (the matcher blends the rim into the wall's bottom row, and the
+        // verifier removes much of that row: its windows straddle the rim).
+        for (int gap = 0; gap <= kMaxBlendRows && v - gap - 2 >= 0; ++gap) {
+            if (gap > 0) {
+                const Row blend = rowOf(v - gap);
+                // A row with no valid pixel is no evidence that the wall goes on down to the rim.
+                if (blend.count == 0 || (blend.count >= minPixels && !(blend.residual < -0.5F * tau))) {
+                    break;
+                }
+            }
+            const int w1 = v - gap - 1;
+            const int w2 = v - gap - 2;
+            const Row wall1 = rowOf(w1);
+            const Row wall2 = rowOf(w2);
+            if (wall1.count < minPixels || wall2.count < minPixels || !(wall1.residual < -tau) ||
+                !(wall2.residual < -tau)) {
+                continue;
+            }
+            // The sector itself must see the wall, not only a neighbour.
+            const std::size_t own = static_cast<std::size_t>(s) * rows;
+            const std::uint32_t ownCount =
+                rowCount_[own + static_cast<std::size_t>(w1)] + rowCount_[own + static_cast<std::size_t>(w2)];
+            const float ownResidual =
+                rowResidual_[own + static_cast<std::size_t>(w1)] + rowResidual_[own + static_cast<std::size_t>(w2)];
+            if (ownCount == 0 || !(ownResidual < -tau * static_cast<float>(ownCount) * 0.5F)) {
+                continue;
+            }
+            return Cluster{static_cast<int>(wall1.count + wall2.count), 0.5F * (rim.crossing + wall1.crossing)};
         }
-        // The sector itself must see the wall, not only a neighbour.
-        const std::size_t own = static_cast<std::size_t>(s) * rows;
-        const std::uint32_t ownCount =
-            rowCount_[own + static_cast<std::size_t>(v - 1)] + rowCount_[own + static_cast<std::size_t>(v - 2)];
-        const float ownResidual =
-            rowResidual_[own + static_cast<std::size_t>(v - 1)] + rowResidual_[own + static_cast<std::size_t>(v - 2)];
-        if (ownCount == 0 || !(ownResidual < -tau * static_cast<float>(ownCount) * 0.5F)) {
-            continue;
-        }
-        return Cluster{static_cast<int>(wall1.count + wall2.count), 0.5F * (rim.crossing + wall1.crossing)};
     }
     return Cluster{};
 }

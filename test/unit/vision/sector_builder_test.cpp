@@ -468,6 +468,38 @@ TEST(SectorBuilder, FarWallTooShallowForPixelVotesIsFoundByTheRowProfile)
               SectorState::Obstacle);
 }
 
+TEST(SectorBuilder, AFarWallIsFoundAboveABlendedOrThinnedBottomRow)
+{
+    // A 1 m drop at 7 m: its far wall at 8 m is 6 rows, 0.4..2.9 px below the ground. The matcher blends the rim
+    // into the wall's bottom row (here: 0.6 px below the ground), or the verifier removes most of that row (here:
+    // all but every 8th pixel); both hide the rim right below the wall, and the wall is still found above them.
+    const auto ahead = [](const cv::Mat& d16) {
+        auto sut = makeBuilder(profileOnly());
+        EXPECT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+        return sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    };
+    cv::Mat wall = groundDisparity();
+    paintFarWall(wall, 7.0, 8.0);
+    const int bottom = roiRow(kHeightM - 8.0 * kHeightM / 7.0, 8.0);
+    const DisparityPlane plane = kGround.disparityPlane(kProjection);
+
+    cv::Mat blended = wall.clone();
+    cv::Mat thinned = wall.clone();
+    for (int u = 0; u < wall.cols; ++u) {
+        blended.at<std::int16_t>(bottom, u) =
+            static_cast<std::int16_t>(std::lround((plane.at(u, bottom + kRoi.y) - 0.6) * 16.0));
+        if (u % 8 != 0) {
+            thinned.at<std::int16_t>(bottom, u) = -16;
+        }
+    }
+    for (const cv::Mat* d16 : {&wall, &blended, &thinned}) {
+        const Sector s = ahead(*d16);
+        EXPECT_EQ(s.state, SectorState::Obstacle);
+        EXPECT_EQ(s.kind, ObstacleKind::Negative);
+        EXPECT_NEAR(s.rangeM, 7.0, 0.05 * 7.0);
+    }
+}
+
 TEST(SectorBuilder, OneLowRowIsNoFarDrop)
 {
     // A matcher streak: a single row 2 px below the ground at 9 m (a wall needs two rows below the ground above a

@@ -19,8 +19,10 @@
 ///  - far drops by the row profile: beyond ~6 m a trench's far wall is 3..5 rows at 0.2..1.8 px below the ground
 ///    disparity, as deep as the noise of single pixels (a 1 m trench at 9 m: 0..6 cm; empty ground gives as
 ///    many per-pixel drop votes). Its rows are told apart by their mean: per sector and row, the mean residual
-///    d - d_g (= d z / h) over the sector and its neighbours; a rim is a row on the ground with the two rows
-///    above it below the ground (dropProfile*). Its range is where the rim row and the first wall row meet: the
+///    d - d_g (= d z / h) over the sector and its neighbours; a rim is a row on the ground with two rows below
+///    the ground above it, right above it or above up to two rows between that are halfway down or sparse but
+///    not empty (the matcher blends the rim into the wall's bottom row and the verifier thins that row out)
+///    (dropProfile*). Its range is where the rim row and the first wall row meet: the
 ///    mean of their rays' ground crossings.
 /// The range of a positive vote is the point's horizontal range; that of a negative vote is where the ray to it
 /// crosses the ground plane (the near rim of the drop, where the vehicle must stop), as the simulator's truth.
@@ -77,9 +79,9 @@ struct SectorBuilderConfig {
     int maxStrayDropVotes = 20; ///< the same for negative votes (far ground is noisier below the plane: 10 would
                                 ///< turn 52 -> 38 sectors of empty ground Unknown)
     /// Far drops by their row profile (see the file comment): a rim beyond dropProfileMinRangeM is a row whose
-    /// mean residual disparity is above -dropProfileResidualPx / 2 with the two rows above it (the far wall)
-    /// below -dropProfileResidualPx, over the sector and its two neighbours, each row with at least
-    /// dropProfileMinPixels valid pixels.
+    /// mean residual disparity is above -dropProfileResidualPx / 2 with two rows above it (the far wall) below
+    /// -dropProfileResidualPx (up to two blended or thinned rows between), over the sector and its two
+    /// neighbours, each row with at least dropProfileMinPixels valid pixels.
     float dropProfileMinRangeM = 5.0F;  ///< [m] nearer drops are left to the per-pixel votes
     float dropProfileResidualPx = 1.0F; ///< [px] (empty ground: row means within +-0.7 px at 9 m measured)
     int dropProfileMinPixels = 6;
