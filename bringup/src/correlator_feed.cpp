@@ -166,7 +166,9 @@ std::size_t CorrelatorFeed::add(std::span<const Message> batch, const OnSnapshot
     accepted.reserve(batch.size());
     for (std::size_t k = 0; k < batch.size(); ++k) {
         const double t = timeOf(batch[k]);
-        if (t < earliest || (checkpoints_.empty() && isLate(batch[k]))) {
+        if (!std::isfinite(t)) { // the readers refuse these; the order below needs finite times
+            refuse(batch[k], Error{"", "time is not finite", "fix the sender"});
+        } else if (t < earliest || (checkpoints_.empty() && isLate(batch[k]))) {
             refuse(batch[k], tooLate(t));
         } else {
             accepted.push_back(Held{t, batch[k], false, k});

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -193,6 +194,9 @@ TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
     EXPECT_EQ(refused.error().fix, "sort the input by time");
     EXPECT_EQ(feed.applied(), 1U);
     EXPECT_DOUBLE_EQ(feed.earliestAccepted(), 10.0);
+    fix.t = NAN;
+    EXPECT_FALSE(feed.add(fix, nullptr));
+    EXPECT_EQ(feed.applied(), 1U);
 }
 
 } // namespace
