@@ -243,7 +243,8 @@ void LiveCorrelator::poll(std::int64_t nowNs)
         return; // gathering the histories
     }
     const auto reorderNs = static_cast<std::int64_t>(options_.reorderMs * 1e6);
-    // Release in time order while the earliest has waited long enough (a later-arriving earlier one holds the rest).
+    // Release in the correlator's order while the first has waited long enough (a later-arriving earlier one holds
+    // the rest); one batch for the feed.
     batch_.clear();
     while (!reorder_.empty() && nowNs - reorder_.begin()->second.arrivalNs >= reorderNs) {
         batch_.push_back(std::move(reorder_.begin()->second.message));

@@ -493,6 +493,16 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     return BuildStatus::Ok;
 }
 
+void SectorBuilder::reportNeighbour(Sector& out, const Sector& from) const noexcept
+{
+    out.state = SectorState::Obstacle;
+    out.kind = from.kind;
+    out.rangeM = from.rangeM;
+    out.heightM = from.heightM;
+    out.confidence = 0.5F * from.confidence; // inferred from the neighbour, not seen
+    out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
+}
+
 void SectorBuilder::widenDrops() noexcept
 {
     // A hole's rim runs out at a grazing angle at its lateral ends: there its far wall shows only a sliver, too
@@ -518,12 +528,7 @@ void SectorBuilder::widenDrops() noexcept
             }
         }
         if (nearest != nullptr) {
-            out.state = SectorState::Obstacle;
-            out.kind = ObstacleKind::Negative;
-            out.rangeM = nearest->rangeM;
-            out.heightM = nearest->heightM;
-            out.confidence = 0.5F * nearest->confidence; // inferred from the neighbour, not seen
-            out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
+            reportNeighbour(out, *nearest);
         }
     }
 }
@@ -556,13 +561,7 @@ void SectorBuilder::closeGaps() noexcept
             if (gap < config_.closeGapM) {
                 const Sector& nearer = ra <= rb ? a : c;
                 for (int k = left + 1; k < s; ++k) {
-                    Sector& out = sectors_.sectors[static_cast<std::size_t>(k)];
-                    out.state = SectorState::Obstacle;
-                    out.kind = nearer.kind;
-                    out.rangeM = nearer.rangeM;
-                    out.heightM = nearer.heightM;
-                    out.confidence = 0.5F * nearer.confidence; // inferred from the neighbours, not seen
-                    out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
+                    reportNeighbour(sectors_.sectors[static_cast<std::size_t>(k)], nearer);
                 }
             }
         }

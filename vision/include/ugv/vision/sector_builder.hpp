@@ -180,6 +180,8 @@ private:
     std::vector<double> boundarySin_;
     /// Nearest far drop of sector s by the row profile, or a Cluster with no votes.
     [[nodiscard]] Cluster profileDrop(int s) const noexcept;
+    /// `out` reports the obstacle of its neighbour `from`, at half its confidence (widenDrops, closeGaps).
+    void reportNeighbour(Sector& out, const Sector& from) const noexcept;
     /// Clear sectors within dropEdgeSectors of a negative obstacle take it over (see the definition).
     void widenDrops() noexcept;
     /// Runs of Clear sectors between two obstacle sectors less than closeGapM apart take the nearer one over.
