@@ -39,13 +39,13 @@ double CorrelatorFeed::timeOf(const Message& m) noexcept
 
 double CorrelatorFeed::earliestAccepted() const noexcept
 {
-    if (state_.lastT <= -1e300) {
+    if (!state_.last) {
         return kMinusInf; // nothing yet
     }
     if (checkpoints_.empty()) {
-        return state_.lastT;
+        return lastT();
     }
-    return std::max(state_.lastT - lateWindowS_, checkpoints_.front().t);
+    return std::max(lastT() - lateWindowS_, checkpoints_.front().t);
 }
 
 bool CorrelatorFeed::isLate(const Message& message) const
@@ -54,17 +54,16 @@ bool CorrelatorFeed::isLate(const Message& message) const
         return false;
     }
     // Without a window only an earlier time is out of order (equal times are taken as they come).
-    return lateWindowS_ > 0.0 ? appliedBefore(message, *state_.last) : timeOf(message) < state_.lastT;
+    return lateWindowS_ > 0.0 ? appliedBefore(message, *state_.last) : timeOf(message) < lastT();
 }
 
 Error CorrelatorFeed::tooLate(double t) const
 {
     if (lateWindowS_ <= 0.0) {
-        return Error{"",
-                     "time " + std::to_string(t) + " is before the previous message's " + std::to_string(state_.lastT),
+        return Error{"", "time " + std::to_string(t) + " is before the previous message's " + std::to_string(lastT()),
                      "sort the input by time"};
     }
-    if (t >= state_.lastT - lateWindowS_) {
+    if (t >= lastT() - lateWindowS_) {
         return Error{"",
                      "time " + std::to_string(t) + " is before the earliest time held for a replay (" +
                          std::to_string(earliestAccepted()) + ": the first message's, or " +
@@ -73,7 +72,7 @@ Error CorrelatorFeed::tooLate(double t) const
     }
     return Error{"",
                  "time " + std::to_string(t) + " is more than the late window (" + std::to_string(lateWindowS_) +
-                     " s) before the latest message's " + std::to_string(state_.lastT),
+                     " s) before the latest message's " + std::to_string(lastT()),
                  "sort the input by time, or raise the late window (correlator.late_window_s, correlate "
                  "--late-window-s)"};
 }
@@ -108,7 +107,6 @@ Result<void, Error> CorrelatorFeed::applyInOrder(const Message& message, double 
             state_.nextCheckpointT = (std::floor(t / checkpointS_) + 1.0) * checkpointS_;
         }
     }
-    state_.lastT = t;
     state_.last = message;
     if (std::isnan(state_.nextSnapshotT)) {
         state_.nextSnapshotT = (std::floor(t / periodS_) + 1.0) * periodS_;
@@ -134,7 +132,7 @@ Result<void, Error> CorrelatorFeed::applyInOrder(const Message& message, double 
 
 void CorrelatorFeed::prune()
 {
-    const double horizon = state_.lastT - lateWindowS_;
+    const double horizon = lastT() - lateWindowS_;
     while (checkpoints_.size() >= 2 && checkpoints_[1].t <= horizon) {
         checkpoints_.pop_front();
     }
@@ -249,7 +247,7 @@ std::optional<Snapshot> CorrelatorFeed::finish(const OnSnapshot& onSnapshot)
     if (state_.applied == 0) {
         return std::nullopt;
     }
-    return take(state_.lastT, onSnapshot, kMinusInf);
+    return take(lastT(), onSnapshot, kMinusInf);
 }
 
 } // namespace ugv::bringup

@@ -78,7 +78,6 @@ public:
 
     [[nodiscard]] std::size_t applied() const noexcept { return state_.applied; }
     [[nodiscard]] std::size_t snapshots() const noexcept { return state_.snapshots; }
-    [[nodiscard]] double lastT() const noexcept { return state_.lastT; }
     /// Late messages put in their place, and the messages applied again for them.
     [[nodiscard]] std::size_t resequenced() const noexcept { return resequenced_; }
     [[nodiscard]] std::size_t replayed() const noexcept { return replayed_; }
@@ -94,7 +93,6 @@ private:
     /// Everything a replay restores.
     struct State {
         std::variant<correlator::OriginalCorrelator, correlator::ImprovedCorrelator> correlator;
-        double lastT = -1e300;
         double nextSnapshotT = NAN;
         double nextCheckpointT = NAN;
         std::size_t applied = 0;
@@ -116,6 +114,8 @@ private:
     };
 
     static double timeOf(const correlator::Message& m) noexcept;
+    /// The time of the last message applied (call only when there is one).
+    [[nodiscard]] double lastT() const noexcept { return timeOf(*state_.last); }
     /// Applies a message not older than the last one. Snapshots of boundaries at or after `emitFrom` are given out.
     Result<void, Error> applyInOrder(const correlator::Message& message, double t, const OnSnapshot& onSnapshot,
                                      double emitFrom);
