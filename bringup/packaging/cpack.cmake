@@ -11,6 +11,11 @@ set(CPACK_DEBIAN_PACKAGE_DESCRIPTION
  semi-global matching) and publishes obstacle sectors over iceoryx and DDS within a per-frame deadline. With the
  ugvsense tool (calibration, recording, replay, latency budgets, the OOI correlator) and systemd units. Nothing is
  enabled at install: 'systemctl start ugvsensed' runs it on the embedded default recording.")
+if(UGV_CPU_LEVEL AND NOT UGV_CPU_LEVEL STREQUAL "x86-64")
+    # toolchain/cpu-level.cmake: the programs refuse, with this fix, to start on an older CPU.
+    string(APPEND CPACK_DEBIAN_PACKAGE_DESCRIPTION
+           "\n .\n Built for ${UGV_CPU_LEVEL} CPUs; for older x86-64 PCs build the package with -DUGV_CPU=x86-64.")
+endif()
 set(CPACK_PACKAGING_INSTALL_PREFIX ${CMAKE_INSTALL_PREFIX}) # the units name the programs by this prefix
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)                     # ugvsense_<version>_<arch>.deb
 set(CPACK_DEBIAN_PACKAGE_SECTION misc)

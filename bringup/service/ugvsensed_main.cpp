@@ -9,6 +9,7 @@
 #include <string>
 
 #include "runner.hpp"
+#include "ugv/platform/cpu_level.hpp"
 #include "ugv/platform/log.hpp"
 
 namespace {
@@ -49,6 +50,13 @@ bool parseNumber(const char* text, double min, double max, double& out)
     char* end = nullptr;
     out = std::strtod(text, &end);
     return end != text && *end == '\0' && out >= min && out <= max;
+}
+
+// First, before the static initialisers of our own code (priority 101 runs before the default): a CPU without the
+// instruction set this build is for (UGV_CPU) gets a clear error instead of SIGILL.
+[[gnu::constructor(101)]] void checkCpuFirst()
+{
+    ugv::exitUnlessCpuRunsBuild("ugvsensed");
 }
 
 } // namespace

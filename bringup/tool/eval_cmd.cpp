@@ -1,6 +1,7 @@
 // ugvsense eval: (a) --sim: obstacle detection on simulator scenes against the exact ground-truth sectors
 // (bringup/sim/README.md); (b) --middlebury: our matcher and OpenCV's default StereoSGBM against Middlebury ground
-// truth (../shared/data, or $UGV_SHARED_DATA, or --data DIR).
+// truth (../shared/data, or $UGV_SHARED_DATA, or --data DIR); (c) --approach: how far ahead each obstacle type is
+// seen as it comes nearer.
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -146,20 +148,9 @@ bool honoursBearing(const std::string& type)
     return type != "curb" && type != "trench"; // they run across the whole view
 }
 
-/// Runs the simulator suite; prints the table and verdicts and appends the JSON object to `json`.
-/// @return 0 when everything ran, 1 on a render/detector failure.
-int runSimSuite(const SimOptions& o, std::ostringstream& json)
+/// The obstacle types to run: every scene but the empty ground and the overhang, or those of --types.
+std::vector<std::string> obstacleTypes(const SimOptions& o)
 {
-    auto detectorResult = SimDetector::create(o.matcher, o.groundPrior);
-    if (!detectorResult) {
-        std::cerr << "ugvsense eval: error: " << detectorResult.error().message() << '\n';
-        return 1;
-    }
-    SimDetector& det = *detectorResult;
-    sim::RenderResult frame;
-    const auto start = std::chrono::steady_clock::now();
-    int framesRun = 0;
-
     std::vector<std::string> types;
     for (const std::string& name : sim::sceneNames()) {
         if (name != "empty" && name != "overhang" &&
@@ -167,6 +158,34 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             types.push_back(name);
         }
     }
+    return types;
+}
+
+/// A fresh detector for a run (the ground estimate's smoothing starts anew); prints the error when it cannot be made.
+std::optional<SimDetector> makeSimDetector(const SimOptions& o)
+{
+    auto detector = SimDetector::create(o.matcher, o.groundPrior);
+    if (!detector) {
+        std::cerr << "ugvsense eval: error: " << detector.error().message() << '\n';
+        return std::nullopt;
+    }
+    return std::move(detector).value();
+}
+
+/// Runs the simulator suite; prints the table and verdicts and appends the JSON object to `json`.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runSimSuite(const SimOptions& o, std::ostringstream& json)
+{
+    std::optional<SimDetector> detector = makeSimDetector(o);
+    if (!detector) {
+        return 1;
+    }
+    SimDetector& det = *detector;
+    sim::RenderResult frame;
+    const auto start = std::chrono::steady_clock::now();
+    int framesRun = 0;
+
+    const std::vector<std::string> types = obstacleTypes(o);
     std::map<std::string, std::vector<BandStats>> stats;
     for (const std::string& type : types) {
         stats[type].resize(kBandCount);
@@ -347,6 +366,72 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     return 0;
 }
 
+/// The approach: each obstacle placed from kApproachFarM down to kApproachNearM, `stepM` nearer each frame (what
+/// the vehicle sees driving at it, less the motion blur), once per texture with the bearings taking turns. Prints
+/// per type how far ahead it is first seen and from where it is seen in every frame on.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runApproach(const SimOptions& o, double stepM, std::ostringstream& json)
+{
+    constexpr double kApproachFarM = 12.0;
+    constexpr double kApproachNearM = 1.0;
+    std::optional<SimDetector> detector = makeSimDetector(o);
+    if (!detector) {
+        return 1;
+    }
+    SimDetector& det = *detector;
+    sim::RenderResult frame;
+    const auto start = std::chrono::steady_clock::now();
+    int framesRun = 0;
+    std::printf("\napproach: each obstacle from %.0f m to %.0f m in %.2f m steps (%zu texture(s), bearings %s)\n",
+                kApproachFarM, kApproachNearM, stepM, o.textures.size(), o.bearings.size() > 1 ? "taking turns" : "0");
+    std::printf("%-12s %-8s %8s %8s %10s %10s\n", "type", "texture", "bearing", "det%", "first_m", "held_m");
+    json << "  \"approach\": {\n    \"step_m\": " << jsonNumber(stepM) << ",\n    \"runs\": [";
+    bool firstRow = true;
+    std::map<std::string, std::vector<double>> held;
+    const std::vector<std::string> types = obstacleTypes(o);
+    for (const std::string& type : types) {
+        std::size_t cases = 0;
+        for (const sim::GroundTexture texture : o.textures) {
+            const double bearing = honoursBearing(type) ? o.bearings[cases++ % o.bearings.size()] : 0.0;
+            std::vector<ApproachFrame> frames;
+            const int steps = static_cast<int>(std::lround((kApproachFarM - kApproachNearM) / stepM));
+            for (int i = 0; i <= steps; ++i) {
+                const double range = kApproachFarM - i * stepM;
+                auto scene = sim::makeScene(type, range, bearing, texture, 1);
+                if (!scene || !det.run(*scene, frame)) {
+                    std::cerr << "ugvsense eval: error: scene " << type << " failed\n";
+                    return 1;
+                }
+                ++framesRun;
+                const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
+                if (score.gtHasObstacle) {
+                    frames.push_back({score.gtRangeM, score.detected});
+                }
+            }
+            const ApproachScore a = scoreApproach(frames);
+            held[type].push_back(a.heldRangeM);
+            std::printf("%-12s %-8s %+8.0f %8.1f %10.2f %10.2f\n", type.c_str(), textureName(texture), bearing,
+                        a.frames > 0 ? 100.0 * a.detected / a.frames : 0.0, a.firstRangeM, a.heldRangeM);
+            json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << type << "\", \"texture\": \""
+                 << textureName(texture) << "\", \"bearing_deg\": " << jsonNumber(bearing)
+                 << ", \"frames\": " << a.frames << ", \"detected\": " << a.detected
+                 << ", \"first_range_m\": " << jsonNumber(a.firstRangeM)
+                 << ", \"held_range_m\": " << jsonNumber(a.heldRangeM) << "}";
+            firstRow = false;
+        }
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("approach summary (%d frames in %.1f s): held_m = seen in every frame from this GT range on\n",
+                framesRun, seconds);
+    for (const std::string& type : types) {
+        const std::vector<double>& h = held[type];
+        std::printf("%-12s held from %.2f m in every run (median of runs %.2f m)\n", type.c_str(),
+                    *std::min_element(h.begin(), h.end()), quantile(h, 0.5));
+    }
+    json << "\n    ],\n    \"frames\": " << framesRun << ",\n    \"seconds\": " << jsonNumber(seconds) << "\n  }";
+    return 0;
+}
+
 struct StereoSet {
     const char* name;
     const char* folder; ///< relative to the data root
@@ -461,11 +546,17 @@ int runEval(int argc, char** argv)
 {
     Args args(
         "eval",
-        "[--sim] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] [--ground-prior] "
+        "[--sim] [--approach] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] "
+        "[--ground-prior] "
         "[--json OUT] [--data DIR] [--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
+         {"approach", "",
+          "simulator: each obstacle placed from 12 m to 1 m, 0.25 m nearer each frame: how far ahead it is seen",
+          false},
          {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
-         {"quick", "", "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0)", false},
+         {"quick", "",
+          "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0; the approach in 0.5 m steps)",
+          false},
          {"types", "LIST", "simulator: only these obstacle types, comma-separated (ugvsense sim --list)", false},
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
@@ -481,9 +572,9 @@ int runEval(int argc, char** argv)
         std::cout << args.usage();
         return 0;
     }
-    if (!args.has("sim") && !args.has("middlebury")) {
-        return reportUsageError("eval",
-                                Error{"ugvsense eval", "nothing to evaluate", "give --sim and/or --middlebury"});
+    if (!args.has("sim") && !args.has("approach") && !args.has("middlebury")) {
+        return reportUsageError(
+            "eval", Error{"ugvsense eval", "nothing to evaluate", "give --sim, --approach and/or --middlebury"});
     }
     if (!args.positional().empty()) {
         return reportUsageError("eval", Error{"ugvsense eval", "unexpected argument '" + args.positional()[0] + "'",
@@ -526,7 +617,8 @@ int runEval(int argc, char** argv)
 
     std::ostringstream json;
     json << "{\n";
-    if (args.has("sim")) {
+    const bool simulated = args.has("sim") || args.has("approach");
+    if (simulated) {
         SimOptions o;
         if (args.has("quick")) {
             o.textures = {sim::GroundTexture::Asphalt};
@@ -560,12 +652,20 @@ int runEval(int argc, char** argv)
         }
         o.matcher = matcher;
         o.groundPrior = args.has("ground-prior");
-        if (const int rc = runSimSuite(o, json); rc != 0) {
-            return rc;
+        if (args.has("sim")) {
+            if (const int rc = runSimSuite(o, json); rc != 0) {
+                return rc;
+            }
+        }
+        if (args.has("approach")) {
+            json << (args.has("sim") ? ",\n" : "");
+            if (const int rc = runApproach(o, args.has("quick") ? 0.5 : 0.25, json); rc != 0) {
+                return rc;
+            }
         }
     }
     if (args.has("middlebury")) {
-        json << (args.has("sim") ? ",\n" : "");
+        json << (simulated ? ",\n" : "");
         if (const int rc = runMiddlebury(root, matcher, json); rc != 0) {
             return rc;
         }

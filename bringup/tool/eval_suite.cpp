@@ -154,6 +154,26 @@ DisparityScore scoreDisparity(const cv::Mat& predicted, const cv::Mat& gt)
     return score;
 }
 
+ApproachScore scoreApproach(std::vector<ApproachFrame> frames)
+{
+    std::sort(frames.begin(), frames.end(),
+              [](const ApproachFrame& a, const ApproachFrame& b) { return a.gtRangeM < b.gtRangeM; });
+    ApproachScore score;
+    score.frames = static_cast<int>(frames.size());
+    bool held = true; // every frame so far (from the nearest out) detected
+    for (const ApproachFrame& f : frames) {
+        held = held && f.detected;
+        if (f.detected) {
+            ++score.detected;
+            score.firstRangeM = f.gtRangeM; // sorted: the last detected is the farthest
+        }
+        if (held) {
+            score.heldRangeM = f.gtRangeM;
+        }
+    }
+    return score;
+}
+
 double quantile(std::vector<double> values, double p)
 {
     if (values.empty()) {

@@ -47,6 +47,24 @@ struct GapScore {
 };
 GapScore scoreGap(const ObstacleSectors& detected, const ObstacleSectors& gt);
 
+/// One frame of an approach: the obstacle placed nearer frame by frame (`ugvsense eval --approach`).
+struct ApproachFrame {
+    double gtRangeM = 0.0; ///< [m] nearest GT obstacle range (frames whose GT has no obstacle are left out)
+    bool detected = false; ///< as in ObstacleFrameScore
+};
+
+/// How far ahead an obstacle is seen on the way to it.
+struct ApproachScore {
+    int frames = 0;
+    int detected = 0;
+    double firstRangeM = 0.0; ///< [m] the farthest GT range at which it is detected; 0 when never
+    /// [m] the farthest GT range from which it is detected in every frame on (at that range and every nearer
+    /// one); 0 when the nearest frame is missed.
+    double heldRangeM = 0.0;
+};
+/// @param frames in any order
+ApproachScore scoreApproach(std::vector<ApproachFrame> frames);
+
 /// Disparity errors against ground truth over the pixels with valid GT (GT > 0).
 struct DisparityScore {
     int gtPixels = 0;       ///< pixels with valid GT

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ugv/platform/cpu_level.hpp"
 
 namespace {
 
@@ -40,6 +41,13 @@ void printHelp(std::ostream& out)
     for (const auto& sub : kSubcommands) {
         out << "  " << sub.name << std::string(16 - std::strlen(sub.name), ' ') << sub.summary << '\n';
     }
+}
+
+// First, before the static initialisers of our own code (priority 101 runs before the default): a CPU without the
+// instruction set this build is for (UGV_CPU) gets a clear error instead of SIGILL.
+[[gnu::constructor(101)]] void checkCpuFirst()
+{
+    ugv::exitUnlessCpuRunsBuild("ugvsense");
 }
 
 } // namespace

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <type_traits>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/hal/intrin.hpp>
@@ -44,6 +46,78 @@ inline int censusRowSimd(const std::uint8_t* centre, std::ptrdiff_t step, int wi
     return x;
 }
 
+/// The two vector widths of the kernels over disparities: 256-bit blocks while they fit, 128-bit for the rest.
+/// The disparity count is a multiple of 16, not of 32, so the native width alone would run past the end.
+struct W128 {
+    using U8 = cv::v_uint8x16;
+    using U16 = cv::v_uint16x8;
+    static constexpr int kLanes8 = 16;
+    static U8 load(const std::uint8_t* p) { return cv::v_load(p); }
+    static U16 load(const std::uint16_t* p) { return cv::v_load(p); }
+    static U8 all(std::uint8_t v) { return cv::v_setall_u8(v); }
+    static U16 all(std::uint16_t v) { return cv::v_setall_u16(v); }
+};
+#if CV_SIMD256
+struct W256 {
+    using U8 = cv::v_uint8x32;
+    using U16 = cv::v_uint16x16;
+    static constexpr int kLanes8 = 32;
+    static U8 load(const std::uint8_t* p) { return cv::v256_load(p); }
+    static U16 load(const std::uint16_t* p) { return cv::v256_load(p); }
+    static U8 all(std::uint8_t v) { return cv::v256_setall_u8(v); }
+    static U16 all(std::uint16_t v) { return cv::v256_setall_u16(v); }
+};
+#endif
+
+/// Runs `block(W{}, k)` over [0, d) (d a multiple of 16): 256-bit blocks first where the build has them.
+template <class Block>
+inline void forDisparityBlocks(int d, Block&& block) noexcept
+{
+    int k = 0;
+#if CV_SIMD256
+    for (; k + W256::kLanes8 <= d; k += W256::kLanes8) {
+        block(W256{}, k);
+    }
+#endif
+    for (; k < d; k += W128::kLanes8) {
+        block(W128{}, k);
+    }
+}
+
+/// The running minimum of the blocks of either width (T: std::uint8_t or std::uint16_t lanes).
+template <class T>
+class BlockMin {
+public:
+    using V128 = std::conditional_t<sizeof(T) == 1, W128::U8, W128::U16>;
+    void add(const V128& v) noexcept
+    {
+        min128_ = cv::v_min(min128_, v);
+        used128_ = true;
+    }
+#if CV_SIMD256
+    using V256 = std::conditional_t<sizeof(T) == 1, W256::U8, W256::U16>;
+    void add(const V256& v) noexcept
+    {
+        min256_ = cv::v_min(min256_, v);
+    }
+#endif
+    [[nodiscard]] T value() const noexcept
+    {
+        T result = std::numeric_limits<T>::max();
+#if CV_SIMD256
+        result = static_cast<T>(cv::v_reduce_min(min256_));
+#endif
+        return used128_ ? std::min(result, static_cast<T>(cv::v_reduce_min(min128_))) : result;
+    }
+
+private:
+    V128 min128_ = W128::all(std::numeric_limits<T>::max());
+    bool used128_ = false;
+#if CV_SIMD256
+    V256 min256_ = W256::all(std::numeric_limits<T>::max());
+#endif
+};
+
 /// Cost of one left pixel (its 4 census bytes and its scaled intensity) against `d` right pixels: Hamming
 /// distance plus min(|intensity difference|, clip). `right` points at the 5 reversed right planes (stride
 /// `planeStride`) at the entry of disparity 0.
@@ -51,20 +125,16 @@ inline void costPixelSimd(const std::uint8_t left[5], const std::uint8_t* right,
                           std::uint8_t* cost) noexcept
 {
     using namespace cv; // NOLINT(google-build-using-namespace)
-    const int lanes = VTraits<v_uint8>::vlanes();
-    const v_uint8 l0 = vx_setall_u8(left[0]);
-    const v_uint8 l1 = vx_setall_u8(left[1]);
-    const v_uint8 l2 = vx_setall_u8(left[2]);
-    const v_uint8 l3 = vx_setall_u8(left[3]);
-    const v_uint8 li = vx_setall_u8(left[4]);
-    const v_uint8 vClip = vx_setall_u8(static_cast<std::uint8_t>(clip));
-    for (int k = 0; k < d; k += lanes) {
-        const v_uint8 c = v_add(
-            v_add(v_popcount(v_xor(l0, vx_load(right + k))), v_popcount(v_xor(l1, vx_load(right + planeStride + k)))),
-            v_add(v_popcount(v_xor(l2, vx_load(right + 2 * planeStride + k))),
-                  v_popcount(v_xor(l3, vx_load(right + 3 * planeStride + k)))));
-        v_store(cost + k, v_add(c, v_min(v_absdiff(li, vx_load(right + 4 * planeStride + k)), vClip)));
-    }
+    forDisparityBlocks(d, [&](auto w, int k) {
+        using V = decltype(w);
+        const auto c = v_add(v_add(v_popcount(v_xor(V::all(left[0]), V::load(right + k))),
+                                   v_popcount(v_xor(V::all(left[1]), V::load(right + planeStride + k)))),
+                             v_add(v_popcount(v_xor(V::all(left[2]), V::load(right + 2 * planeStride + k))),
+                                   v_popcount(v_xor(V::all(left[3]), V::load(right + 3 * planeStride + k)))));
+        const auto intensity = v_min(v_absdiff(V::all(left[4]), V::load(right + 4 * planeStride + k)),
+                                     V::all(static_cast<std::uint8_t>(clip)));
+        v_store(cost + k, v_add(c, intensity));
+    });
 }
 
 /// One step of a path: out = cost + min(prev, prev[-1] + p1, prev[+1] + p1, minPrev + p2) - minPrev, 8-bit
@@ -73,19 +143,18 @@ inline std::uint8_t pathStepSimd(const std::uint8_t* prev, int minPrev, const st
                                  int d, int p1, int p2) noexcept
 {
     using namespace cv; // NOLINT(google-build-using-namespace)
-    const int lanes = VTraits<v_uint8>::vlanes();
-    const v_uint8 vP1 = vx_setall_u8(static_cast<std::uint8_t>(p1));
-    const v_uint8 vBound = vx_setall_u8(static_cast<std::uint8_t>(std::min(255, minPrev + p2)));
-    const v_uint8 vMinPrev = vx_setall_u8(static_cast<std::uint8_t>(minPrev));
-    v_uint8 acc = vx_setall_u8(255);
-    for (int k = 0; k < d; k += lanes) {
-        const v_uint8 step = v_add(v_min(vx_load(prev + k - 1), vx_load(prev + k + 1)), vP1);
-        const v_uint8 best = v_min(v_min(vx_load(prev + k), step), vBound);
-        const v_uint8 l = v_add(v_sub(best, vMinPrev), vx_load(cost + k));
+    const auto bound = static_cast<std::uint8_t>(std::min(255, minPrev + p2));
+    BlockMin<std::uint8_t> result;
+    forDisparityBlocks(d, [&](auto w, int k) {
+        using V = decltype(w);
+        const auto step =
+            v_add(v_min(V::load(prev + k - 1), V::load(prev + k + 1)), V::all(static_cast<std::uint8_t>(p1)));
+        const auto best = v_min(v_min(V::load(prev + k), step), V::all(bound));
+        const auto l = v_add(v_sub(best, V::all(static_cast<std::uint8_t>(minPrev))), V::load(cost + k));
         v_store(out + k, l);
-        acc = v_min(acc, l);
-    }
-    return v_reduce_min(acc);
+        result.add(l);
+    });
+    return result.value();
 }
 
 /// sum[k] = a[k] + b[k] + c[k] + e[k] (16-bit) for k in [0, d).
@@ -93,44 +162,42 @@ inline void sumFourSimd(const std::uint8_t* a, const std::uint8_t* b, const std:
                         std::uint16_t* sum, int d) noexcept
 {
     using namespace cv; // NOLINT(google-build-using-namespace)
-    const int lanes = VTraits<v_uint8>::vlanes();
-    const int half = VTraits<v_uint16>::vlanes();
-    for (int k = 0; k < d; k += lanes) {
-        v_uint16 aLo;
-        v_uint16 aHi;
-        v_uint16 bLo;
-        v_uint16 bHi;
-        v_uint16 cLo;
-        v_uint16 cHi;
-        v_uint16 eLo;
-        v_uint16 eHi;
-        v_expand(vx_load(a + k), aLo, aHi);
-        v_expand(vx_load(b + k), bLo, bHi);
-        v_expand(vx_load(c + k), cLo, cHi);
-        v_expand(vx_load(e + k), eLo, eHi);
+    forDisparityBlocks(d, [&](auto w, int k) {
+        using V = decltype(w);
+        typename V::U16 aLo;
+        typename V::U16 aHi;
+        typename V::U16 bLo;
+        typename V::U16 bHi;
+        typename V::U16 cLo;
+        typename V::U16 cHi;
+        typename V::U16 eLo;
+        typename V::U16 eHi;
+        v_expand(V::load(a + k), aLo, aHi);
+        v_expand(V::load(b + k), bLo, bHi);
+        v_expand(V::load(c + k), cLo, cHi);
+        v_expand(V::load(e + k), eLo, eHi);
         v_store(sum + k, v_add(v_add(aLo, bLo), v_add(cLo, eLo)));
-        v_store(sum + k + half, v_add(v_add(aHi, bHi), v_add(cHi, eHi)));
-    }
+        v_store(sum + k + V::kLanes8 / 2, v_add(v_add(aHi, bHi), v_add(cHi, eHi)));
+    });
 }
 
 /// sum[k] += a[k]; @return min over k of the new sum.
 inline std::uint16_t addAndMinSimd(const std::uint8_t* a, std::uint16_t* sum, int d) noexcept
 {
     using namespace cv; // NOLINT(google-build-using-namespace)
-    const int lanes = VTraits<v_uint8>::vlanes();
-    const int half = VTraits<v_uint16>::vlanes();
-    v_uint16 acc = vx_setall_u16(0xFFFF);
-    for (int k = 0; k < d; k += lanes) {
-        v_uint16 lo;
-        v_uint16 hi;
-        v_expand(vx_load(a + k), lo, hi);
-        const v_uint16 s0 = v_add(vx_load(sum + k), lo);
-        const v_uint16 s1 = v_add(vx_load(sum + k + half), hi);
+    BlockMin<std::uint16_t> result;
+    forDisparityBlocks(d, [&](auto w, int k) {
+        using V = decltype(w);
+        typename V::U16 lo;
+        typename V::U16 hi;
+        v_expand(V::load(a + k), lo, hi);
+        const auto s0 = v_add(V::load(sum + k), lo);
+        const auto s1 = v_add(V::load(sum + k + V::kLanes8 / 2), hi);
         v_store(sum + k, s0);
-        v_store(sum + k + half, s1);
-        acc = v_min(acc, v_min(s0, s1));
-    }
-    return v_reduce_min(acc);
+        v_store(sum + k + V::kLanes8 / 2, s1);
+        result.add(v_min(s0, s1));
+    });
+    return result.value();
 }
 
 #endif

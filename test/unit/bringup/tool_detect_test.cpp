@@ -328,4 +328,26 @@ TEST(EvalScoring, DisparityScoresMaskUnknownGtAndCountMissingPredictions)
     EXPECT_DOUBLE_EQ(ugv::tool::quantile({}, 0.95), 0.0);
 }
 
+TEST(EvalScoring, ApproachHeldRangeIsWhereDetectionBecomesContinuous)
+{
+    using ugv::tool::ApproachFrame;
+    // Seen once at 9 m, missed at 8 m, then seen from 7 m on; the frames arrive in any order.
+    const auto sut = ugv::tool::scoreApproach(
+        {{2.0, true}, {9.0, true}, {7.0, true}, {8.0, false}, {10.0, false}, {3.0, true}, {5.0, true}});
+    EXPECT_EQ(sut.frames, 7);
+    EXPECT_EQ(sut.detected, 5);
+    EXPECT_DOUBLE_EQ(sut.firstRangeM, 9.0);
+    EXPECT_DOUBLE_EQ(sut.heldRangeM, 7.0);
+
+    // A miss at the nearest frame: never held, though seen farther away.
+    const auto missedNear = ugv::tool::scoreApproach({{1.0, false}, {4.0, true}});
+    EXPECT_DOUBLE_EQ(missedNear.heldRangeM, 0.0);
+    EXPECT_DOUBLE_EQ(missedNear.firstRangeM, 4.0);
+
+    const auto never = ugv::tool::scoreApproach({{1.0, false}, {2.0, false}});
+    EXPECT_EQ(never.detected, 0);
+    EXPECT_DOUBLE_EQ(never.firstRangeM, 0.0);
+    EXPECT_DOUBLE_EQ(never.heldRangeM, 0.0);
+}
+
 } // namespace
