@@ -37,10 +37,10 @@ Result<void, Error> checkCpuLevel(std::string_view program, std::string_view lev
     if (cpuRunsLevel) {
         return {};
     }
-    return Unexpected(Error{std::string(program),
-                            "this build is for " + std::string(level) +
-                                " CPUs and this CPU does not have that instruction set (x86-64-v3: AVX2, FMA, BMI2; "
-                                "x86-64-v2: SSE4.2, POPCNT)",
+    return Unexpected(Error{"instruction set",
+                            "this build is for " + std::string(level) + " CPUs and this CPU is not one (" +
+                                std::string(program) + " needs " +
+                                (level == "x86-64-v3" ? "AVX2, FMA and BMI2" : "SSE4.2 and POPCNT") + ")",
                             "rebuild with 'cmake -DUGV_CPU=x86-64' (runs on any x86-64 CPU) or install a "
                             "package built that way"});
 }
