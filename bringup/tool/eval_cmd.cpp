@@ -547,8 +547,7 @@ int runEval(int argc, char** argv)
     Args args(
         "eval",
         "[--sim] [--approach] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] "
-        "[--ground-prior] "
-        "[--json OUT] [--data DIR] [--skip-missing]",
+        "[--ground-prior] [--json OUT] [--data DIR] [--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
          {"approach", "",
           "simulator: each obstacle placed from 12 m to 1 m, 0.25 m nearer each frame: how far ahead it is seen",

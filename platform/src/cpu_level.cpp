@@ -1,10 +1,10 @@
 // Compiled for the plain x86-64 level whatever UGV_CPU is (platform/CMakeLists.txt): this code runs on the CPUs
-// the rest of the build may not.
+// the rest of the build may not. Only libc and builtins here (see cpu_level.hpp).
 #include "ugv/platform/cpu_level.hpp"
 
 #include <cstdio>
 #include <cstdlib>
-#include <string>
+#include <cstring>
 
 #ifndef UGV_BUILT_CPU_LEVEL
 #define UGV_BUILT_CPU_LEVEL ""
@@ -12,19 +12,19 @@
 
 namespace ugv {
 
-std::string_view builtCpuLevel() noexcept
+const char* builtCpuLevel() noexcept
 {
     return UGV_BUILT_CPU_LEVEL;
 }
 
-bool cpuRuns(std::string_view level) noexcept
+bool cpuRuns(const char* level) noexcept
 {
 #if defined(__x86_64__)
     __builtin_cpu_init();
-    if (level == "x86-64-v3") {
+    if (std::strcmp(level, "x86-64-v3") == 0) {
         return __builtin_cpu_supports("x86-64-v3") != 0;
     }
-    if (level == "x86-64-v2") {
+    if (std::strcmp(level, "x86-64-v2") == 0) {
         return __builtin_cpu_supports("x86-64-v2") != 0;
     }
 #endif
@@ -32,24 +32,23 @@ bool cpuRuns(std::string_view level) noexcept
     return true;
 }
 
-Result<void, Error> checkCpuLevel(std::string_view program, std::string_view level, bool cpuRunsLevel)
+int formatCpuLevelError(char* out, std::size_t size, const char* program, const char* level) noexcept
 {
-    if (cpuRunsLevel) {
-        return {};
-    }
-    return Unexpected(Error{"instruction set",
-                            "this build is for " + std::string(level) + " CPUs and this CPU is not one (" +
-                                std::string(program) + " needs " +
-                                (level == "x86-64-v3" ? "AVX2, FMA and BMI2" : "SSE4.2 and POPCNT") + ")",
-                            "rebuild with 'cmake -DUGV_CPU=x86-64' (runs on any x86-64 CPU) or install a "
-                            "package built that way"});
+    const bool v3 = std::strcmp(level, "x86-64-v3") == 0;
+    return std::snprintf(out, size,
+                         "%s: error: instruction set: this build is for %s CPUs and this CPU is not one (%s needs %s) "
+                         "(fix: rebuild with 'cmake -DUGV_CPU=x86-64' (runs on any x86-64 CPU) or install a package "
+                         "built that way)",
+                         program, level, program, v3 ? "AVX2, FMA and BMI2" : "SSE4.2 and POPCNT");
 }
 
 void exitUnlessCpuRunsBuild(const char* program) noexcept
 {
-    const std::string_view level = builtCpuLevel();
-    if (auto ok = checkCpuLevel(program, level, cpuRuns(level)); !ok) {
-        std::fprintf(stderr, "%s: error: %s\n", program, ok.error().message().c_str());
+    const char* level = builtCpuLevel();
+    if (!cpuRuns(level)) {
+        char line[512];
+        formatCpuLevelError(line, sizeof(line), program, level);
+        std::fprintf(stderr, "%s\n", line);
         std::_Exit(1);
     }
 }

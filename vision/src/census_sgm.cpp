@@ -104,7 +104,8 @@ std::uint16_t addAndMinScalar(const std::uint8_t* a, std::uint16_t* sum, int d) 
 }
 
 /// The minimum of sum[k] over k in [0, d) outside [lo, hi] (the second best beside the winner's neighbours).
-/// Reads only: masking the entries in place and restoring them stalled every SIMD load on the scalar stores.
+/// Reads only (the entries are masked in registers, not overwritten and restored). Native u16 vectors: at most 16
+/// lanes at the levels we build (toolchain/cpu-level.cmake), and d is a multiple of 16.
 std::uint16_t minOutside(const std::uint16_t* sum, int d, int lo, int hi, bool useSimd) noexcept
 {
 #if (CV_SIMD || CV_SIMD_SCALABLE)

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string_view>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -128,13 +129,13 @@ TEST(CensusSgm, RejectsWrongSizes)
 TEST(CensusSgm, SimdWidthFollowsTheBuiltCpuLevel)
 {
     const int lanes = cv::v_uint8::nlanes;
-    if (ugv::builtCpuLevel() == "x86-64-v3") {
+    if (std::string_view(ugv::builtCpuLevel()) == "x86-64-v3") {
         EXPECT_EQ(lanes, 32);
         EXPECT_EQ(CV_AVX2, 1);
     } else {
         EXPECT_EQ(lanes, 16) << "128-bit: SSE2 or SSE4.2 on x86-64, NEON on aarch64";
     }
-    if (ugv::builtCpuLevel() == "x86-64-v2") {
+    if (std::string_view(ugv::builtCpuLevel()) == "x86-64-v2") {
         EXPECT_EQ(CV_SSE4_2, 1);
     }
 }
