@@ -167,17 +167,28 @@ duplicates=$(sed -E 's/.* ([0-9]+) duplicate\(s\).*/\1/' <<<"$line")
 [ "$duplicates" -gt 0 ] || fail "UGV 2's restarted process repeated nothing: the kill came too early to test it"
 
 # The station again, while the UGV processes linger with their histories.
-start_gcs second
-for _ in $(seq 300); do [ -f "$work/gcs/inputs.1.jsonl" ] && break; sleep 0.1; done # the first run's log set aside
-for _ in $(seq 600); do
-    [ -f "$work/gcs/inputs.jsonl" ] && [ "$(wc -l <"$work/gcs/inputs.jsonl")" -ge "$total" ] && break
-    sleep 0.1
-done
-sleep 1
-stop_gcs
+restarted_station_gets_all() { # LOG KEPT: start it (the last run's log is set aside as inputs.KEPT.jsonl), wait
+    start_gcs "$1" # for every message (60 s), stop it; true when the new log holds the whole scenario
+    for _ in $(seq 300); do [ -f "$work/gcs/inputs.$2.jsonl" ] && break; sleep 0.1; done
+    for _ in $(seq 600); do
+        [ -f "$work/gcs/inputs.jsonl" ] && [ "$(wc -l <"$work/gcs/inputs.jsonl")" -ge "$total" ] && break
+        sleep 0.1
+    done
+    sleep 1
+    stop_gcs
+    same_lines "$work/gcs/inputs.jsonl" "$work/scenario.jsonl"
+}
+# Fast DDS 2.9 now and then sends a keep-all, transient-local writer's history to none of a late-joining reader
+# (eProsima/Fast-DDS#3822, open upstream): seen once here (a CI run, 2026-12-02), when one UGV's whole history
+# stayed away from the restarted station. A second restart gets it (README, operator guide); two misses in a row
+# fail the test.
+if ! restarted_station_gets_all second 1; then
+    echo "   the restarted station got $(wc -l <"$work/gcs/inputs.jsonl") of $total messages (Fast DDS 2.9's" \
+        "late-joiner miss, eProsima/Fast-DDS#3822): restarting it once more"
+    restarted_station_gets_all second-retry 2 ||
+        fail "the restarted station got $(wc -l <"$work/gcs/inputs.jsonl") of $total messages, twice in a row"
+fi
 [ -s "$work/gcs/inputs.1.jsonl" ] || fail "the first run's log was not kept as inputs.1.jsonl"
-same_lines "$work/gcs/inputs.jsonl" "$work/scenario.jsonl" ||
-    fail "the restarted station got $(wc -l <"$work/gcs/inputs.jsonl") of $total messages"
 "$tool" correlate --input "$work/gcs/inputs.jsonl" --output "$work/offline2.jsonl" >/dev/null 2>&1
 cmp -s "$work/offline2.jsonl" "$work/gcs/snapshots.jsonl" || fail "restarted: live snapshots differ from offline"
 cmp -s <(tail -n 1 "$work/offline.jsonl") <(tail -n 1 "$work/offline2.jsonl") ||
