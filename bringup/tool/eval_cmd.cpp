@@ -132,6 +132,13 @@ public:
         return detector_.status() == vision::DetectorStatus::Ok;
     }
     [[nodiscard]] const ObstacleSectors& sectors() const { return detector_.sectors(); }
+    /// Frames run so far (each one rendered and detected).
+    [[nodiscard]] std::uint64_t frames() const { return frames_; }
+    /// [s] since the detector was made.
+    [[nodiscard]] double seconds() const
+    {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    }
 
 private:
     SimDetector(vision::Rectifier rectifier, vision::ObstacleDetector detector)
@@ -141,6 +148,7 @@ private:
     vision::Rectifier rectifier_;
     vision::ObstacleDetector detector_;
     std::uint64_t frames_ = 0;
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
 bool honoursBearing(const std::string& type)
@@ -182,8 +190,6 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     }
     SimDetector& det = *detector;
     sim::RenderResult frame;
-    const auto start = std::chrono::steady_clock::now();
-    int framesRun = 0;
 
     const std::vector<std::string> types = obstacleTypes(o);
     std::map<std::string, std::vector<BandStats>> stats;
@@ -205,7 +211,6 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
                                 std::cerr << "ugvsense eval: error: scene " << type << " failed\n";
                                 return 1;
                             }
-                            ++framesRun;
                             const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
                             BandStats& s = stats[type][static_cast<std::size_t>(b)];
                             ++s.frames;
@@ -236,7 +241,6 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             if (!scene || !det.run(*scene, frame)) {
                 return 1;
             }
-            ++framesRun;
             ++emptyFrames;
             const int n = countRedBlue(det.sectors());
             emptyFalseSectors += n;
@@ -256,7 +260,6 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             if (!scene || !det.run(*scene, frame)) {
                 return 1;
             }
-            ++framesRun;
             ++overhangFrames;
             overhangFalseFrames += countRedBlue(det.sectors()) > 0 ? 1 : 0;
         }
@@ -274,11 +277,11 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
             if (!scene || !det.run(*scene, frame)) {
                 return 1;
             }
-            ++framesRun;
             doorway.push_back({range, textureName(texture), scoreGap(det.sectors(), frame.sectors)});
         }
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = det.seconds();
+    const int framesRun = static_cast<int>(det.frames());
 
     // Table and verdicts.
     std::printf("\nsimulator suite: %d frames in %.1f s (default rig 640x480, level, 0.59 m; %zu texture(s), %zu "
@@ -380,8 +383,6 @@ int runApproach(const SimOptions& o, double stepM, std::ostringstream& json)
     }
     SimDetector& det = *detector;
     sim::RenderResult frame;
-    const auto start = std::chrono::steady_clock::now();
-    int framesRun = 0;
     std::printf("\napproach: each obstacle from %.0f m to %.0f m in %.2f m steps (%zu texture(s), bearings %s)\n",
                 kApproachFarM, kApproachNearM, stepM, o.textures.size(), o.bearings.size() > 1 ? "taking turns" : "0");
     std::printf("%-12s %-8s %8s %8s %10s %10s\n", "type", "texture", "bearing", "det%", "first_m", "held_m");
@@ -402,7 +403,6 @@ int runApproach(const SimOptions& o, double stepM, std::ostringstream& json)
                     std::cerr << "ugvsense eval: error: scene " << type << " failed\n";
                     return 1;
                 }
-                ++framesRun;
                 const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
                 if (score.gtHasObstacle) {
                     frames.push_back({score.gtRangeM, score.detected});
@@ -420,7 +420,8 @@ int runApproach(const SimOptions& o, double stepM, std::ostringstream& json)
             firstRow = false;
         }
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = det.seconds();
+    const int framesRun = static_cast<int>(det.frames());
     std::printf("approach summary (%d frames in %.1f s): held_m = seen in every frame from this GT range on\n",
                 framesRun, seconds);
     for (const std::string& type : types) {

@@ -1,7 +1,6 @@
 #include "ugv/vision/census_sgm.hpp"
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdlib>
@@ -103,43 +102,20 @@ std::uint16_t addAndMinScalar(const std::uint8_t* a, std::uint16_t* sum, int d) 
     return acc;
 }
 
-/// The minimum of sum[k] over k in [0, d) outside [lo, hi] (the second best beside the winner's neighbours).
-/// Reads only (the entries are masked in registers, not overwritten and restored). Native u16 vectors: at most 16
-/// lanes at the levels we build (toolchain/cpu-level.cmake), and d is a multiple of 16.
-std::uint16_t minOutside(const std::uint16_t* sum, int d, int lo, int hi, bool useSimd) noexcept
+std::uint16_t minOf(const std::uint16_t* sum, int d, bool useSimd) noexcept
 {
 #if (CV_SIMD || CV_SIMD_SCALABLE)
     if (useSimd) {
         using namespace cv; // NOLINT(google-build-using-namespace)
-        constexpr int kMaxLanes = 64;
-        static constexpr auto kIota = [] {
-            std::array<std::uint16_t, kMaxLanes> a{};
-            for (int i = 0; i < kMaxLanes; ++i) {
-                a[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(i);
-            }
-            return a;
-        }();
         const int lanes = simd::VTraits<v_uint16>::vlanes();
-        const v_uint16 none = vx_setall_u16(kNoCost);
-        const v_uint16 vLo = vx_setall_u16(static_cast<std::uint16_t>(lo));
-        const v_uint16 vHi = vx_setall_u16(static_cast<std::uint16_t>(hi));
-        v_uint16 acc = none;
+        v_uint16 acc = vx_setall_u16(kNoCost);
         for (int k = 0; k < d; k += lanes) {
-            v_uint16 v = vx_load(sum + k);
-            if (k + lanes > lo && k <= hi) {
-                const v_uint16 index = simd::v_add(vx_load(kIota.data()), vx_setall_u16(static_cast<std::uint16_t>(k)));
-                v = v_select(simd::v_or(simd::v_gt(vLo, index), simd::v_gt(index, vHi)), v, none);
-            }
-            acc = v_min(acc, v);
+            acc = v_min(acc, vx_load(sum + k));
         }
         return v_reduce_min(acc);
     }
 #endif
-    std::uint16_t acc = kNoCost;
-    for (int k = 0; k < d; ++k) {
-        acc = k < lo || k > hi ? std::min(acc, sum[k]) : acc;
-    }
-    return acc;
+    return *std::min_element(sum, sum + d);
 }
 
 int firstIndexOf(const std::uint16_t* sum, int d, std::uint16_t value, bool useSimd) noexcept
@@ -402,7 +378,18 @@ void CensusSgm::winner(int i, std::uint16_t minSum, std::int16_t* disp) noexcept
     std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
     const int x = x0_ + i;
     const int best = firstIndexOf(sum, d_, minSum, config_.simd);
-    const std::uint16_t second = minOutside(sum, d_, std::max(0, best - 1), std::min(d_ - 1, best + 1), config_.simd);
+    // Second best outside best +- 1: mask the three, take the minimum, restore.
+    const int lo = std::max(0, best - 1);
+    const int hi = std::min(d_ - 1, best + 1);
+    std::uint16_t saved[3] = {0, 0, 0};
+    for (int k = lo; k <= hi; ++k) {
+        saved[k - lo] = sum[k];
+        sum[k] = kNoCost;
+    }
+    const std::uint16_t second = minOf(sum, d_, config_.simd);
+    for (int k = lo; k <= hi; ++k) {
+        sum[k] = saved[k - lo];
+    }
     if (static_cast<int>(second) * (100 - config_.uniquenessRatio) <= static_cast<int>(minSum) * 100) {
         disp[x] = kInvalid;
         return;
