@@ -1,7 +1,7 @@
 // ugvsense eval: (a) --sim: obstacle detection on simulator scenes against the exact ground-truth sectors
 // (bringup/sim/README.md); (b) --middlebury: our matcher and OpenCV's default StereoSGBM against Middlebury ground
 // truth (../shared/data, or $UGV_SHARED_DATA, or --data DIR); (c) --approach: how far ahead each obstacle type is
-// seen as it comes nearer.
+// seen as it comes nearer; (d) --hole-signal: how much of a far hole the images themselves show.
 
 #include <algorithm>
 #include <chrono>
@@ -113,7 +113,9 @@ public:
         if (!detector) {
             return Unexpected(detector.error());
         }
-        return SimDetector(std::move(rectifier).value(), std::move(detector).value());
+        const vision::DisparityPlane ground =
+            vision::GroundPlane::fromMount(*calib.mount).disparityPlane(rectifier->projection());
+        return SimDetector(std::move(rectifier).value(), std::move(detector).value(), ground);
     }
 
     /// Renders `scene` and runs the detector on it; false when rendering or detection failed.
@@ -132,6 +134,8 @@ public:
         return detector_.status() == vision::DetectorStatus::Ok;
     }
     [[nodiscard]] const ObstacleSectors& sectors() const { return detector_.sectors(); }
+    /// The rig's ground (its mount) as a disparity model of the rectified left image.
+    [[nodiscard]] const vision::DisparityPlane& ground() const { return ground_; }
     /// Frames run so far (each one rendered and detected).
     [[nodiscard]] std::uint64_t frames() const { return frames_; }
     /// [s] since the detector was made.
@@ -141,12 +145,13 @@ public:
     }
 
 private:
-    SimDetector(vision::Rectifier rectifier, vision::ObstacleDetector detector)
-        : rectifier_(std::move(rectifier)), detector_(std::move(detector))
+    SimDetector(vision::Rectifier rectifier, vision::ObstacleDetector detector, const vision::DisparityPlane& ground)
+        : rectifier_(std::move(rectifier)), detector_(std::move(detector)), ground_(ground)
     {
     }
     vision::Rectifier rectifier_;
     vision::ObstacleDetector detector_;
+    vision::DisparityPlane ground_;
     std::uint64_t frames_ = 0;
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
@@ -433,6 +438,86 @@ int runApproach(const SimOptions& o, double stepM, std::ostringstream& json)
     return 0;
 }
 
+/// The hole signal: for 1 m holes from 6 to 10 m, the images' own evidence of the far wall (dropEvidence(), no
+/// matcher) against plain ground in the same rows, beside our detector on the same frames. It tells a miss that
+/// better matching could fix from one the images do not allow.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runHoleSignal(const SimOptions& o, const std::vector<double>& ranges, std::ostringstream& json)
+{
+    constexpr int kHalfWidth = 7; ///< 15 x 1 px windows: the wall is 2 to 4 rows at 6 to 10 m
+    constexpr int kStripWidth = 32;
+    constexpr int kStripRows = 2;
+    constexpr double kNearM = 5.0; ///< [m] the rows of ground from here ...
+    constexpr double kFarM = 15.0; ///< [m] ... to here
+    std::optional<SimDetector> detector = makeSimDetector(o);
+    if (!detector) {
+        return 1;
+    }
+    SimDetector& det = *detector;
+    const vision::DisparityPlane& ground = det.ground();
+    const sim::Rig rig;
+    // The far band's rows at the image centre (ground disparity f b / Z).
+    const auto rowAt = [&](double rangeM) {
+        return static_cast<int>(
+            std::lround((rig.focalPx * rig.baselineM / rangeM - ground.a * rig.cx() - ground.c) / ground.b));
+    };
+    const int rowFirst = rowAt(kFarM);
+    const int rowLast = rowAt(kNearM);
+    std::printf(
+        "\nhole signal: the images' own evidence of a 1 m hole's far wall (no matcher: 15 x 1 px zero-mean SAD at "
+        "the ground's disparity against the best 0.5-3 px below it, pooled over %d x %d px strips), the best wall "
+        "strip against the best plain-ground strip of the same rows; beside our detector on the same frames\n",
+        kStripWidth, kStripRows);
+    std::printf("%-12s %8s %7s %8s %12s %12s %12s\n", "type", "range_m", "frames", "det%", "separable%", "wall_p50",
+                "ground_p50");
+    json << "  \"hole_signal\": [";
+    bool firstRow = true;
+    sim::RenderResult frame;
+    for (const char* const type : {"hole", "hole_square"}) {
+        for (const double range : ranges) {
+            int frames = 0;
+            int detected = 0;
+            int separable = 0;
+            std::vector<double> wall;
+            std::vector<double> plain;
+            for (const sim::GroundTexture texture : o.textures) {
+                for (int seed = 1; seed <= o.seeds; ++seed) {
+                    auto scene = sim::makeScene(type, range, 0.0, texture, static_cast<std::uint64_t>(seed));
+                    if (!scene || !det.run(*scene, frame)) {
+                        std::cerr << "ugvsense eval: error: scene " << type << " failed\n";
+                        return 1;
+                    }
+                    const cv::Mat evidence =
+                        dropEvidence(frame.left, frame.right, ground, rowFirst, rowLast, kHalfWidth);
+                    const DropSignal signal = scoreDropSignal(evidence, frame.labels, frame.disparity, ground, rowFirst,
+                                                              rowLast, kStripWidth, kStripRows);
+                    if (!signal.hasWall) {
+                        continue; // the hole lies beyond the rows, or its wall is too shallow to count
+                    }
+                    ++frames;
+                    detected += scoreObstacleFrame(det.sectors(), frame.sectors).detected ? 1 : 0;
+                    separable += signal.separable() ? 1 : 0;
+                    wall.push_back(signal.wallBest);
+                    plain.push_back(signal.groundBest);
+                }
+            }
+            const double detRate = frames > 0 ? 100.0 * detected / frames : 0.0;
+            const double sepRate = frames > 0 ? 100.0 * separable / frames : 0.0;
+            std::printf("%-12s %8.1f %7d %8.1f %12.1f %12.3f %12.3f\n", type, range, frames, detRate, sepRate,
+                        quantile(wall, 0.5), quantile(plain, 0.5));
+            json << (firstRow ? "\n" : ",\n") << "    {\"type\": \"" << type << "\", \"range_m\": " << jsonNumber(range)
+                 << ", \"frames\": " << frames << ", \"detected\": " << detected << ", \"separable\": " << separable
+                 << ", \"wall_p50\": " << jsonNumber(quantile(wall, 0.5))
+                 << ", \"ground_p50\": " << jsonNumber(quantile(plain, 0.5)) << "}";
+            firstRow = false;
+        }
+    }
+    json << "\n  ]";
+    std::printf("separable%%: frames whose best wall strip beats every plain-ground strip of its rows, i.e. a detector "
+                "told where the hole is and given the best threshold for the frame would see it\n");
+    return 0;
+}
+
 struct StereoSet {
     const char* name;
     const char* folder; ///< relative to the data root
@@ -547,11 +632,16 @@ int runEval(int argc, char** argv)
 {
     Args args(
         "eval",
-        "[--sim] [--approach] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] "
+        "[--sim] [--approach] [--hole-signal] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] "
+        "[--matcher MODE] "
         "[--ground-prior] [--json OUT] [--data DIR] [--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
          {"approach", "",
           "simulator: each obstacle placed from 12 m to 1 m, 0.25 m nearer each frame: how far ahead it is seen",
+          false},
+         {"hole-signal", "",
+          "simulator: 1 m holes at 6-10 m: the images' own evidence of the far wall (no matcher) against plain ground, "
+          "beside our detector",
           false},
          {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
          {"quick", "",
@@ -572,9 +662,9 @@ int runEval(int argc, char** argv)
         std::cout << args.usage();
         return 0;
     }
-    if (!args.has("sim") && !args.has("approach") && !args.has("middlebury")) {
-        return reportUsageError(
-            "eval", Error{"ugvsense eval", "nothing to evaluate", "give --sim, --approach and/or --middlebury"});
+    if (!args.has("sim") && !args.has("approach") && !args.has("hole-signal") && !args.has("middlebury")) {
+        return reportUsageError("eval", Error{"ugvsense eval", "nothing to evaluate",
+                                              "give --sim, --approach, --hole-signal and/or --middlebury"});
     }
     if (!args.positional().empty()) {
         return reportUsageError("eval", Error{"ugvsense eval", "unexpected argument '" + args.positional()[0] + "'",
@@ -617,7 +707,7 @@ int runEval(int argc, char** argv)
 
     std::ostringstream json;
     json << "{\n";
-    const bool simulated = args.has("sim") || args.has("approach");
+    const bool simulated = args.has("sim") || args.has("approach") || args.has("hole-signal");
     if (simulated) {
         SimOptions o;
         if (args.has("quick")) {
@@ -660,6 +750,15 @@ int runEval(int argc, char** argv)
         if (args.has("approach")) {
             json << (args.has("sim") ? ",\n" : "");
             if (const int rc = runApproach(o, args.has("quick") ? 0.5 : 0.25, json); rc != 0) {
+                return rc;
+            }
+        }
+        if (args.has("hole-signal")) {
+            json << (args.has("sim") || args.has("approach") ? ",\n" : "");
+            const std::vector<double> ranges = args.has("quick")
+                                                   ? std::vector<double>{7.0, 9.0}
+                                                   : std::vector<double>{6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5, 10.0};
+            if (const int rc = runHoleSignal(o, ranges, json); rc != 0) {
                 return rc;
             }
         }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 
@@ -172,6 +173,140 @@ ApproachScore scoreApproach(std::vector<ApproachFrame> frames)
         }
     }
     return score;
+}
+
+namespace {
+
+constexpr std::uint8_t kLabelGround = 0;   ///< sim::Label::Ground
+constexpr std::uint8_t kLabelNegative = 2; ///< sim::Label::Negative
+constexpr float kWallBelowGroundPx = 0.75F;
+constexpr int kStripStepPx = 4;
+constexpr int kGroundRowsAroundWall = 6;
+
+/// Linear interpolation of row `r` at x; false outside the row.
+bool sampleRow(const std::uint8_t* r, int cols, double x, float& value)
+{
+    const int x0 = static_cast<int>(std::floor(x));
+    if (x0 < 0 || x0 + 1 >= cols) {
+        return false;
+    }
+    const auto f = static_cast<float>(x - x0);
+    value = (1.0F - f) * r[x0] + f * r[x0 + 1];
+    return true;
+}
+
+} // namespace
+
+cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::DisparityPlane& ground, int rowFirst,
+                     int rowLast, int halfWidth)
+{
+    CV_Assert(left.type() == CV_8UC1 && right.type() == CV_8UC1 && left.size() == right.size() && halfWidth >= 1);
+    constexpr double kNearestBelowPx = 0.5;
+    constexpr double kFarthestBelowPx = 3.0;
+    constexpr double kStepPx = 0.25;
+    cv::Mat evidence(left.size(), CV_32F, cv::Scalar(0));
+    const int n = 2 * halfWidth + 1;
+    std::vector<float> l(static_cast<std::size_t>(n));
+    std::vector<float> r(static_cast<std::size_t>(n));
+    // Zero-mean SAD per pixel of the window at disparity d(x) for each window pixel; false off the image.
+    const auto cost = [&](int y, int x, const auto& disparityAt, float& c) {
+        const std::uint8_t* lr = left.ptr<std::uint8_t>(y);
+        const std::uint8_t* rr = right.ptr<std::uint8_t>(y);
+        float ml = 0.0F;
+        float mr = 0.0F;
+        for (int i = 0; i < n; ++i) {
+            const int xi = x - halfWidth + i;
+            l[static_cast<std::size_t>(i)] = lr[xi];
+            if (!sampleRow(rr, right.cols, xi - disparityAt(xi), r[static_cast<std::size_t>(i)])) {
+                return false;
+            }
+            ml += l[static_cast<std::size_t>(i)];
+            mr += r[static_cast<std::size_t>(i)];
+        }
+        ml /= static_cast<float>(n);
+        mr /= static_cast<float>(n);
+        c = 0.0F;
+        for (std::size_t i = 0; i < l.size(); ++i) {
+            c += std::abs((l[i] - ml) - (r[i] - mr));
+        }
+        c /= static_cast<float>(n);
+        return true;
+    };
+    for (int y = std::max(0, rowFirst); y <= std::min(left.rows - 1, rowLast); ++y) {
+        float* e = evidence.ptr<float>(y);
+        for (int x = halfWidth; x < left.cols - halfWidth; ++x) {
+            float onGround = 0.0F;
+            if (!cost(
+                    y, x, [&](int xi) { return ground.at(xi, y); }, onGround)) {
+                continue;
+            }
+            float best = std::numeric_limits<float>::infinity();
+            const double dg = ground.at(x, y);
+            for (double d = dg - kFarthestBelowPx; d <= dg - kNearestBelowPx + 1e-9; d += kStepPx) {
+                float c = 0.0F;
+                if (d > 0.0 && cost(
+                                   y, x, [d](int) { return d; }, c)) {
+                    best = std::min(best, c);
+                }
+            }
+            e[x] = std::isfinite(best) ? (onGround - best) / (onGround + 1.0F) : 0.0F;
+        }
+    }
+    return evidence;
+}
+
+DropSignal scoreDropSignal(const cv::Mat& evidence, const cv::Mat& labels, const cv::Mat& gtDisparity,
+                           const vision::DisparityPlane& ground, int rowFirst, int rowLast, int stripWidth,
+                           int stripRows)
+{
+    rowFirst = std::max(0, rowFirst);
+    rowLast = std::min(evidence.rows - 1, rowLast);
+    const auto isWall = [&](int y, int x) {
+        return labels.at<std::uint8_t>(y, x) == kLabelNegative &&
+               ground.at(x, y) - gtDisparity.at<float>(y, x) >= kWallBelowGroundPx;
+    };
+    int wallFirst = rowLast + 1;
+    int wallLast = rowFirst - 1;
+    for (int y = rowFirst; y <= rowLast; ++y) {
+        for (int x = 0; x < evidence.cols; ++x) {
+            if (isWall(y, x)) {
+                wallFirst = std::min(wallFirst, y);
+                wallLast = std::max(wallLast, y);
+            }
+        }
+    }
+    DropSignal signal;
+    if (wallFirst > wallLast) {
+        return signal;
+    }
+    signal.wallBest = -std::numeric_limits<double>::infinity();
+    signal.groundBest = -std::numeric_limits<double>::infinity();
+    const int area = stripWidth * stripRows;
+    for (int y = std::max(rowFirst, wallFirst - kGroundRowsAroundWall);
+         y + stripRows - 1 <= std::min(rowLast, wallLast + kGroundRowsAroundWall); ++y) {
+        for (int x0 = 0; x0 + stripWidth <= evidence.cols; x0 += kStripStepPx) {
+            double sum = 0.0;
+            int wall = 0;
+            int plain = 0;
+            for (int yy = y; yy < y + stripRows; ++yy) {
+                for (int x = x0; x < x0 + stripWidth; ++x) {
+                    sum += evidence.at<float>(yy, x);
+                    wall += isWall(yy, x) ? 1 : 0;
+                    plain += labels.at<std::uint8_t>(yy, x) == kLabelGround ? 1 : 0;
+                }
+            }
+            const double mean = sum / area;
+            if (2 * wall >= area) {
+                signal.hasWall = true;
+                signal.wallBest = std::max(signal.wallBest, mean);
+            } else if (plain == area) {
+                signal.groundBest = std::max(signal.groundBest, mean);
+            }
+        }
+    }
+    signal.wallBest = signal.hasWall ? signal.wallBest : 0.0;
+    signal.groundBest = std::isfinite(signal.groundBest) ? signal.groundBest : 0.0;
+    return signal;
 }
 
 double quantile(std::vector<double> values, double p)

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "ugv/platform/obstacle_sectors.hpp"
+#include "ugv/vision/ground_plane.hpp"
 
 namespace ugv::tool {
 
@@ -79,6 +80,35 @@ struct DisparityScore {
 /// @param[in] predicted  CV_32F disparity [px], invalid < 0
 /// @param[in] gt         CV_32F disparity [px], 0 = unknown (masked out); same size
 DisparityScore scoreDisparity(const cv::Mat& predicted, const cv::Mat& gt);
+
+/// The images' own evidence that pixels lie below the ground, with no matcher (`ugvsense eval --hole-signal`): over a
+/// window of one row and 2 * halfWidth + 1 pixels, the zero-mean SAD of left against right at the ground's disparity
+/// (c_g) and the least one at a constant disparity 0.5 to 3 px below the ground's (c_b; 0.25 px steps, the right image
+/// interpolated linearly); evidence = (c_g - c_b) / (c_g + 1) grey levels. Near 0 where the ground explains the
+/// window, up to 1 where a farther surface does and the ground does not.
+/// @param[in] left, right  CV_8UC1 rectified pair of one size
+/// @param[in] ground       the ground's disparity model
+/// @param[in] rowFirst, rowLast  rows to compute (clamped to the image); the rest of the result is 0
+/// @return CV_32F of the size of `left`
+cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::DisparityPlane& ground, int rowFirst,
+                     int rowLast, int halfWidth);
+
+/// One frame's drop evidence pooled over strips of stripWidth x stripRows pixels (every 4 px, every row): the best
+/// strip over a hole's far wall against the best plain-ground strip in the same rows.
+struct DropSignal {
+    bool hasWall = false;  ///< the truth has a wall strip: half its pixels or more are wall
+    double wallBest = 0.0; ///< best mean evidence of a wall strip; 0 without one
+    double groundBest =
+        0.0; ///< best mean evidence of a strip all on plain ground, in the wall's rows +- 6; 0 without one
+    /// Even a detector told where to look and given the best threshold for this frame would find the wall.
+    [[nodiscard]] bool separable() const { return hasWall && wallBest > groundBest; }
+};
+/// @param[in] evidence     dropEvidence()
+/// @param[in] labels       CV_8U truth per pixel: 0 plain ground, 2 a hole's wall or floor (sim::Label)
+/// @param[in] gtDisparity  CV_32F true disparity; a wall pixel is a label-2 pixel at least 0.75 px below the ground
+DropSignal scoreDropSignal(const cv::Mat& evidence, const cv::Mat& labels, const cv::Mat& gtDisparity,
+                           const vision::DisparityPlane& ground, int rowFirst, int rowLast, int stripWidth,
+                           int stripRows);
 
 /// The p-quantile (nearest rank) of `values` (copied and sorted); 0 when empty.
 double quantile(std::vector<double> values, double p);

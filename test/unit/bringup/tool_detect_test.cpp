@@ -350,4 +350,69 @@ TEST(EvalScoring, ApproachHeldRangeIsWhereDetectionBecomesContinuous)
     EXPECT_DOUBLE_EQ(never.heldRangeM, 0.0);
 }
 
+/// A textured pair whose right image sees the left through a constant ground disparity of 10 px, except a block of
+/// rows and columns seen 2 px farther (a far wall): right(y, x) = left(y, x + d).
+struct DropPair {
+    static constexpr double kGroundPx = 10.0;
+    static constexpr int kWallPx = 8;
+    cv::Rect wall{200, 40, 64, 2};
+    cv::Mat left, right, labels, gtDisparity;
+    DropPair()
+    {
+        cv::Mat texture(80, 400, CV_8UC1);
+        cv::RNG rng(7);
+        rng.fill(texture, cv::RNG::UNIFORM, 40, 200);
+        left = texture(cv::Rect(0, 0, 380, 80)).clone();
+        right = cv::Mat(left.size(), CV_8UC1);
+        labels = cv::Mat(left.size(), CV_8UC1, cv::Scalar(0));
+        gtDisparity = cv::Mat(left.size(), CV_32F, cv::Scalar(kGroundPx));
+        labels(wall).setTo(2);
+        gtDisparity(wall).setTo(kWallPx);
+        for (int y = 0; y < right.rows; ++y) {
+            for (int x = 0; x < right.cols; ++x) {
+                // The right pixel at x sees the left's x + d: d of the left pixel there (walls are fronto-parallel).
+                const int d = wall.contains({x + kWallPx, y}) ? kWallPx : static_cast<int>(kGroundPx);
+                right.at<std::uint8_t>(y, x) = texture.at<std::uint8_t>(y, x + d);
+            }
+        }
+    }
+};
+
+TEST(EvalScoring, DropEvidenceIsHighOnAFartherSurfaceAndLowOnTheGround)
+{
+    const DropPair pair;
+    const ugv::vision::DisparityPlane ground{0.0, 0.0, DropPair::kGroundPx};
+    const cv::Mat sut = ugv::tool::dropEvidence(pair.left, pair.right, ground, 30, 50, 7);
+    ASSERT_EQ(sut.type(), CV_32F);
+    // Windows wholly on the wall, and wholly on the ground of the same rows and of rows without a wall.
+    const cv::Rect onWall(pair.wall.x + 8, pair.wall.y, pair.wall.width - 16, pair.wall.height);
+    double wallMin = 0.0;
+    cv::minMaxLoc(sut(onWall), &wallMin, nullptr);
+    EXPECT_GT(wallMin, 0.5);
+    double groundMax = 0.0;
+    cv::minMaxLoc(sut(cv::Rect(20, 30, 150, 21)), nullptr, &groundMax);
+    EXPECT_LT(groundMax, 0.05);
+    // Rows outside [rowFirst, rowLast] are left at 0.
+    EXPECT_EQ(cv::countNonZero(sut(cv::Rect(0, 0, sut.cols, 30))), 0);
+}
+
+TEST(EvalScoring, DropSignalComparesTheBestWallStripWithThePlainGroundOfItsRows)
+{
+    const DropPair pair;
+    const ugv::vision::DisparityPlane ground{0.0, 0.0, DropPair::kGroundPx};
+    const cv::Mat evidence = ugv::tool::dropEvidence(pair.left, pair.right, ground, 30, 50, 7);
+    const auto sut = ugv::tool::scoreDropSignal(evidence, pair.labels, pair.gtDisparity, ground, 30, 50, 32, 2);
+    EXPECT_TRUE(sut.hasWall);
+    EXPECT_GT(sut.wallBest, 0.5);
+    EXPECT_LT(sut.groundBest, 0.05);
+    EXPECT_TRUE(sut.separable());
+
+    // The same pair with the wall's pixels only 0.5 px below the ground in the truth: no wall to score.
+    cv::Mat shallow = pair.gtDisparity.clone();
+    shallow(pair.wall).setTo(DropPair::kGroundPx - 0.5);
+    const auto none = ugv::tool::scoreDropSignal(evidence, pair.labels, shallow, ground, 30, 50, 32, 2);
+    EXPECT_FALSE(none.hasWall);
+    EXPECT_FALSE(none.separable());
+}
+
 } // namespace
