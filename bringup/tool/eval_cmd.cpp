@@ -464,7 +464,7 @@ int runHoleSignal(const SimOptions& o, const std::vector<double>& ranges, std::o
     const int rowFirst = rowAt(kFarM);
     const int rowLast = rowAt(kNearM);
     std::printf(
-        "\nhole signal: the images' own evidence of a 1 m hole's far wall (no matcher: 15 x 1 px zero-mean SAD at "
+        "\nhole signal: the images' own evidence of a 1 m hole's far wall (no matcher: 15 x 1 px zero-mean SAD near "
         "the ground's disparity against the best 0.5-3 px below it, pooled over %d x %d px strips), the best wall "
         "strip against the best plain-ground strip of the same rows; beside our detector on the same frames\n",
         kStripWidth, kStripRows);

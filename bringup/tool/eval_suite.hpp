@@ -82,10 +82,12 @@ struct DisparityScore {
 DisparityScore scoreDisparity(const cv::Mat& predicted, const cv::Mat& gt);
 
 /// The images' own evidence that pixels lie below the ground, with no matcher (`ugvsense eval --hole-signal`): over a
-/// window of one row and 2 * halfWidth + 1 pixels, the zero-mean SAD of left against right at the ground's disparity
-/// (c_g) and the least one at a constant disparity 0.5 to 3 px below the ground's (c_b; 0.25 px steps, the right image
-/// interpolated linearly); evidence = (c_g - c_b) / (c_g + 1) grey levels. Near 0 where the ground explains the
-/// window, up to 1 where a farther surface does and the ground does not.
+/// window of one row and 2 * halfWidth + 1 pixels, the zero-mean SAD per pixel of left against right near the
+/// ground's disparity (c_g: the least within +-3/8 px of it, 1/8 px steps) and the least one at a constant disparity
+/// 0.5 to 3 px below the ground's (c_b; 1/4 px steps), the right image interpolated linearly; evidence = (c_g - c_b) /
+/// (c_g + 1) grey levels. Near 0 or below where the ground explains the window, up to 1 where a farther surface does
+/// and the ground does not. The ground's own search keeps the least of many farther costs from winning by chance
+/// where the images disagree for another reason (a strong horizontal edge).
 /// @param[in] left, right  CV_8UC1 rectified pair of one size
 /// @param[in] ground       the ground's disparity model
 /// @param[in] rowFirst, rowLast  rows to compute (clamped to the image); the rest of the result is 0
