@@ -238,8 +238,8 @@ cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::Di
         float* e = evidence.ptr<float>(y);
         for (int x = halfWidth; x < left.cols - halfWidth; ++x) {
             // The ground gets a search of its own (+-3/8 px): the least of the 11 farther costs would otherwise beat
-            // a single ground cost by chance wherever the images disagree for another reason (a strong horizontal
-            // edge: the simulator's jittered samples, a real rig's vertical misalignment).
+            // a single ground cost by chance wherever the images disagree for another reason (the noise of a strong
+            // edge: the simulator's jittered samples, a real rig's small vertical misalignment).
             float onGround = std::numeric_limits<float>::infinity();
             for (double shift = -kGroundSearchPx; shift <= kGroundSearchPx + 1e-9; shift += kGroundStepPx) {
                 float c = 0.0F;

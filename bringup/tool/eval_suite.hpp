@@ -87,7 +87,7 @@ DisparityScore scoreDisparity(const cv::Mat& predicted, const cv::Mat& gt);
 /// 0.5 to 3 px below the ground's (c_b; 1/4 px steps), the right image interpolated linearly; evidence = (c_g - c_b) /
 /// (c_g + 1) grey levels. Near 0 or below where the ground explains the window, up to 1 where a farther surface does
 /// and the ground does not. The ground's own search keeps the least of many farther costs from winning by chance
-/// where the images disagree for another reason (a strong horizontal edge).
+/// where the images disagree for another reason (the noise of a strong edge).
 /// @param[in] left, right  CV_8UC1 rectified pair of one size
 /// @param[in] ground       the ground's disparity model
 /// @param[in] rowFirst, rowLast  rows to compute (clamped to the image); the rest of the result is 0
