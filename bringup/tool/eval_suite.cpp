@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <limits>
 
+#include "sim/renderer.hpp"
+
 namespace ugv::tool {
 
 namespace {
@@ -177,8 +179,6 @@ ApproachScore scoreApproach(std::vector<ApproachFrame> frames)
 
 namespace {
 
-constexpr std::uint8_t kLabelGround = 0;   ///< sim::Label::Ground
-constexpr std::uint8_t kLabelNegative = 2; ///< sim::Label::Negative
 constexpr float kWallBelowGroundPx = 0.75F;
 constexpr int kStripStepPx = 4;
 constexpr int kGroundRowsAroundWall = 6;
@@ -273,7 +273,7 @@ DropSignal scoreDropSignal(const cv::Mat& evidence, const cv::Mat& labels, const
     rowFirst = std::max(0, rowFirst);
     rowLast = std::min(evidence.rows - 1, rowLast);
     const auto isWall = [&](int y, int x) {
-        return labels.at<std::uint8_t>(y, x) == kLabelNegative &&
+        return labels.at<std::uint8_t>(y, x) == static_cast<std::uint8_t>(sim::Label::Negative) &&
                ground.at(x, y) - gtDisparity.at<float>(y, x) >= kWallBelowGroundPx;
     };
     int wallFirst = rowLast + 1;
@@ -303,7 +303,7 @@ DropSignal scoreDropSignal(const cv::Mat& evidence, const cv::Mat& labels, const
                 for (int x = x0; x < x0 + stripWidth; ++x) {
                     sum += evidence.at<float>(yy, x);
                     wall += isWall(yy, x) ? 1 : 0;
-                    plain += labels.at<std::uint8_t>(yy, x) == kLabelGround ? 1 : 0;
+                    plain += labels.at<std::uint8_t>(yy, x) == static_cast<std::uint8_t>(sim::Label::Ground) ? 1 : 0;
                 }
             }
             const double mean = sum / area;

@@ -100,13 +100,13 @@ cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::Di
 struct DropSignal {
     bool hasWall = false;  ///< the truth has a wall strip: half its pixels or more are wall
     double wallBest = 0.0; ///< best mean evidence of a wall strip; 0 without one
-    double groundBest =
-        0.0; ///< best mean evidence of a strip all on plain ground, in the wall's rows +- 6; 0 without one
+    /// Best mean evidence of a strip all on plain ground, in the wall's rows +- 6; 0 without one.
+    double groundBest = 0.0;
     /// Even a detector told where to look and given the best threshold for this frame would find the wall.
     [[nodiscard]] bool separable() const { return hasWall && wallBest > groundBest; }
 };
 /// @param[in] evidence     dropEvidence()
-/// @param[in] labels       CV_8U truth per pixel: 0 plain ground, 2 a hole's wall or floor (sim::Label)
+/// @param[in] labels       CV_8U truth per pixel, sim::Label (Ground, Negative: a hole's wall or floor)
 /// @param[in] gtDisparity  CV_32F true disparity; a wall pixel is a label-2 pixel at least 0.75 px below the ground
 DropSignal scoreDropSignal(const cv::Mat& evidence, const cv::Mat& labels, const cv::Mat& gtDisparity,
                            const vision::DisparityPlane& ground, int rowFirst, int rowLast, int stripWidth,
