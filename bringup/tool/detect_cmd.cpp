@@ -25,8 +25,6 @@
 namespace ugv::tool {
 namespace {
 
-constexpr int kBarHeightPx = 24;        ///< [px] sector bar below the overlay image
-constexpr double kTintAlpha = 0.55;     ///< weight of the tint colour on obstacle pixels
 constexpr double kMaxDistanceM = 100.0; ///< [m] upper bound of --danger / --caution
 
 int fail(const Error& error)
@@ -53,86 +51,6 @@ cv::Mat readImage(const std::string& path, int flags, std::string& why)
         why = "not a readable image";
     }
     return image;
-}
-
-cv::Scalar dangerColour(DangerClass danger)
-{
-    switch (danger) {
-    case DangerClass::Red:
-        return {0, 0, 255};
-    case DangerClass::Blue:
-        return {255, 0, 0};
-    case DangerClass::Green:
-        return {0, 190, 0};
-    case DangerClass::Unknown:
-        break;
-    }
-    return {128, 128, 128};
-}
-
-/// The rectified left image in colour (identity for the rectified form; each channel remapped otherwise) with
-/// the obstacle pixels of the dense cue tinted (above the ground: red, below: blue) and a bar of the sectors'
-/// danger classes below it, each sector over the columns of its bearings.
-cv::Mat makeOverlay(const cv::Mat& colourLeft, vision::Rectifier& fullRectifier, const vision::ObstacleDetector& det,
-                    const vision::DetectorConfig& config, const vision::RectifiedProjection& p)
-{
-    cv::Mat rectified;
-    if (fullRectifier.identity()) {
-        rectified = colourLeft.clone();
-    } else {
-        std::vector<cv::Mat> channels;
-        cv::split(colourLeft, channels);
-        for (cv::Mat& channel : channels) {
-            cv::Mat out(channel.size(), CV_8UC1);
-            (void)fullRectifier.rectify(viewOf(channel), viewOf(channel), ImageViewU8(out.data, out.cols, out.rows),
-                                        ImageViewU8(out.data, out.cols, out.rows));
-            channel = out;
-        }
-        cv::merge(channels, rectified);
-    }
-    const Rect roi = det.roi();
-    const cv::Mat& disparity = det.disparity16();
-    const vision::GroundPlane& ground = det.ground();
-    for (int y = config.marginRows; y < roi.height; ++y) {
-        const auto* d = disparity.ptr<std::int16_t>(y);
-        auto* pixel = rectified.ptr<cv::Vec3b>(roi.y + y);
-        for (int x = 0; x < roi.width; ++x) {
-            if (d[x] <= 0) {
-                continue;
-            }
-            const vision::VehiclePoint point =
-                ground.pixelToVehicle(roi.x + x, roi.y + y, d[x] / static_cast<double>(vision::RoiMatcher::kScale), p);
-            if (std::hypot(point.x, point.y) > config.sectors.maxRangeM) {
-                continue;
-            }
-            cv::Vec3b tint;
-            if (point.z > config.sectors.minHeightM) {
-                tint = {0, 0, 255};
-            } else if (point.z < -config.sectors.minDepthM) {
-                tint = {255, 0, 0};
-            } else {
-                continue;
-            }
-            cv::Vec3b& px = pixel[roi.x + x];
-            for (int c = 0; c < 3; ++c) {
-                px[c] = cv::saturate_cast<std::uint8_t>((1.0 - kTintAlpha) * px[c] + kTintAlpha * tint[c]);
-            }
-        }
-    }
-    cv::Mat canvas(rectified.rows + kBarHeightPx, rectified.cols, CV_8UC3, cv::Scalar(0, 0, 0));
-    rectified.copyTo(canvas(cv::Rect(0, 0, rectified.cols, rectified.rows)));
-    const ObstacleSectors& sectors = det.sectors();
-    constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-    for (int i = 0; i < sectors.count; ++i) {
-        const Sector& s = sectors.sectors[static_cast<std::size_t>(i)];
-        // Positive bearings are to the left: the larger bearing gives the smaller column.
-        const int x0 = static_cast<int>(std::lround(p.cx - p.fx * std::tan(s.bearingMaxDeg * kDegToRad)));
-        const int x1 = static_cast<int>(std::lround(p.cx - p.fx * std::tan(s.bearingMinDeg * kDegToRad)));
-        cv::rectangle(canvas, cv::Point(std::max(0, x0), rectified.rows + 2),
-                      cv::Point(std::min(canvas.cols - 1, x1 - 1), canvas.rows - 3), dangerColour(s.danger),
-                      cv::FILLED);
-    }
-    return canvas;
 }
 
 bool writeJson(const std::string& path, const vision::ObstacleDetector& det, bool estimated)
@@ -256,57 +174,27 @@ int runDetect(int argc, char** argv)
     }
 
     const vision::DetectorConfig config = detectorConfig(options);
-    vision::RectifierConfig roiConfig;
-    roiConfig.roiMarginRows = config.marginRows;
-    auto roiRectifier = vision::Rectifier::create(*calib, roiConfig);
-    vision::RectifierConfig fullConfig = roiConfig;
+    vision::RectifierConfig fullConfig;
+    fullConfig.roiMarginRows = config.marginRows;
     fullConfig.fullFrame = true;
     auto fullRectifier = vision::Rectifier::create(*calib, fullConfig);
-    if (!roiRectifier || !fullRectifier) {
-        return fail(!roiRectifier ? roiRectifier.error() : fullRectifier.error());
+    if (!fullRectifier) {
+        return fail(fullRectifier.error());
     }
-    if (roiRectifier->rectify(viewOf(left), viewOf(right)) != vision::RectifyStatus::Ok) {
-        return fail(Error{args.get("left"), "rectification rejected the images", "check the image sizes"});
+    auto run = detectPair(*calib, left, right, config, args.get("calib"));
+    if (!run) {
+        return fail(run.error());
     }
-    const Rect roi = roiRectifier->roi();
-    const vision::RectifiedProjection& projection = roiRectifier->projection();
-
-    bool estimated = false;
-    vision::GroundPlane ground;
-    if (calib->mount) {
-        ground = vision::GroundPlane::fromMount(*calib->mount);
-    } else {
-        auto matcher = vision::RoiMatcher::create(config.matcher, cv::Size(roi.width, roi.height));
-        if (!matcher) {
-            return fail(matcher.error());
-        }
-        if (matcher->match(roiRectifier->rectifiedLeft(), roiRectifier->rectifiedRight()) != vision::MatchStatus::Ok) {
-            return fail(Error{"ground estimate", "the stereo matcher failed on the ROI", ""});
-        }
-        auto fit = fitGround(matcher->disparity16(), roi, projection);
-        if (!fit) {
-            return fail(Error{args.get("calib") + ": no mount, and the " + fit.error().where + " failed",
-                              fit.error().what, fit.error().fix});
-        }
-        ground = fit->ground;
-        estimated = true;
+    const vision::RectifiedProjection& projection = run->rectifier->projection();
+    const bool estimated = run->fit.has_value();
+    if (estimated) {
+        const vision::GroundPlane& g = run->fit->ground;
         std::printf("ground: estimated from the bottom rows (no mount in the calibration): height %.3f m, pitch "
                     "%.2f deg, roll %.2f deg (%d of %d disparities fit)\n",
-                    ground.heightM, ground.pitchDeg(), ground.rollDeg(), fit->inliers, fit->samples);
+                    g.heightM, g.pitchDeg(), g.rollDeg(), run->fit->inliers, run->fit->samples);
     }
-
-    auto detector = vision::ObstacleDetector::create(config, projection, roi, ground);
-    if (!detector) {
-        return fail(detector.error());
-    }
-    const ObstacleSectors& sectors =
-        detector->process(roiRectifier->rectifiedLeft(), roiRectifier->rectifiedRight(), 0, 0);
-    if (detector->status() != vision::DetectorStatus::Ok) {
-        return fail(Error{"detector",
-                          "the pipeline failed (status " + std::to_string(static_cast<int>(detector->status())) +
-                              "), all sectors unknown",
-                          ""});
-    }
+    const vision::ObstacleDetector* detector = &*run->detector;
+    const ObstacleSectors& sectors = detector->sectors();
     const vision::GroundPlane& used = detector->ground();
     std::printf("ground used: height %.3f m, pitch %.2f deg, roll %.2f deg (%s; per-frame estimate %s)\n", used.heightM,
                 used.pitchDeg(), used.rollDeg(), estimated ? "estimated" : "configured mount",

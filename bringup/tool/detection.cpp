@@ -3,8 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
+#include <string>
+#include <utility>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "ugv/vision/roi_matcher.hpp"
 
 namespace ugv::tool {
 namespace {
@@ -18,6 +25,8 @@ constexpr double kMinCameraHeightM = 0.05; ///< [m]
 constexpr double kMaxCameraHeightM = 10.0; ///< [m]
 constexpr double kMaxPitchDeg = 45.0;      ///< [deg]
 constexpr double kMaxRollDeg = 30.0;       ///< [deg]
+constexpr int kBarHeightPx = 24;           ///< [px] sector bar below the overlay image
+constexpr double kTintAlpha = 0.55;        ///< weight of the tint colour on obstacle pixels
 
 struct Sample {
     double x;
@@ -125,6 +134,150 @@ Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const v
             Error{where, text, "give the mount in the calibration file (mount: height_m, pitch_deg, roll_deg)"});
     }
     return fit;
+}
+
+Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, const cv::Mat& left,
+                                        const cv::Mat& right, const vision::DetectorConfig& config,
+                                        const std::string& calibName)
+{
+    PairDetection out;
+    vision::RectifierConfig roiConfig;
+    roiConfig.roiMarginRows = config.marginRows;
+    auto rectifier = vision::Rectifier::create(calib, roiConfig);
+    if (!rectifier) {
+        return Unexpected(std::move(rectifier).error());
+    }
+    out.rectifier.emplace(std::move(rectifier).value());
+    vision::Rectifier& rect = *out.rectifier;
+    if (rect.rectify(viewOf(left), viewOf(right)) != vision::RectifyStatus::Ok) {
+        return Unexpected(Error{calibName, "rectification rejected the images", "check the image sizes"});
+    }
+    const Rect roi = rect.roi();
+    const vision::RectifiedProjection& projection = rect.projection();
+    vision::GroundPlane ground;
+    if (calib.mount) {
+        ground = vision::GroundPlane::fromMount(*calib.mount);
+    } else {
+        auto matcher = vision::RoiMatcher::create(config.matcher, cv::Size(roi.width, roi.height));
+        if (!matcher) {
+            return Unexpected(std::move(matcher).error());
+        }
+        if (matcher->match(rect.rectifiedLeft(), rect.rectifiedRight()) != vision::MatchStatus::Ok) {
+            return Unexpected(Error{"ground estimate", "the stereo matcher failed on the ROI", ""});
+        }
+        auto fit = fitGround(matcher->disparity16(), roi, projection);
+        if (!fit) {
+            return Unexpected(
+                Error{calibName + ": no mount, and the " + fit.error().where + " failed", fit.error().what,
+                      fit.error().fix});
+        }
+        ground = fit->ground;
+        out.fit = *fit;
+    }
+    auto detector = vision::ObstacleDetector::create(config, projection, roi, ground);
+    if (!detector) {
+        return Unexpected(std::move(detector).error());
+    }
+    out.detector.emplace(std::move(detector).value());
+    (void)out.detector->process(rect.rectifiedLeft(), rect.rectifiedRight(), 0, 0);
+    if (out.detector->status() != vision::DetectorStatus::Ok) {
+        return Unexpected(Error{"detector",
+                                "the pipeline failed (status " +
+                                    std::to_string(static_cast<int>(out.detector->status())) +
+                                    "), all sectors unknown",
+                                ""});
+    }
+    return out;
+}
+
+cv::Scalar dangerColour(DangerClass danger)
+{
+    switch (danger) {
+    case DangerClass::Red:
+        return {0, 0, 255};
+    case DangerClass::Blue:
+        return {255, 0, 0};
+    case DangerClass::Green:
+        return {0, 190, 0};
+    case DangerClass::Unknown:
+        break;
+    }
+    return {128, 128, 128};
+}
+
+/// The rectified left image in colour (identity for the rectified form; each channel remapped otherwise) with
+/// the obstacle pixels of the dense cue tinted (above the ground: red, below: blue) and a bar of the sectors'
+/// danger classes below it, each sector over the columns of its bearings.
+cv::Mat makeOverlay(const cv::Mat& colourLeft, vision::Rectifier& fullRectifier, const vision::ObstacleDetector& det,
+                    const vision::DetectorConfig& config, const vision::RectifiedProjection& p)
+{
+    cv::Mat rectified;
+    if (fullRectifier.identity()) {
+        rectified = colourLeft.clone();
+    } else {
+        std::vector<cv::Mat> channels;
+        cv::split(colourLeft, channels);
+        for (cv::Mat& channel : channels) {
+            cv::Mat out(channel.size(), CV_8UC1);
+            (void)fullRectifier.rectify(viewOf(channel), viewOf(channel), ImageViewU8(out.data, out.cols, out.rows),
+                                        ImageViewU8(out.data, out.cols, out.rows));
+            channel = out;
+        }
+        cv::merge(channels, rectified);
+    }
+    const Rect roi = det.roi();
+    const cv::Mat& disparity = det.disparity16();
+    const vision::GroundPlane& ground = det.ground();
+    for (int y = config.marginRows; y < roi.height; ++y) {
+        const auto* d = disparity.ptr<std::int16_t>(y);
+        auto* pixel = rectified.ptr<cv::Vec3b>(roi.y + y);
+        for (int x = 0; x < roi.width; ++x) {
+            if (d[x] <= 0) {
+                continue;
+            }
+            const vision::VehiclePoint point =
+                ground.pixelToVehicle(roi.x + x, roi.y + y, d[x] / static_cast<double>(vision::RoiMatcher::kScale), p);
+            if (std::hypot(point.x, point.y) > det.sectorConfig().maxRangeM) {
+                continue;
+            }
+            cv::Vec3b tint;
+            if (point.z > det.sectorConfig().minHeightM) {
+                tint = {0, 0, 255};
+            } else if (point.z < -det.sectorConfig().minDepthM) {
+                tint = {255, 0, 0};
+            } else {
+                continue;
+            }
+            cv::Vec3b& px = pixel[roi.x + x];
+            for (int c = 0; c < 3; ++c) {
+                px[c] = cv::saturate_cast<std::uint8_t>((1.0 - kTintAlpha) * px[c] + kTintAlpha * tint[c]);
+            }
+        }
+    }
+    const ObstacleSectors& sectors = det.sectors();
+    std::vector<cv::Scalar> colours;
+    for (int i = 0; i < sectors.count; ++i) {
+        colours.push_back(dangerColour(sectors.sectors[static_cast<std::size_t>(i)].danger));
+    }
+    return appendSectorBar(rectified, sectors, colours, p);
+}
+
+cv::Mat appendSectorBar(const cv::Mat& image, const ObstacleSectors& layout, const std::vector<cv::Scalar>& colours,
+                        const vision::RectifiedProjection& p)
+{
+    cv::Mat canvas(image.rows + kBarHeightPx, image.cols, CV_8UC3, cv::Scalar(0, 0, 0));
+    image.copyTo(canvas(cv::Rect(0, 0, image.cols, image.rows)));
+    constexpr double kDegToRad = std::numbers::pi / 180.0;
+    for (int i = 0; i < layout.count && i < static_cast<int>(colours.size()); ++i) {
+        const Sector& s = layout.sectors[static_cast<std::size_t>(i)];
+        // Positive bearings are to the left: the larger bearing gives the smaller column.
+        const int x0 = static_cast<int>(std::lround(p.cx - p.fx * std::tan(s.bearingMaxDeg * kDegToRad)));
+        const int x1 = static_cast<int>(std::lround(p.cx - p.fx * std::tan(s.bearingMinDeg * kDegToRad)));
+        cv::rectangle(canvas, cv::Point(std::max(0, x0), image.rows + 2),
+                      cv::Point(std::min(canvas.cols - 1, x1 - 1), canvas.rows - 3),
+                      colours[static_cast<std::size_t>(i)], cv::FILLED);
+    }
+    return canvas;
 }
 
 const char* stateName(SectorState state)

@@ -5,7 +5,9 @@
 /// cv::Mat <-> ImageView glue, a ground-plane fit for calibrations without a mount, and sector naming / JSON.
 /// Host tool only: everything here may allocate. Thread-safety: reentrant.
 
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -16,6 +18,7 @@
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/stereo_calibration.hpp"
 
 namespace ugv::tool {
 
@@ -46,6 +49,34 @@ struct GroundFit {
 /// @param[in] disparity16  CV_16S disparity of the ROI rows (x16, invalid < 0), as RoiMatcher gives it
 /// @param[in] roi          full-frame rectangle of those rows
 Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const vision::RectifiedProjection& projection);
+
+/// One stereo pair through the tool's detector (`detect`, `eval --real`): the ROI rectified, the ground of the
+/// calibration's mount (or, without one, fitGround() on the ROI's disparity), the detector run once.
+struct PairDetection {
+    std::optional<vision::Rectifier> rectifier; ///< the ROI rectifier (its images are the detector's input)
+    std::optional<vision::ObstacleDetector> detector;
+    std::optional<GroundFit> fit; ///< set when the calibration has no mount and the ground was fitted
+};
+
+/// @param[in] left, right  8-bit grey images of calib.imageSize
+/// @param[in] calibName    named in errors (the file, or the data set's pair)
+/// @return the detector after process() with status Ok, or what failed (rectification, ground fit, pipeline).
+Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, const cv::Mat& left,
+                                        const cv::Mat& right, const vision::DetectorConfig& config,
+                                        const std::string& calibName);
+
+/// The colour of a danger class in overlays (BGR).
+cv::Scalar dangerColour(DangerClass danger);
+
+/// The rectified left image in colour (identity for the rectified form; each channel remapped otherwise) with
+/// the obstacle pixels of the dense cue tinted (above the ground: red, below: blue) and a bar of the sectors'
+/// danger classes below it, each sector over the columns of its bearings.
+cv::Mat makeOverlay(const cv::Mat& colourLeft, vision::Rectifier& fullRectifier, const vision::ObstacleDetector& det,
+                    const vision::DetectorConfig& config, const vision::RectifiedProjection& p);
+
+/// Appends a bar of kBarHeightPx rows below `canvas` with one colour per sector over the columns of its bearings.
+cv::Mat appendSectorBar(const cv::Mat& canvas, const ObstacleSectors& layout, const std::vector<cv::Scalar>& colours,
+                        const vision::RectifiedProjection& p);
 
 const char* stateName(SectorState state);
 const char* kindName(ObstacleKind kind);

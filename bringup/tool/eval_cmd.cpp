@@ -25,6 +25,7 @@
 #include "commands.hpp"
 #include "detection.hpp"
 #include "eval_suite.hpp"
+#include "real_eval.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
@@ -632,8 +633,8 @@ int runEval(int argc, char** argv)
 {
     Args args(
         "eval",
-        "[--sim] [--approach] [--hole-signal] [--middlebury] [--quick] [--types LIST] [--frames-per-case N] "
-        "[--matcher MODE] "
+        "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
+        "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] "
         "[--ground-prior] [--json OUT] [--data DIR] [--skip-missing]",
         {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
          {"approach", "",
@@ -644,6 +645,15 @@ int runEval(int argc, char** argv)
           "beside our detector",
           false},
          {"middlebury", "", "score the matcher on Middlebury (and aloe) pairs against OpenCV's default SGBM", false},
+         {"real", "DIR",
+          "score the obstacle sectors on real pairs with LiDAR ground truth (DIR: ../shared/data/real-stereo, its "
+          "index.csv), beside OpenCV StereoSGBM + RANSAC ground + a 0.25 m threshold",
+          false},
+         {"mount", "H,P,R", "real: give every pair this mount (height m, pitch deg, roll deg); default: none, found",
+          false},
+         {"pairs", "LIST", "real: only these pairs, comma-separated (index.csv's pair column)", false},
+         {"verbose", "", "real: a line per sector (truth, ours, outcome)", false},
+         {"overlay-dir", "DIR", "real: write an overlay per pair (sector bar: ours; below it the truth)", false},
          {"quick", "",
           "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0; the approach in 0.5 m steps)",
           false},
@@ -654,7 +664,7 @@ int runEval(int argc, char** argv)
           false},
          {"json", "OUT", "write all figures as JSON", false},
          {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
-         {"skip-missing", "", "exit 77 (skipped) when the Middlebury data are missing", false}});
+         {"skip-missing", "", "exit 77 (skipped) when the Middlebury or real data are missing", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError("eval", parsed.error());
     }
@@ -662,9 +672,10 @@ int runEval(int argc, char** argv)
         std::cout << args.usage();
         return 0;
     }
-    if (!args.has("sim") && !args.has("approach") && !args.has("hole-signal") && !args.has("middlebury")) {
+    if (!args.has("sim") && !args.has("approach") && !args.has("hole-signal") && !args.has("middlebury") &&
+        !args.has("real")) {
         return reportUsageError("eval", Error{"ugvsense eval", "nothing to evaluate",
-                                              "give --sim, --approach, --hole-signal and/or --middlebury"});
+                                              "give --sim, --approach, --hole-signal, --middlebury and/or --real"});
     }
     if (!args.positional().empty()) {
         return reportUsageError("eval", Error{"ugvsense eval", "unexpected argument '" + args.positional()[0] + "'",
@@ -701,6 +712,16 @@ int runEval(int argc, char** argv)
             std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error") << ": Middlebury data "
                       << "not found at " << (root / "middlebury").string()
                       << " (fix: set UGV_SHARED_DATA or --data DIR to the shared data root)\n";
+            return args.has("skip-missing") ? kExitSkipped : 1;
+        }
+    }
+
+    if (args.has("real")) {
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(std::filesystem::path(args.get("real")) / "index.csv", ec)) {
+            std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error")
+                      << ": real stereo data not found: no " << args.get("real") << "/index.csv"
+                      << " (fix: --real ../shared/data/real-stereo, or $UGV_SHARED_DATA/real-stereo)\n";
             return args.has("skip-missing") ? kExitSkipped : 1;
         }
     }
@@ -766,6 +787,21 @@ int runEval(int argc, char** argv)
     if (args.has("middlebury")) {
         json << (simulated ? ",\n" : "");
         if (const int rc = runMiddlebury(root, matcher, json); rc != 0) {
+            return rc;
+        }
+    }
+    if (args.has("real")) {
+        json << (simulated || args.has("middlebury") ? ",\n" : "");
+        RealEvalOptions real;
+        real.dir = args.get("real");
+        real.overlayDir = args.get("overlay-dir");
+        real.mount = args.get("mount");
+        real.verbose = args.has("verbose");
+        std::stringstream list(args.get("pairs"));
+        for (std::string name; std::getline(list, name, ',');) {
+            real.pairs.push_back(name);
+        }
+        if (const int rc = runRealEval(real, json); rc != 0) {
             return rc;
         }
     }

@@ -53,13 +53,13 @@ Result<GroundEstimator, Error> GroundEstimator::create(const GroundEstimatorConf
     if (config.width < 1 || config.height < 1 || config.sampleStep < 1 || config.y0 < 0) {
         return fail("width, height, sampleStep >= 1 and y0 >= 0 required");
     }
-    if (!(config.candidateTolerancePx > 0.0) || !(config.inlierTolerancePx > 0.0) || config.ransacIterations < 1 ||
+    if (!(config.inlierTolerancePx > 0.0) || config.ransacIterations < 1 ||
         config.minInliers < 3 || !(config.minInlierFraction >= 0.0 && config.minInlierFraction <= 1.0)) {
         return fail("tolerances > 0, ransacIterations >= 1, minInliers >= 3, minInlierFraction in [0, 1] required");
     }
-    if (!(config.heightBandM > 0.0) || !(config.pitchBandDeg > 0.0) || !(config.rollBandDeg > 0.0) ||
+    if (!(config.heightBandFraction > 0.0 && config.heightBandFraction < 1.0) || !(config.pitchBandDeg > 0.0) || !(config.rollBandDeg > 0.0) ||
         !(config.smoothing > 0.0 && config.smoothing <= 1.0)) {
-        return fail("bands > 0 and smoothing in (0, 1] required");
+        return fail("bands > 0 (height fraction below 1) and smoothing in (0, 1] required");
     }
     return GroundEstimator(config);
 }
@@ -91,20 +91,50 @@ int GroundEstimator::collectCandidates(ImageView<const std::int16_t> disparity) 
                 continue;
             }
             const double d = row[x] * kDisparityScale;
-            if (std::abs(d - configuredDisparity_.at(x, y)) < config_.candidateTolerancePx) {
-                candidates_[static_cast<std::size_t>(count++)] =
-                    Candidate{static_cast<float>(x), static_cast<float>(y), static_cast<float>(d)};
-            }
+            candidates_[static_cast<std::size_t>(count++)] =
+                Candidate{static_cast<float>(x), static_cast<float>(y), static_cast<float>(d)};
         }
     }
     return count;
+}
+
+bool GroundEstimator::inBand(const DisparityPlane& plane) const noexcept
+{
+    if (!finitePlane(plane)) {
+        return false;
+    }
+    const GroundPlane g = GroundPlane::fromDisparityPlane(plane, config_.projection);
+    return std::isfinite(g.heightM) &&
+           std::abs(g.heightM - config_.mount.heightM) <= config_.heightBandFraction * config_.mount.heightM &&
+           std::abs(g.pitchDeg() - config_.mount.pitchDeg) <= config_.pitchBandDeg &&
+           std::abs(g.rollDeg() - config_.mount.rollDeg) <= config_.rollBandDeg;
+}
+
+int GroundEstimator::countInliers(int count, const DisparityPlane& plane) const noexcept
+{
+    const auto fa = static_cast<float>(plane.a);
+    const auto fb = static_cast<float>(plane.b);
+    const auto fc = static_cast<float>(plane.c);
+    const auto tol = static_cast<float>(config_.inlierTolerancePx);
+    int inliers = 0;
+    for (int i = 0; i < count; ++i) {
+        const Candidate& c = candidates_[static_cast<std::size_t>(i)];
+        inliers += std::abs(fa * c.x + fb * c.y + fc - c.d) < tol ? 1 : 0;
+    }
+    return inliers;
 }
 
 bool GroundEstimator::ransac(int count, DisparityPlane& best) noexcept
 {
     Rng rng{config_.seed};
     int bestInliers = 0;
-    const auto tol = static_cast<float>(config_.inlierTolerancePx);
+    // The last estimate (a pitching vehicle moves little between frames) and the configured plane first.
+    for (const DisparityPlane& prior : {state_, configuredDisparity_}) {
+        if (const int inliers = countInliers(count, prior); inliers > bestInliers) {
+            bestInliers = inliers;
+            best = prior;
+        }
+    }
     for (int it = 0; it < config_.ransacIterations; ++it) {
         const Candidate& p = candidates_[static_cast<std::size_t>(rng.below(count))];
         const Candidate& q = candidates_[static_cast<std::size_t>(rng.below(count))];
@@ -123,15 +153,10 @@ bool GroundEstimator::ransac(int count, DisparityPlane& best) noexcept
         const double a = (d1 * y2 - d2 * y1) / det;
         const double b = (x1 * d2 - x2 * d1) / det;
         const DisparityPlane model{a, b, p.d - a * p.x - b * p.y};
-        const auto fa = static_cast<float>(model.a);
-        const auto fb = static_cast<float>(model.b);
-        const auto fc = static_cast<float>(model.c);
-        int inliers = 0;
-        for (int i = 0; i < count; ++i) {
-            const Candidate& c = candidates_[static_cast<std::size_t>(i)];
-            inliers += std::abs(fa * c.x + fb * c.y + fc - c.d) < tol ? 1 : 0;
+        if (!inBand(model)) {
+            continue; // not a ground: a face, a wall, a mix of both
         }
-        if (inliers > bestInliers) {
+        if (const int inliers = countInliers(count, model); inliers > bestInliers) {
             bestInliers = inliers;
             best = model;
         }
@@ -218,12 +243,7 @@ const GroundEstimate& GroundEstimator::update(ImageView<const std::int16_t> disp
         fallback(GroundFallbackReason::TooFewInliers);
         return estimate_;
     }
-    const GroundPlane measured = GroundPlane::fromDisparityPlane(fit, config_.projection);
-    const bool inBand = std::isfinite(measured.heightM) &&
-                        std::abs(measured.heightM - config_.mount.heightM) <= config_.heightBandM &&
-                        std::abs(measured.pitchDeg() - config_.mount.pitchDeg) <= config_.pitchBandDeg &&
-                        std::abs(measured.rollDeg() - config_.mount.rollDeg) <= config_.rollBandDeg;
-    if (!inBand) {
+    if (!inBand(fit)) {
         fallback(GroundFallbackReason::OutOfBand);
         estimate_.measured = fit;
         estimate_.inliers = inliers;

@@ -55,7 +55,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
                                       std::to_string(kMaxSectors)));
     }
     if (!(config.minHeightM > 0.0F) || !(config.minDepthM > 0.0F) || !(config.rangeBinM > 0.0F) ||
-        !(config.maxRangeM > config.rangeBinM) || config.minSupport < 1 || config.minDropSupport < 1 ||
+        !(config.maxRangeM >= 0.0F) || !(config.maxRangeDisparityPx > 0.0F) || config.minSupport < 1 || config.minDropSupport < 1 ||
         config.maxStrayVotes < 1 || config.maxStrayDropVotes < 1 || !(config.dropSupportRangeM > 0.0F) ||
         config.clusterWindowM < 0.0F || config.clusterFraction < 0.0F ||
         !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
@@ -81,10 +81,18 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
 
     SectorBuilder sut;
     sut.config_ = config;
+    if (config.maxRangeM == 0.0F) {
+        sut.config_.maxRangeM =
+            static_cast<float>(projection.fx * projection.baselineM / static_cast<double>(config.maxRangeDisparityPx));
+    }
+    if (!(sut.config_.maxRangeM > config.rangeBinM)) {
+        return Unexpected(configError("maxRangeM " + std::to_string(sut.config_.maxRangeM) +
+                                      " is not above rangeBinM"));
+    }
     sut.projection_ = projection;
     sut.roi_ = roi;
     sut.firstRow_ = firstRow;
-    sut.bins_ = static_cast<int>(std::ceil(config.maxRangeM / config.rangeBinM));
+    sut.bins_ = static_cast<int>(std::ceil(sut.config_.maxRangeM / config.rangeBinM));
     // The full frame's width is 2 cx + 1 (pixel centres at integers, principal point at the centre).
     const double width = 2.0 * projection.cx + 1.0;
     sut.hfovDeg_ = static_cast<float>(2.0 * std::atan(width / (2.0 * projection.fx)) * kRadToDeg);

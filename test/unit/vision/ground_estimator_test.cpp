@@ -135,7 +135,7 @@ TEST(GroundEstimator, RecoversPitchedRigsFromSimulatorDisparity)
         }
         GroundEstimatorConfig config = makeConfig(1.0);
         config.mount = Mount{0.59, 0.0, 0.0};
-        config.heightBandM = 0.15;
+        config.heightBandFraction = 0.25;
         auto sut = GroundEstimator::create(config);
         ASSERT_TRUE(sut.has_value());
 

@@ -3,17 +3,20 @@
 /// @file
 /// Per-frame ground estimate from a measured disparity image over the ROI.
 ///
-/// Each update(): (1) candidates = valid disparities on a sparse grid within candidateTolerancePx of the
-/// CONFIGURED model d_g (so that obstacles and garbage far from any plausible ground never seed the fit);
-/// (2) RANSAC for d = a x + b y + c with a fixed iteration count and a fixed seed (same input, same output);
-/// (3) least-squares refinement on the inliers (closed form, centred coordinates), twice;
-/// (4) GroundPlane::fromDisparityPlane, checked against a band around the configured mount (height, pitch,
-/// roll); (5) exponential smoothing of the plane coefficients. When there are too few candidates or inliers,
-/// the fit is degenerate or leaves the band, the estimate falls back to the configured plane with
-/// reliable == false and the reason, and the smoothing restarts from the configured plane.
+/// Each update(): (1) candidates = every valid disparity on a sparse grid of the ROI; (2) hypotheses for
+/// d = a x + b y + c: the last reliable estimate, the configured plane and RANSAC planes through three candidates
+/// (fixed iteration count and seed: same input, same output); a hypothesis counts only when its plane is a
+/// plausible ground, inside the band around the configured mount (height within heightBandFraction, pitch and roll
+/// within their bands), so that a car's back, a wall or a kerb's face can never win however many pixels it has;
+/// the one with the most inliers wins; (3) least-squares refinement on the inliers (closed form, centred
+/// coordinates), twice; (4) GroundPlane::fromDisparityPlane, checked against the band again; (5) exponential
+/// smoothing of the plane coefficients. When there are too few candidates or inliers, the fit is degenerate or
+/// leaves the band, the estimate falls back to the configured plane with reliable == false and the reason, and
+/// the smoothing restarts from the configured plane.
 ///
-/// The candidate tolerance bounds the pitch step that can be tracked: a pitch change of dp moves the ground's
-/// disparity by about (B/h) f dp (4.9 px/deg for the default rig), so the default 20 px admits ~4 deg.
+/// No candidate is chosen by its distance to the configured plane, so a mount that is off by the band (the default
+/// admits +-12 deg pitch, +-6 deg roll and +-35 % height) is still found, and a pitching vehicle is followed from
+/// frame to frame (the last estimate is always a hypothesis).
 ///
 /// Disparity input: CV_16S fixed point as cv::StereoSGBM outputs (value / 16 = disparity [px]), invalid < 0.
 
@@ -36,22 +39,21 @@ struct GroundEstimatorConfig {
     int height = 248;                   ///< ROI height [px]
     int y0 = 232;                       ///< full-frame row of ROI row 0 [px]
     int sampleStep = 4;                 ///< candidate grid step [px]
-    double candidateTolerancePx = 20.0; ///< |d - d_g(config)| below this makes a candidate [px]
     double inlierTolerancePx = 1.0;     ///< RANSAC / refinement inlier distance [px]
     int ransacIterations = 64;
     std::uint64_t seed = 0x9E3779B97F4A7C15ULL; ///< RANSAC sampling seed (re-applied every update)
     int minInliers = 300;                       ///< absolute minimum of inliers
-    double minInlierFraction = 0.3;             ///< minimum inliers / candidates
-    double heightBandM = 0.15;                  ///< [m] allowed |height - configured|
-    double pitchBandDeg = 5.0;                  ///< [deg] allowed |pitch - configured|
-    double rollBandDeg = 5.0;                   ///< [deg] allowed |roll - configured|
+    double minInlierFraction = 0.15;            ///< minimum inliers / candidates (candidates include obstacles)
+    double heightBandFraction = 0.35;           ///< allowed |height - configured| / configured
+    double pitchBandDeg = 12.0;                 ///< [deg] allowed |pitch - configured|
+    double rollBandDeg = 6.0;                   ///< [deg] allowed |roll - configured|
     double smoothing = 0.5;                     ///< weight of the new measurement, (0, 1]; 1 = no smoothing
 };
 
 enum class GroundFallbackReason : std::uint8_t {
     None = 0,         ///< reliable estimate
     WrongInput,       ///< disparity view is not width x height
-    TooFewCandidates, ///< fewer than minInliers candidates near the configured ground
+    TooFewCandidates, ///< fewer than minInliers valid disparities
     TooFewInliers,    ///< best plane has too few inliers (absolute or fraction)
     DegenerateFit,    ///< no non-degenerate sample or singular refinement
     OutOfBand,        ///< fitted plane outside the band around the configured mount
@@ -95,6 +97,9 @@ private:
     void fallback(GroundFallbackReason reason) noexcept;
     int collectCandidates(ImageView<const std::int16_t> disparity) noexcept;
     bool ransac(int count, DisparityPlane& best) noexcept;
+    /// The plane is a plausible ground: finite and inside the band around the configured mount.
+    [[nodiscard]] bool inBand(const DisparityPlane& plane) const noexcept;
+    [[nodiscard]] int countInliers(int count, const DisparityPlane& plane) const noexcept;
     bool refine(int count, DisparityPlane& plane, int& inliers) const noexcept;
 
     GroundEstimatorConfig config_;

@@ -110,6 +110,8 @@ public:
     /// The ground plane the last frame's sectors used.
     [[nodiscard]] const GroundPlane& ground() const noexcept { return ground_; }
     [[nodiscard]] Rect roi() const noexcept { return roi_; }
+    /// The sector builder's config as used (maxRangeM resolved from the rig).
+    [[nodiscard]] const SectorBuilderConfig& sectorConfig() const noexcept { return builder_.config(); }
 
 private:
     ObstacleDetector(RoiMatcher matcher, SectorBuilder builder, GroundEstimator estimator, GroundMismatch mismatch,

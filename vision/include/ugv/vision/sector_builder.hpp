@@ -65,7 +65,10 @@ struct SectorBuilderConfig {
     float minDropGapM = 0.25F;       ///< [m] the ray to the point crosses the ground this far before it
                                      ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
                                      ///< view beyond 4 m, a few centimetres below the ground, behind a gap
-    float maxRangeM = 12.0F;         ///< [m] points farther away are ignored (disparity too coarse)
+    float maxRangeM = 0.0F;          ///< [m] points farther away are ignored (disparity too coarse); 0: from the
+                                     ///< rig, where the disparity falls to maxRangeDisparityPx (fx B / that)
+    float maxRangeDisparityPx = 13.65F; ///< [px] (a 0.5 px error is 3.7 % of the range there; the default rig,
+                                        ///< 546 px x 0.30 m: 12 m; KITTI's, 721 px x 0.53 m: 28 m)
     float rangeBinM = 0.02F;         ///< [m] histogram resolution
     float faceSupportRangeM = 5.0F;  ///< [m] a positive cluster farther than r needs minSupport (this / r) votes ...
     int minFaceSupport = 20;         ///< ... but at least this many ...
