@@ -13,13 +13,17 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <opencv2/imgcodecs.hpp>
 
+#include "sim/ground.hpp"
 #include "sim/noise.hpp"
 
 namespace ugv::sim {
 namespace {
 
+using detail::GroundPart;
 using detail::Octave;
+using detail::wireCoverage;
 using Eigen::Vector3d;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -37,9 +41,11 @@ constexpr double kFencePostSpacingM = 2.5;   // [m] at most
 constexpr double kStripeM = 0.2;             // [m] barrier stripe width
 constexpr double kHeightBandM = 0.10;        // [m] sector height: max over hits within this of the nearest
 constexpr int kFullScreen = 1 << 20;         // [px] screen rectangle of a primitive behind the camera
+constexpr int kMirrorBounces = 1;            // reflections of reflections are not traced
+constexpr double kDeepM = 1e3;               // [m] the background wall reaches this far down on a non-flat ground
 
 enum class PrimKind : std::uint8_t { Cylinder, Box, Sphere, Fence };
-enum class Surface : std::uint8_t { Sky, Ground, Object, HoleWall, HoleFloor, Background };
+enum class Surface : std::uint8_t { Sky, Ground, Object, HoleWall, HoleFloor, Background, Kerb };
 
 /// One analytic primitive in world coordinates. Box-like kinds use a local frame centred at (cx, cy) and
 /// rotated by yaw; vertical extent [z0, z1] (sphere: centre height z0).
@@ -74,6 +80,19 @@ struct Hit {
     Surface surface = Surface::Sky;
     int prim = -1;
     int obstacle = -1;
+    double tGround = kInf; ///< [m] where the ray crossed the ground surface (hole walls and floors)
+};
+
+/// Where a ray is traced from: the pixel whose primitives' screen rectangles cull the scene (primary rays only), the
+/// fence layers and mirror bounces left, and the path length before this ray (texture footprint).
+struct RayContext {
+    int px = 0;
+    int py = 0;
+    int view = 0;
+    int layers = kFenceLayers;
+    int bounces = kMirrorBounces;
+    double pathM = 0.0; ///< [m]
+    bool cull = true;
 };
 
 struct ScreenRect {
@@ -87,21 +106,6 @@ inline void toLocal(double x, double y, double cx, double cy, double c, double s
     const double dy = y - cy;
     lx = c * dx + s * dy;
     ly = -s * dx + c * dy;
-}
-
-/// Fraction of [a - w/2, a + w/2] covered by wires of width `wire` centred at multiples of `spacing`.
-double wireCoverage(double a, double w, double spacing, double wire) noexcept
-{
-    const auto cumulative = [&](double x) {
-        const double shifted = x + wire / 2.0;
-        const double cells = std::floor(shifted / spacing);
-        return cells * wire + std::min(shifted - cells * spacing, wire);
-    };
-    if (w <= 1e-12) {
-        const double m = a + wire / 2.0 - std::floor((a + wire / 2.0) / spacing) * spacing;
-        return m < wire ? 1.0 : 0.0;
-    }
-    return std::clamp((cumulative(a + w / 2.0) - cumulative(a - w / 2.0)) / w, 0.0, 1.0);
 }
 
 constexpr std::array<Octave, 6> kAsphalt = {
@@ -138,7 +142,9 @@ GroundStyle groundStyle(GroundTexture texture) noexcept
 /// The scene compiled into primitives, plus the cameras of the current pose.
 class Tracer {
 public:
-    Tracer(const Scene& scene, const Pose& pose, const RenderOptions& options) : scene_(scene), options_(options)
+    Tracer(const Scene& scene, const Pose& pose, const RenderOptions& options)
+        : scene_(scene), options_(options), ground_(scene.ground), look_(scene),
+          wallBottom_(scene.ground.flat() ? 0.0 : -kDeepM)
     {
         compile();
         setupCameras(pose);
@@ -163,16 +169,30 @@ public:
     double sinYaw() const { return sinYaw_; }
     const ObjectInfo& info(int obstacle) const { return infos_[static_cast<std::size_t>(obstacle)]; }
     bool isFence(int prim) const { return prims_[static_cast<std::size_t>(prim)].kind == PrimKind::Fence; }
+    /// [m] the ground below a hit point: the road's for the kerb face (its foot), else the local surface's.
+    double groundBelow(const Hit& hit, const Vector3d& p) const
+    {
+        if (ground_.flat()) {
+            return 0.0;
+        }
+        return hit.surface == Surface::Kerb ? ground_.roadHeight(p.x(), p.y()) : ground_.height(p.x(), p.y());
+    }
+    /// [m] the point where a ray that hit a hole's wall or floor crossed the ground (its near rim).
+    Vector3d rim(const Hit& hit, const Vector3d& o, const Vector3d& d, const Vector3d& p) const
+    {
+        return ground_.flat() ? Vector3d(p - (p.z() / d.z()) * d) : Vector3d(o + hit.tGround * d);
+    }
 
-    /// Nearest hit with t > tMin of the ray from `o` along unit `d`, sampled inside pixel (px, py) of `view`.
-    Hit trace(const Vector3d& o, const Vector3d& d, double tMin, int px, int py, int view) const
+    /// Nearest hit with t > tMin of the ray from `o` along unit `d`, sampled inside pixel (px, py) of `view`;
+    /// `cull` = false for secondary rays (reflections), which the screen rectangles do not bound.
+    Hit trace(const Vector3d& o, const Vector3d& d, double tMin, int px, int py, int view, bool cull = true) const
     {
         Hit best = traceGround(o, d, tMin);
         traceBackground(o, d, tMin, best);
         const std::vector<ScreenRect>& rects = rects_[static_cast<std::size_t>(view)];
         for (std::size_t i = 0; i < prims_.size(); ++i) {
             const ScreenRect& r = rects[i];
-            if (px < r.x0 || px > r.x1 || py < r.y0 || py > r.y1) {
+            if (cull && (px < r.x0 || px > r.x1 || py < r.y0 || py > r.y1)) {
                 continue;
             }
             intersect(prims_[i], static_cast<int>(i), o, d, tMin, best);
@@ -180,20 +200,32 @@ public:
         return best;
     }
 
-    /// Radiance (albedo x shading, before the camera gains) along a ray; fences blend with what lies behind.
-    double radiance(const Vector3d& o, const Vector3d& d, double tMin, int px, int py, int view, int layers) const
+    /// Radiance (albedo x shading, before the camera gains) along a ray; fences blend with what lies behind, mirrors
+    /// on the ground with what the reflected ray sees.
+    double radiance(const Vector3d& o, const Vector3d& d, double tMin, const RayContext& ray) const
     {
-        const Hit hit = trace(o, d, tMin, px, py, view);
+        const Hit hit = trace(o, d, tMin, ray.px, ray.py, ray.view, ray.cull);
         if (hit.surface == Surface::Sky) {
             return sky(d);
         }
         const Vector3d p = o + hit.t * d;
         // [m] pixel footprint, only mildly stretched at grazing incidence: the across-view detail that stereo
         // matching needs is kept, and the supersampling handles the foreshortened direction.
-        const double footprint =
-            hit.t / scene_.rig.focalPx / std::sqrt(std::sqrt(std::max(std::abs(hit.n.dot(d)), kMinIncidence)));
+        const double footprint = (ray.pathM + hit.t) / scene_.rig.focalPx /
+                                 std::sqrt(std::sqrt(std::max(std::abs(hit.n.dot(d)), kMinIncidence)));
         const double value = albedo(hit, p, footprint) * shading(hit.n);
-        if (hit.prim < 0 || !isFence(hit.prim) || layers <= 0) {
+        if (hit.surface == Surface::Ground && ray.bounces > 0) {
+            const double reflectance = look_.reflectance(p.x(), p.y());
+            if (reflectance > 0.0) {
+                RayContext mirrored = ray;
+                mirrored.cull = false;
+                mirrored.bounces = ray.bounces - 1;
+                mirrored.pathM = ray.pathM + hit.t;
+                const Vector3d r = d - 2.0 * d.dot(hit.n) * hit.n;
+                return (1.0 - reflectance) * value + reflectance * radiance(p, r, kBehindEpsM, mirrored);
+            }
+        }
+        if (hit.prim < 0 || !isFence(hit.prim) || ray.layers <= 0) {
             return value;
         }
         const Prim& f = prims_[static_cast<std::size_t>(hit.prim)];
@@ -202,9 +234,11 @@ public:
         toLocal(p.x(), p.y(), f.cx, f.cy, f.cosYaw, f.sinYaw, lx, ly);
         const double sampleFootprint = hit.t / (scene_.rig.focalPx * options_.samplesPerAxis); // [m]
         const double across = wireCoverage(ly + f.hy, sampleFootprint, f.spacing, f.wire);
-        const double up = wireCoverage(p.z(), sampleFootprint, f.spacing, f.wire);
+        const double up = wireCoverage(p.z() - f.z0, sampleFootprint, f.spacing, f.wire);
         const double coverage = 1.0 - (1.0 - across) * (1.0 - up);
-        const double behind = radiance(o, d, hit.t + kBehindEpsM, px, py, view, layers - 1);
+        RayContext behindRay = ray;
+        behindRay.layers = ray.layers - 1;
+        const double behind = radiance(o, d, hit.t + kBehindEpsM, behindRay);
         return coverage * value + (1.0 - coverage) * behind;
     }
 
@@ -221,6 +255,11 @@ private:
             ObjectInfo info;
             info.albedo = o.albedo;
             info.striped = o.type == ObstacleType::Barrier;
+            // The object stands on the ground at its footprint centre; parts that touch the ground reach `sink`
+            // below it, so that no gap opens under them where the ground falls away (the ground hides the rest).
+            const double base = ground_.height(cx, cy);                                                   // [m]
+            const double sink = ground_.maxSlope() * (std::hypot(o.lengthM, o.widthM) / 2.0 + o.radiusM); // [m]
+            const auto bottom = [&](double z0) { return z0 > 0.0 ? base + z0 : base - sink; };
             // Local point (lx, ly) of this object's frame in world coordinates.
             const auto wx = [&](double lx, double ly) { return cx + c * lx - s * ly; };
             const auto wy = [&](double lx, double ly) { return cy + s * lx + c * ly; };
@@ -234,8 +273,8 @@ private:
                 p.sinYaw = s;
                 p.hx = hx;
                 p.hy = hy;
-                p.z0 = z0;
-                p.z1 = z1;
+                p.z0 = bottom(z0);
+                p.z1 = base + z1;
                 prims_.push_back(p);
             };
             const auto addCylinder = [&](double lx, double ly, double r, double z0, double z1) {
@@ -245,8 +284,8 @@ private:
                 p.cx = wx(lx, ly);
                 p.cy = wy(lx, ly);
                 p.r = r;
-                p.z0 = z0;
-                p.z1 = z1;
+                p.z0 = bottom(z0);
+                p.z1 = base + z1;
                 prims_.push_back(p);
             };
             switch (o.type) {
@@ -290,7 +329,8 @@ private:
                 p.cosYaw = c;
                 p.sinYaw = s;
                 p.hy = o.widthM / 2.0;
-                p.z1 = o.heightM;
+                p.z0 = bottom(0.0);
+                p.z1 = base + o.heightM;
                 p.spacing = o.spacingM;
                 p.wire = o.wireM;
                 prims_.push_back(p);
@@ -316,7 +356,7 @@ private:
                 head.cx = cx;
                 head.cy = cy;
                 head.r = 0.11 * k;
-                head.z0 = o.heightM - head.r;
+                head.z0 = base + o.heightM - head.r;
                 prims_.push_back(head);
                 break;
             }
@@ -407,9 +447,12 @@ private:
                           clampPx(std::ceil(v1)) + 2};
     }
 
-    /// The ground plane, or the wall or floor of the negative obstacle whose footprint the ray enters.
+    /// The ground, or the wall or floor of the negative obstacle whose footprint the ray enters.
     Hit traceGround(const Vector3d& o, const Vector3d& d, double tMin) const
     {
+        if (!ground_.flat()) {
+            return traceShapedGround(o, d, tMin);
+        }
         Hit hit;
         if (d.z() > -kTinyDir) {
             return hit;
@@ -420,63 +463,106 @@ private:
         for (const Neg& n : negs_) {
             double lx = 0.0;
             double ly = 0.0;
-            toLocal(gx, gy, n.cx, n.cy, n.cosYaw, n.sinYaw, lx, ly);
-            const bool inside = n.round ? lx * lx + ly * ly < n.r * n.r : std::abs(lx) < n.hx && std::abs(ly) < n.hy;
-            if (!inside) {
-                continue;
+            if (contains(n, gx, gy, lx, ly)) {
+                return intoNegative(n, o, d, tMin, tg, lx, ly, (-n.depth - o.z()) / d.z());
             }
-            const double tFloor = (-n.depth - o.z()) / d.z();
-            double tWall = kInf;
-            Vector3d wallNormal(0.0, 0.0, 1.0);
-            if (n.round) {
-                const double ox = o.x() - n.cx;
-                const double oy = o.y() - n.cy;
-                const double a = d.x() * d.x() + d.y() * d.y();
-                if (a > kTinyDir) {
-                    const double b = ox * d.x() + oy * d.y();
-                    const double c = ox * ox + oy * oy - n.r * n.r;
-                    const double disc = std::max(b * b - a * c, 0.0);
-                    tWall = (-b + std::sqrt(disc)) / a;
-                    wallNormal = Vector3d(-(ox + tWall * d.x()), -(oy + tWall * d.y()), 0.0) / n.r;
-                }
-            } else {
-                const double ldx = n.cosYaw * d.x() + n.sinYaw * d.y();
-                const double ldy = -n.sinYaw * d.x() + n.cosYaw * d.y();
-                // Exit through the far slab in x and y; the inward normal faces back along the ray.
-                if (std::abs(ldx) > kTinyDir) {
-                    const double t = tg + ((ldx > 0.0 ? n.hx : -n.hx) - lx) / ldx;
-                    if (t < tWall) {
-                        tWall = t;
-                        const double sx = ldx > 0.0 ? -1.0 : 1.0;
-                        wallNormal = Vector3d(sx * n.cosYaw, sx * n.sinYaw, 0.0);
-                    }
-                }
-                if (std::abs(ldy) > kTinyDir) {
-                    const double t = tg + ((ldy > 0.0 ? n.hy : -n.hy) - ly) / ldy;
-                    if (t < tWall) {
-                        tWall = t;
-                        const double sy = ldy > 0.0 ? -1.0 : 1.0;
-                        wallNormal = Vector3d(-sy * n.sinYaw, sy * n.cosYaw, 0.0);
-                    }
-                }
-            }
-            hit.obstacle = n.obstacle;
-            if (tFloor <= tWall) {
-                hit.t = tFloor;
-                hit.surface = Surface::HoleFloor;
-                hit.n = Vector3d(0.0, 0.0, 1.0);
-            } else {
-                hit.t = tWall;
-                hit.surface = Surface::HoleWall;
-                hit.n = wallNormal;
-            }
-            return hit.t > tMin ? hit : Hit{};
         }
         if (tg > tMin) {
             hit.t = tg;
             hit.surface = Surface::Ground;
         }
         return hit;
+    }
+
+    /// traceGround() on a height field: road, pavement or kerb face; a hole's floor lies `depth` below the piece of
+    /// the ground the ray entered through, parallel to it.
+    Hit traceShapedGround(const Vector3d& o, const Vector3d& d, double tMin) const
+    {
+        const detail::GroundHit g = ground_.intersect(o, d, tMin);
+        Hit hit;
+        if (g.part == GroundPart::None) {
+            return hit;
+        }
+        hit.t = g.t;
+        hit.n = g.n;
+        hit.surface = g.part == GroundPart::KerbFace ? Surface::Kerb : Surface::Ground;
+        if (g.part == GroundPart::KerbFace || d.z() > -kTinyDir) {
+            return hit;
+        }
+        const double gx = o.x() + g.t * d.x();
+        const double gy = o.y() + g.t * d.y();
+        for (const Neg& n : negs_) {
+            double lx = 0.0;
+            double ly = 0.0;
+            if (contains(n, gx, gy, lx, ly)) {
+                const detail::GroundPlane& plane = g.plane;
+                const double tFloor =
+                    (plane.at(o.x(), o.y()) - n.depth - o.z()) / (d.z() - plane.cx * d.x() - plane.cy * d.y());
+                Hit inside = intoNegative(n, o, d, tMin, g.t, lx, ly, tFloor);
+                inside.tGround = g.t;
+                return inside;
+            }
+        }
+        return hit;
+    }
+
+    /// Whether the ground point (x, y) lies in the footprint of `n`; (lx, ly) its local coordinates.
+    static bool contains(const Neg& n, double x, double y, double& lx, double& ly)
+    {
+        toLocal(x, y, n.cx, n.cy, n.cosYaw, n.sinYaw, lx, ly);
+        return n.round ? lx * lx + ly * ly < n.r * n.r : std::abs(lx) < n.hx && std::abs(ly) < n.hy;
+    }
+
+    /// The wall or floor of `n` hit by a ray that entered its footprint at tg (local (lx, ly)); the floor at tFloor.
+    static Hit intoNegative(const Neg& n, const Vector3d& o, const Vector3d& d, double tMin, double tg, double lx,
+                            double ly, double tFloor)
+    {
+        Hit hit;
+        double tWall = kInf;
+        Vector3d wallNormal(0.0, 0.0, 1.0);
+        if (n.round) {
+            const double ox = o.x() - n.cx;
+            const double oy = o.y() - n.cy;
+            const double a = d.x() * d.x() + d.y() * d.y();
+            if (a > kTinyDir) {
+                const double b = ox * d.x() + oy * d.y();
+                const double c = ox * ox + oy * oy - n.r * n.r;
+                const double disc = std::max(b * b - a * c, 0.0);
+                tWall = (-b + std::sqrt(disc)) / a;
+                wallNormal = Vector3d(-(ox + tWall * d.x()), -(oy + tWall * d.y()), 0.0) / n.r;
+            }
+        } else {
+            const double ldx = n.cosYaw * d.x() + n.sinYaw * d.y();
+            const double ldy = -n.sinYaw * d.x() + n.cosYaw * d.y();
+            // Exit through the far slab in x and y; the inward normal faces back along the ray.
+            if (std::abs(ldx) > kTinyDir) {
+                const double t = tg + ((ldx > 0.0 ? n.hx : -n.hx) - lx) / ldx;
+                if (t < tWall) {
+                    tWall = t;
+                    const double sx = ldx > 0.0 ? -1.0 : 1.0;
+                    wallNormal = Vector3d(sx * n.cosYaw, sx * n.sinYaw, 0.0);
+                }
+            }
+            if (std::abs(ldy) > kTinyDir) {
+                const double t = tg + ((ldy > 0.0 ? n.hy : -n.hy) - ly) / ldy;
+                if (t < tWall) {
+                    tWall = t;
+                    const double sy = ldy > 0.0 ? -1.0 : 1.0;
+                    wallNormal = Vector3d(-sy * n.sinYaw, sy * n.cosYaw, 0.0);
+                }
+            }
+        }
+        hit.obstacle = n.obstacle;
+        if (tFloor <= tWall) {
+            hit.t = tFloor;
+            hit.surface = Surface::HoleFloor;
+            hit.n = Vector3d(0.0, 0.0, 1.0);
+        } else {
+            hit.t = tWall;
+            hit.surface = Surface::HoleWall;
+            hit.n = wallNormal;
+        }
+        return hit.t > tMin ? hit : Hit{};
     }
 
     void traceBackground(const Vector3d& o, const Vector3d& d, double tMin, Hit& best) const
@@ -498,7 +584,7 @@ private:
         const double s = std::sqrt(disc);
         const double t = c < 0.0 ? (-b + s) / a : (-b - s) / a;
         const double z = o.z() + t * d.z();
-        if (t > tMin && t < best.t && z >= 0.0 && z <= bg.wallHeightM) {
+        if (t > tMin && t < best.t && z >= wallBottom_ && z <= bg.wallHeightM) {
             best.t = t;
             best.surface = Surface::Background;
             best.n = Vector3d(-(o.x() + t * d.x()), -(o.y() + t * d.y()), 0.0) / bg.wallDistanceM;
@@ -576,7 +662,7 @@ private:
             const double t = -lx / ldx;
             const double y = ly + t * ldy;
             const double z = o.z() + t * d.z();
-            if (t > tMin && t < best.t && std::abs(y) <= p.hy && z >= 0.0 && z <= p.z1) {
+            if (t > tMin && t < best.t && std::abs(y) <= p.hy && z >= p.z0 && z <= p.z1) {
                 accept(best, t, toWorld(ldx > 0.0 ? -1.0 : 1.0, 0.0, 0.0), index, p.obstacle);
             }
             return;
@@ -641,6 +727,12 @@ private:
         case Surface::Ground: {
             const GroundStyle g = groundStyle(scene_.texture);
             const double v = g.base + g.spread * detail::fbm2(p.x(), p.y(), g.octaves, footprint, kGroundSeed);
+            return look_.albedo(std::clamp(v, kMinAlbedo, 1.0), p.x(), p.y(), footprint);
+        }
+        case Surface::Kerb: { // kerb stones: concrete, like the curb obstacle
+            constexpr double kKerbAlbedo = 0.65;
+            constexpr std::uint32_t kKerbSeed = 505U;
+            const double v = kKerbAlbedo + 0.6 * detail::fbm3(p.x(), p.y(), p.z(), kObject, footprint, kKerbSeed);
             return std::clamp(v, kMinAlbedo, 1.0);
         }
         case Surface::HoleWall:
@@ -675,6 +767,9 @@ private:
 
     const Scene& scene_;
     const RenderOptions& options_;
+    detail::GroundModel ground_;
+    detail::GroundLook look_;
+    double wallBottom_; // [m]
     std::vector<Prim> prims_;
     std::vector<Neg> negs_;
     std::vector<ObjectInfo> infos_;
@@ -744,24 +839,65 @@ void finishSectors(const std::vector<SectorHit>& hits, const SectorFlags& seesGr
     }
 }
 
-RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderOptions& options)
+/// The ground-truth sectors being collected: the qualifying hits and the sectors that see free ground.
+struct SectorCollector {
+    std::vector<SectorHit> hits;
+    SectorFlags seesGround{};
+    float sectorMin = 0.0F;   // [deg]
+    float sectorWidth = 0.0F; // [deg]
+    int count = 0;
+};
+
+/// Adds the ROI hit at p (label l, `above` [m] over the ground below it) of the left ray `d` to the sectors.
+void collectSectorHit(const Tracer& tracer, const RenderOptions& options, const Hit& hit, const Vector3d& d,
+                      const Vector3d& p, Label l, double above, SectorCollector& sectors)
+{
+    // Bearing and range in the vehicle frame.
+    const Vector3d rel = p - tracer.vehicleOrigin();
+    const double vx = tracer.cosYaw() * rel.x() + tracer.sinYaw() * rel.y();
+    const double vy = -tracer.sinYaw() * rel.x() + tracer.cosYaw() * rel.y();
+    const auto bearing = static_cast<float>(std::atan2(vy, vx) * kRadToDeg);
+    const int sector = static_cast<int>(std::floor((bearing - sectors.sectorMin) / sectors.sectorWidth));
+    if (sector < 0 || sector >= sectors.count) {
+        return;
+    }
+    const bool positive = l == Label::Positive && above > options.minHeightM;
+    // A drop qualifies by its own depth, wherever it is seen: beyond a few metres only the top of its far
+    // wall is in view, a few centimetres below the ground, yet the vehicle must not drive into it.
+    const bool negative = l == Label::Negative && tracer.info(hit.obstacle).depthM > options.minDepthM &&
+                          -above > options.minVisibleDropM;
+    if (!positive && !negative) {
+        sectors.seesGround[static_cast<std::size_t>(sector)] = true;
+        return;
+    }
+    // A drop's range is where the ground ends along this bearing: the point where the ray that sees
+    // the drop crosses the ground (the near rim), not the far wall or floor it hits behind it.
+    double range = std::hypot(vx, vy);
+    if (negative && d.z() < 0.0) {
+        const Vector3d rim = tracer.rim(hit, tracer.origin(0), d, p) - tracer.vehicleOrigin();
+        range = std::hypot(tracer.cosYaw() * rim.x() + tracer.sinYaw() * rim.y(),
+                           -tracer.sinYaw() * rim.x() + tracer.cosYaw() * rim.y());
+    }
+    sectors.hits.push_back(SectorHit{sector, static_cast<float>(range), static_cast<float>(std::abs(above)),
+                                     positive ? ObstacleKind::Positive : ObstacleKind::Negative});
+}
+
+/// Ground truth: one ray through each left pixel centre; then the sectors.
+void renderTruth(const Tracer& tracer, const Scene& scene, const RenderOptions& options, RenderResult& out)
 {
     const Rig& rig = scene.rig;
-    const Tracer tracer(scene, pose, options);
-    RenderResult out;
     out.disparity.create(rig.height, rig.width, CV_32F);
     out.depth.create(rig.height, rig.width, CV_32F);
     out.labels.create(rig.height, rig.width, CV_8U);
     out.ids.create(rig.height, rig.width, CV_16U);
     out.height.create(rig.height, rig.width, CV_32F);
     initSectors(out.sectors, options.sectorCount, static_cast<float>(rig.hfovDeg()));
-    const float sectorMin = out.sectors.sectors[0].bearingMinDeg;
-    const float sectorWidth = static_cast<float>(rig.hfovDeg()) / static_cast<float>(out.sectors.count);
-    std::vector<SectorHit> sectorHits;
-    SectorFlags seesGround{};
+    SectorCollector sectors;
+    sectors.sectorMin = out.sectors.sectors[0].bearingMinDeg;
+    sectors.sectorWidth = static_cast<float>(rig.hfovDeg()) / static_cast<float>(out.sectors.count);
+    sectors.count = out.sectors.count;
     const int roiTop = static_cast<int>(std::floor(options.roiTopFraction * rig.height));
-
-    // Ground truth: one ray through each left pixel centre.
+    const auto kerbId = static_cast<std::uint16_t>(scene.obstacles.size() + 1);
     const Vector3d oL = tracer.origin(0);
     for (int y = 0; y < rig.height; ++y) {
         auto* disp = out.disparity.ptr<float>(y);
@@ -781,56 +917,45 @@ RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderO
                 continue;
             }
             const Vector3d p = oL + hit.t * d;
-            const double z = hit.t * d.dot(tracer.forward()); // [m] along the optical axis
+            const double z = hit.t * d.dot(tracer.forward());        // [m] along the optical axis
+            const double above = p.z() - tracer.groundBelow(hit, p); // [m]
             disp[x] = static_cast<float>(rig.focalPx * rig.baselineM / z);
             depth[x] = static_cast<float>(z);
-            height[x] = static_cast<float>(p.z());
+            height[x] = static_cast<float>(above);
             Label l = Label::Ground;
+            id[x] = hit.obstacle >= 0 ? static_cast<std::uint16_t>(hit.obstacle + 1) : std::uint16_t{0};
             if (hit.surface == Surface::Background) {
                 l = Label::Far;
+            } else if (hit.surface == Surface::Kerb) {
+                l = Label::Positive;
+                id[x] = kerbId;
             } else if (hit.obstacle >= 0) {
                 l = tracer.info(hit.obstacle).label;
             }
             label[x] = static_cast<std::uint8_t>(l);
-            id[x] = hit.obstacle >= 0 ? static_cast<std::uint16_t>(hit.obstacle + 1) : std::uint16_t{0};
-            if (y < roiTop || l == Label::Far) {
-                continue;
-            }
-            // Bearing and range in the vehicle frame.
-            const Vector3d rel = p - tracer.vehicleOrigin();
-            const double vx = tracer.cosYaw() * rel.x() + tracer.sinYaw() * rel.y();
-            const double vy = -tracer.sinYaw() * rel.x() + tracer.cosYaw() * rel.y();
-            const auto bearing = static_cast<float>(std::atan2(vy, vx) * kRadToDeg);
-            const int sector = static_cast<int>(std::floor((bearing - sectorMin) / sectorWidth));
-            if (sector < 0 || sector >= out.sectors.count) {
-                continue;
-            }
-            const bool positive = l == Label::Positive && p.z() > options.minHeightM;
-            // A drop qualifies by its own depth, wherever it is seen: beyond a few metres only the top of its far
-            // wall is in view, a few centimetres below the ground, yet the vehicle must not drive into it.
-            const bool negative = l == Label::Negative && tracer.info(hit.obstacle).depthM > options.minDepthM &&
-                                  -p.z() > options.minVisibleDropM;
-            if (positive || negative) {
-                // A drop's range is where the ground ends along this bearing: the point where the ray that sees
-                // the drop crosses the ground plane (the near rim), not the far wall or floor it hits behind it.
-                double range = std::hypot(vx, vy);
-                if (negative && d.z() < 0.0) {
-                    const Vector3d rim = p - (p.z() / d.z()) * d - tracer.vehicleOrigin();
-                    range = std::hypot(tracer.cosYaw() * rim.x() + tracer.sinYaw() * rim.y(),
-                                       -tracer.sinYaw() * rim.x() + tracer.cosYaw() * rim.y());
-                }
-                sectorHits.push_back(SectorHit{sector, static_cast<float>(range), static_cast<float>(std::abs(p.z())),
-                                               positive ? ObstacleKind::Positive : ObstacleKind::Negative});
-            } else {
-                seesGround[static_cast<std::size_t>(sector)] = true;
+            if (y >= roiTop && l != Label::Far) {
+                collectSectorHit(tracer, options, hit, d, p, l, above, sectors);
             }
         }
     }
-    finishSectors(sectorHits, seesGround, options, out.sectors);
+    finishSectors(sectors.hits, sectors.seesGround, options, out.sectors);
+}
 
-    // Images: samplesPerAxis^2 stratified, jittered rays per pixel, then gains, gradient and noise.
+/// JPEG round trip of an 8-bit image at `quality` (1..100).
+void compressJpeg(cv::Mat& image, int quality)
+{
+    std::vector<std::uint8_t> bytes;
+    cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+    image = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+}
+
+/// Images: samplesPerAxis^2 stratified, jittered rays per pixel, then gains, gradient, vignetting, noise, JPEG.
+void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions& options, RenderResult& out)
+{
+    const Rig& rig = scene.rig;
     const Lighting& light = scene.lighting;
     const int n = options.samplesPerAxis;
+    const double cornerSq = rig.cx() * rig.cx() + rig.cy() * rig.cy(); // [px^2]
     std::mt19937_64 rng(scene.seed);
     std::normal_distribution<double> noise(0.0, 1.0);
     for (int view = 0; view < 2; ++view) {
@@ -838,6 +963,8 @@ RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderO
         img.create(rig.height, rig.width, CV_8U);
         const Vector3d o = tracer.origin(view);
         const double cameraGain = light.gain * (view == 0 ? 1.0 : light.rightGain);
+        const double offset = light.offsetGrey + (view == 0 ? 0.0 : light.rightOffsetGrey); // [grey levels]
+        const double vignette = view == 0 ? light.vignetteLeft : light.vignetteRight;
         const auto jitterSeed = static_cast<std::uint32_t>(scene.seed * 7919U + static_cast<std::uint64_t>(view));
         for (int y = 0; y < rig.height; ++y) {
             auto* row = img.ptr<std::uint8_t>(y);
@@ -848,16 +975,32 @@ RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderO
                     const double jy = detail::lattice(x, y, 2 * k + 1, jitterSeed);
                     const double u = x - 0.5 + ((k % n) + jx) / n;
                     const double v = y - 0.5 + ((k / n) + jy) / n;
-                    sum += tracer.radiance(o, tracer.direction(u, v), 0.0, x, y, view, kFenceLayers);
+                    sum += tracer.radiance(o, tracer.direction(u, v), 0.0, RayContext{x, y, view});
                 }
-                const double gradient = 1.0 + light.gradientX * ((x - rig.cx()) / rig.width) +
-                                        light.gradientY * ((y - rig.cy()) / rig.height);
-                const double grey = 255.0 * cameraGain * gradient * (sum / (n * n)) + light.offsetGrey +
-                                    light.noiseSigmaGrey * noise(rng);
+                double gradient = 1.0 + light.gradientX * ((x - rig.cx()) / rig.width) +
+                                  light.gradientY * ((y - rig.cy()) / rig.height);
+                if (vignette > 0.0) {
+                    const double dx = x - rig.cx();
+                    const double dy = y - rig.cy();
+                    gradient *= 1.0 - vignette * (dx * dx + dy * dy) / cornerSq;
+                }
+                const double grey =
+                    255.0 * cameraGain * gradient * (sum / (n * n)) + offset + light.noiseSigmaGrey * noise(rng);
                 row[x] = static_cast<std::uint8_t>(std::clamp(std::lround(grey), 0L, 255L));
             }
         }
+        if (light.jpegQuality > 0) {
+            compressJpeg(img, light.jpegQuality);
+        }
     }
+}
+
+RenderResult renderUnchecked(const Scene& scene, const Pose& pose, const RenderOptions& options)
+{
+    const Tracer tracer(scene, pose, options);
+    RenderResult out;
+    renderTruth(tracer, scene, options, out);
+    renderImages(tracer, scene, options, out);
     return out;
 }
 

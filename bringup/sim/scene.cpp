@@ -1,5 +1,7 @@
 #include "sim/scene.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -39,6 +41,15 @@ Error sceneError(const std::string& what, const std::string& fix)
     return Error{"sim scene", what, fix};
 }
 
+std::string joined(const std::vector<std::string>& names)
+{
+    std::string text;
+    for (const std::string& n : names) {
+        text += text.empty() ? n : ", " + n;
+    }
+    return text;
+}
+
 bool positive(double v) noexcept
 {
     return std::isfinite(v) && v > 0.0;
@@ -50,6 +61,44 @@ Obstacle centredAt(Obstacle o, double x, double y)
     o.bearingDeg = std::atan2(y, x) * kRadToDeg;
     o.rangeM = std::hypot(x, y) - centreOffsetM(o);
     return o;
+}
+
+using Point = std::pair<double, double>;
+
+/// Convex hull (Andrew's monotone chain), counter-clockwise.
+std::vector<Point> convexHull(std::vector<Point> points)
+{
+    std::sort(points.begin(), points.end());
+    points.erase(std::unique(points.begin(), points.end()), points.end());
+    if (points.size() < 3) {
+        return points;
+    }
+    const auto cross = [](const Point& o, const Point& a, const Point& b) {
+        return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+    };
+    std::vector<Point> hull(2 * points.size());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) { // lower hull
+        while (k >= 2 && cross(hull[k - 2], hull[k - 1], points[i]) <= 0.0) {
+            --k;
+        }
+        hull[k++] = points[i];
+    }
+    for (std::size_t i = points.size() - 1, lower = k + 1; i > 0; --i) { // upper hull
+        while (k >= lower && cross(hull[k - 2], hull[k - 1], points[i - 1]) <= 0.0) {
+            --k;
+        }
+        hull[k++] = points[i - 1];
+    }
+    hull.resize(k - 1);
+    return hull;
+}
+
+/// A value of `values` picked by the variant (cycling).
+template <std::size_t N>
+double pick(const std::array<double, N>& values, int variant)
+{
+    return values[static_cast<std::size_t>(std::max(variant, 0)) % N];
 }
 
 } // namespace
@@ -255,13 +304,144 @@ Result<Scene, Error> makeScene(std::string_view name, double rangeM, double bear
     } else if (name == "overhang") {
         scene.obstacles.push_back(overhang(rangeM, bearingDeg));
     } else {
-        std::string known;
-        for (const std::string& n : sceneNames()) {
-            known += known.empty() ? n : ", " + n;
-        }
-        return Unexpected(sceneError("unknown scene '" + std::string(name) + "'", "use one of: " + known));
+        return Unexpected(
+            sceneError("unknown scene '" + std::string(name) + "'", "use one of: " + joined(sceneNames())));
     }
     return scene;
+}
+
+Shadow castShadow(const Obstacle& caster, double sunAzimuthDeg, double sunElevationDeg, double factor)
+{
+    constexpr int kRoundCorners = 16;
+    Shadow shadow;
+    shadow.factor = factor;
+    if (caster.type == ObstacleType::Hole || caster.type == ObstacleType::Trench || !(sunElevationDeg > 0.0)) {
+        return shadow;
+    }
+    const auto [cx, cy] = obstacleCentre(caster);
+    const double c = std::cos(caster.yawDeg * kDegToRad);
+    const double s = std::sin(caster.yawDeg * kDegToRad);
+    std::vector<Point> outline; // footprint outline in the world frame
+    if (caster.type == ObstacleType::Pole) {
+        for (int k = 0; k < kRoundCorners; ++k) {
+            const double a = 2.0 * std::numbers::pi * k / kRoundCorners;
+            outline.emplace_back(cx + caster.radiusM * std::cos(a), cy + caster.radiusM * std::sin(a));
+        }
+    } else {
+        const double hx = caster.type == ObstacleType::MeshFence ? caster.radiusM : caster.lengthM / 2.0;
+        const double hy = caster.widthM / 2.0;
+        for (const auto& [lx, ly] : std::array<Point, 4>{{{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}}}) {
+            outline.emplace_back(cx + c * lx - s * ly, cy + s * lx + c * ly);
+        }
+    }
+    const bool floating = caster.type == ObstacleType::Overhang || caster.type == ObstacleType::TableLegs;
+    const double bottom = caster.type == ObstacleType::TableLegs ? caster.heightM - 0.04 : caster.elevationM;
+    const double reach = 1.0 / std::tan(sunElevationDeg * kDegToRad); // [m] of shadow per metre of height
+    const double ax = -std::cos(sunAzimuthDeg * kDegToRad) * reach;
+    const double ay = -std::sin(sunAzimuthDeg * kDegToRad) * reach;
+    std::vector<Point> points;
+    for (const auto& [x, y] : outline) {
+        points.emplace_back(x + ax * caster.heightM, y + ay * caster.heightM);
+        points.emplace_back(floating ? Point{x + ax * bottom, y + ay * bottom} : Point{x, y});
+    }
+    shadow.polygon = convexHull(std::move(points));
+    return shadow;
+}
+
+const std::vector<std::string>& conditionNames()
+{
+    static const std::vector<std::string> kNames = {"camber",     "grade_up", "grade_down", "kerb",  "exposure",
+                                                    "vignetting", "noise",    "jpeg",       "paint", "rails",
+                                                    "shadow",     "glossy",   "puddle"};
+    return kNames;
+}
+
+namespace {
+
+/// Ground shapes and photometry; false for a name that is neither.
+bool applyShapeOrPhotometry(Scene& scene, std::string_view name, int v)
+{
+    GroundShape& g = scene.ground;
+    Lighting& l = scene.lighting;
+    if (name == "camber") { // the vehicle in a lane beside the crown, or on it
+        g.camberSlope = pick(std::array{0.02, 0.025, 0.03}, v);
+        g.crownY = pick(std::array{1.75, 0.0, -1.75}, v);
+    } else if (name == "grade_up" || name == "grade_down") {
+        g.gradeChange = (name == "grade_up" ? 1.0 : -1.0) * pick(std::array{0.04, 0.03, 0.05}, v);
+        g.gradeAtX = pick(std::array{6.0, 4.0, 9.0}, v);
+    } else if (name == "kerb") {
+        g.kerbY = pick(std::array{-2.0, 1.5, -2.5}, v);
+        g.kerbHeightM = pick(std::array{0.12, 0.13, 0.15}, v); // over the 0.10 m of an obstacle
+    } else if (name == "exposure") {
+        l.rightGain = pick(std::array{0.85, 1.15, 0.9, 1.1}, v);
+        l.rightOffsetGrey = pick(std::array{6.0, -6.0, -3.0, 3.0}, v);
+    } else if (name == "vignetting") {
+        l.vignetteLeft = pick(std::array{0.2, 0.45, 0.0}, v);
+        l.vignetteRight = pick(std::array{0.45, 0.2, 0.35}, v);
+    } else if (name == "noise") {
+        l.noiseSigmaGrey = pick(std::array{4.0, 6.0, 8.0}, v);
+    } else if (name == "jpeg") {
+        l.jpegQuality = static_cast<int>(pick(std::array{60.0, 80.0, 40.0}, v));
+    } else {
+        return false;
+    }
+    return true;
+}
+
+/// Markings, shadows and mirrors; false for a name that is none of them.
+bool applyAppearance(Scene& scene, std::string_view name, int v)
+{
+    Markings& m = scene.markings;
+    if (name == "paint") { // the vehicle between two lane lines, a stop line ahead
+        m.laneLinesY = {1.75, -1.75, 5.25};
+        m.gapM = pick(std::array{6.0, 0.0, 3.0}, v);
+        m.stopLineX = pick(std::array{6.0, 4.0, 9.0}, v);
+    } else if (name == "rails") {
+        m.tracksY = {pick(std::array{0.0, 0.6, -0.9}, v)};
+    } else if (name == "shadow") { // a building's shadow edge across the path and tree trunks beside it
+        const double edge = pick(std::array{5.0, 7.0, 3.5}, v);
+        Shadow building;
+        building.polygon = {{edge, -30.0}, {edge + 2.0, 30.0}, {60.0, 30.0}, {60.0, -30.0}};
+        scene.shadows.push_back(building);
+        for (const auto& [x, y] : std::array<Point, 2>{{{3.0, -6.0}, {6.0, 7.0}}}) {
+            scene.shadows.push_back(castShadow(centredAt(pole(0.0, 0.0, 0.15, 8.0), x, y), y > 0.0 ? 100.0 : -100.0,
+                                               pick(std::array{25.0, 35.0, 20.0}, v)));
+        }
+    } else if (name == "glossy") { // a polished hall floor
+        scene.texture = GroundTexture::PaintedFloor;
+        scene.background.type = BackgroundType::Walls;
+        Reflector floor;
+        floor.round = false;
+        floor.halfLengthM = floor.halfWidthM = 1000.0;
+        floor.reflectance = pick(std::array{0.5, 0.65, 0.8}, v);
+        scene.reflectors.push_back(floor);
+    } else if (name == "puddle") {
+        Reflector near;
+        near.x = pick(std::array{3.0, 4.0, 2.5}, v);
+        near.y = pick(std::array{0.3, -0.5, 0.0}, v);
+        near.reflectance = pick(std::array{0.7, 0.6, 0.8}, v);
+        Reflector far = near;
+        far.x += 4.0;
+        far.y = -near.y;
+        far.halfLengthM = 1.5;
+        far.halfWidthM = 0.8;
+        scene.reflectors.push_back(near);
+        scene.reflectors.push_back(far);
+    } else {
+        return false;
+    }
+    return true;
+}
+
+} // namespace
+
+Result<void, Error> applyCondition(Scene& scene, std::string_view name, int variant)
+{
+    if (applyShapeOrPhotometry(scene, name, variant) || applyAppearance(scene, name, variant)) {
+        return {};
+    }
+    return Unexpected(
+        sceneError("unknown condition '" + std::string(name) + "'", "use one of: " + joined(conditionNames())));
 }
 
 std::vector<Pose> straightDrive(double distanceM, double speedMps, double fps)
@@ -306,8 +486,71 @@ Result<Course, Error> makeCourse(std::string_view name, double speedMps, double 
     return course;
 }
 
+namespace {
+
+bool finite(double v) noexcept
+{
+    return std::isfinite(v);
+}
+
+bool unit(double v) noexcept
+{
+    return std::isfinite(v) && v >= 0.0 && v <= 1.0;
+}
+
+/// The conditions of issue 20: ground shape, per-camera photometry, markings, shadows, mirrors.
+Result<void, Error> validateConditions(const Scene& scene)
+{
+    constexpr double kMaxSlope = 0.3;
+    constexpr double kMaxVignette = 0.9;
+    constexpr int kMaxJpegQuality = 100;
+    const Lighting& l = scene.lighting;
+    if (!finite(l.rightOffsetGrey) || !(l.vignetteLeft >= 0.0 && l.vignetteLeft <= kMaxVignette) ||
+        !(l.vignetteRight >= 0.0 && l.vignetteRight <= kMaxVignette) || l.jpegQuality < 0 ||
+        l.jpegQuality > kMaxJpegQuality) {
+        return Unexpected(
+            sceneError("lighting: vignetting must be in [0, 0.9], JPEG quality 0..100, offsets finite", ""));
+    }
+    const GroundShape& g = scene.ground;
+    if (!(g.camberSlope >= 0.0 && g.camberSlope <= kMaxSlope) || !(std::abs(g.gradeChange) <= kMaxSlope) ||
+        !finite(g.crownY) || !finite(g.gradeAtX) || !(g.kerbHeightM >= 0.0 && g.kerbHeightM <= 1.0) ||
+        !finite(g.kerbY) || (g.kerbHeightM > 0.0 && g.kerbY == 0.0)) {
+        return Unexpected(sceneError("ground shape: camber in [0, 0.3], grade change in [-0.3, 0.3], kerb height in "
+                                     "[0, 1] m with a non-zero kerb y, all finite",
+                                     "e.g. camber 0.025, grade 0.04 at 8 m, kerb 0.12 m at y -2 m"));
+    }
+    const Markings& m = scene.markings;
+    bool ok = positive(m.lineWidthM) && positive(m.dashM) && m.gapM >= 0.0 && finite(m.gapM) && finite(m.stopLineX) &&
+              positive(m.stopLineWidthM) && positive(m.gaugeM) && positive(m.railWidthM) && m.grooveWidthM >= 0.0 &&
+              m.railWidthM + m.grooveWidthM < m.gaugeM && unit(m.paintAlbedo) && unit(m.railAlbedo) &&
+              unit(m.grooveAlbedo);
+    for (const auto& list : {m.laneLinesY, m.tracksY}) {
+        ok = ok && std::all_of(list.begin(), list.end(), finite);
+    }
+    for (const Shadow& shadow : scene.shadows) {
+        ok = ok && shadow.polygon.size() >= 3 && positive(shadow.factor) && shadow.factor <= 1.0 &&
+             std::all_of(shadow.polygon.begin(), shadow.polygon.end(),
+                         [](const Point& p) { return finite(p.first) && finite(p.second); });
+    }
+    for (const Reflector& r : scene.reflectors) {
+        ok = ok && finite(r.x) && finite(r.y) && positive(r.halfLengthM) && positive(r.halfWidthM) &&
+             unit(r.reflectance);
+    }
+    if (!ok) {
+        return Unexpected(sceneError("markings, shadows or reflectors: non-positive size, albedo or reflectance "
+                                     "outside [0, 1], shadow with fewer than 3 corners, or a non-finite value",
+                                     "use the defaults of Markings, Shadow and Reflector as a reference"));
+    }
+    return {};
+}
+
+} // namespace
+
 Result<void, Error> validate(const Scene& scene)
 {
+    if (auto conditions = validateConditions(scene); !conditions) {
+        return conditions;
+    }
     const Rig& rig = scene.rig;
     if (rig.width < 2 || rig.height < 2 || rig.width > 8192 || rig.height > 8192) {
         return Unexpected(

@@ -46,12 +46,69 @@ enum class GroundTexture : std::uint8_t { Asphalt, Grass, Gravel, PaintedFloor }
 /// Photometric variation. Grey value = 255 * gain * cameraGain * gradient(u, v) * albedo * shading + offset
 /// + N(0, noiseSigma), clamped to [0, 255].
 struct Lighting {
-    double gain = 1.0;           ///< global gain
-    double offsetGrey = 0.0;     ///< [grey levels] global offset
-    double gradientX = 0.04;     ///< relative brightness change from the left to the right image edge
-    double gradientY = 0.03;     ///< relative brightness change from the top to the bottom image edge
-    double rightGain = 1.02;     ///< gain of the right camera relative to the left one
-    double noiseSigmaGrey = 1.5; ///< [grey levels] Gaussian sensor noise (seeded by Scene::seed)
+    double gain = 1.0;            ///< global gain
+    double offsetGrey = 0.0;      ///< [grey levels] global offset
+    double gradientX = 0.04;      ///< relative brightness change from the left to the right image edge
+    double gradientY = 0.03;      ///< relative brightness change from the top to the bottom image edge
+    double rightGain = 1.02;      ///< gain of the right camera relative to the left one
+    double noiseSigmaGrey = 1.5;  ///< [grey levels] Gaussian sensor noise (seeded by Scene::seed)
+    double rightOffsetGrey = 0.0; ///< [grey levels] offset of the right camera added to offsetGrey
+    /// Vignetting of each camera: brightness times 1 - k (r / r_corner)^2, r from the principal point, [0, 0.9].
+    double vignetteLeft = 0.0;
+    double vignetteRight = 0.0;
+    int jpegQuality = 0; ///< JPEG compression of both images at this quality (1..100); 0 = none
+};
+
+/// Shape of the ground: a height field z_g(x, y) in the world frame, the sum of the terms below; all zero is the
+/// flat plane z = 0. The road (carriageway) is
+///   z_road(x, y) = -camberSlope |y - crownY| + gradeChange max(0, x - gradeAtX);
+/// with a kerb (kerbHeightM > 0), the ground beyond the line y = kerbY (on the side away from y = 0) is a flat
+/// pavement at z_road(x, kerbY) + kerbHeightM, joined to the road by a vertical kerb face.
+struct GroundShape {
+    double camberSlope = 0.0; ///< fall per metre to both sides of the crown line (0.025 = 2.5 %), >= 0
+    double crownY = 0.0;      ///< [m] world y of the crown line (it runs along x)
+    double gradeChange = 0.0; ///< change of the forward slope at x = gradeAtX (0.04 = +4 %: uphill beyond)
+    double gradeAtX = 8.0;    ///< [m] world x where the grade changes
+    double kerbY = -2.0;      ///< [m] world y of the kerb face (it runs along x); non-zero
+    double kerbHeightM = 0.0; ///< [m] pavement above the road at the kerb; 0 = no kerb
+    [[nodiscard]] bool flat() const noexcept { return camberSlope == 0.0 && gradeChange == 0.0 && kerbHeightM == 0.0; }
+};
+
+/// Paint and rails on the ground: albedo patterns flush with the surface (not obstacles).
+struct Markings {
+    std::vector<double> laneLinesY; ///< [m] world y of lane lines running along x
+    double lineWidthM = 0.12;       ///< [m]
+    double dashM = 3.0;             ///< [m] dash length along x
+    double gapM = 6.0;              ///< [m] gap between dashes; 0 = solid lines
+    double stopLineX = -1.0;        ///< [m] world x of the near edge of a stop line across the view; < 0 = none
+    double stopLineWidthM = 0.3;    ///< [m]
+    double paintAlbedo = 0.85;
+    std::vector<double> tracksY; ///< [m] world y of tram track centre lines (two rails each, along x)
+    double gaugeM = 1.435;       ///< [m] between the rail centres
+    double railWidthM = 0.07;    ///< [m] rail head (polished steel, bright)
+    double grooveWidthM = 0.04;  ///< [m] flangeway on the inner side of each rail head (dark)
+    double railAlbedo = 0.75;
+    double grooveAlbedo = 0.06;
+    [[nodiscard]] bool empty() const noexcept { return laneLinesY.empty() && tracksY.empty() && stopLineX < 0.0; }
+};
+
+/// A hard shadow on the ground: the ground's albedo times `factor` inside a polygon (world x, y [m], either
+/// orientation). Only the ground is shaded (not obstacles, not what a mirror shows).
+struct Shadow {
+    std::vector<std::pair<double, double>> polygon;
+    double factor = 0.3; ///< (0, 1]
+};
+
+/// A mirror-like region of the ground (a puddle, or a glossy floor when large): the colour there is
+/// (1 - reflectance) * ground + reflectance * what the ray reflected about the ground normal sees. The ground truth
+/// is the ground (floor) itself.
+struct Reflector {
+    double x = 4.0;           ///< [m] world centre
+    double y = 0.0;           ///< [m]
+    double halfLengthM = 0.8; ///< [m] semi-axis along x
+    double halfWidthM = 0.5;  ///< [m] semi-axis along y
+    bool round = true;        ///< ellipse, or axis-aligned rectangle
+    double reflectance = 0.6; ///< [0, 1]
 };
 
 enum class BackgroundType : std::uint8_t { Sky, Walls };
@@ -138,14 +195,32 @@ struct Obstacle {
 /// World-frame centre (x, y) of the object's footprint [m]: (rangeM + centreOffset) along the bearing.
 [[nodiscard]] std::pair<double, double> obstacleCentre(const Obstacle& obstacle) noexcept;
 
+/// The shadow on flat ground of a pole, box, barrier, curb or table top lit by a sun at the given azimuth (direction
+/// towards the sun, counter-clockwise from the world x axis) and elevation: the convex hull of the footprint and
+/// of the top outline projected along the sun's rays. The caster need not be in the scene (a tree off the view).
+[[nodiscard]] Shadow castShadow(const Obstacle& caster, double sunAzimuthDeg, double sunElevationDeg,
+                                double factor = 0.3);
+
 struct Scene {
     Rig rig;
     GroundTexture texture = GroundTexture::Asphalt;
     Lighting lighting;
     Background background;
-    std::vector<Obstacle> obstacles;
-    std::uint64_t seed = 1; ///< sensor noise and sub-pixel jitter
+    std::vector<Obstacle> obstacles; ///< each stands on the ground at its footprint centre
+    std::uint64_t seed = 1;          ///< sensor noise and sub-pixel jitter
+    GroundShape ground;
+    Markings markings;
+    std::vector<Shadow> shadows;
+    std::vector<Reflector> reflectors;
 };
+
+/// Names accepted by applyCondition(): the real-world conditions of issue 20 (bringup/sim/README.md).
+[[nodiscard]] const std::vector<std::string>& conditionNames();
+
+/// Adds a named condition to `scene` (ground shape, photometry, markings, shadows, mirrors); `variant` (>= 0) picks
+/// one of a few settings of it (a sweep over the seeds).
+/// @return an Error naming the valid conditions for an unknown name.
+[[nodiscard]] Result<void, Error> applyCondition(Scene& scene, std::string_view name, int variant = 0);
 
 /// Names accepted by makeScene: "empty" and one per obstacle type.
 [[nodiscard]] const std::vector<std::string>& sceneNames();

@@ -2,7 +2,8 @@
 // - Scene "chessboard": calibration pairs rendered by a known rig, with truth.yaml holding that rig, so that
 //   `ugvsense calibrate` can be checked against it.
 // - Any scene of the ray-cast simulator's catalogue (bringup/sim): one sample with its ground truth
-//   (sim::writeSample) and calibration.yaml (sim::writeCalibration).
+//   (sim::writeSample) and calibration.yaml (sim::writeCalibration), optionally under real-world conditions (named
+//   presets, --condition, and flags for the ground shape, photometry, markings, shadows and mirrors).
 // - A course: a recording (--out REC.ugvrec) with its ground truth in REC.ugvrec.truth.csv, or numbered samples
 //   frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, y, yaw) in a folder.
 
@@ -13,7 +14,9 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -77,6 +80,112 @@ std::optional<sim::GroundTexture> parseTexture(const std::string& name)
         return sim::GroundTexture::PaintedFloor;
     }
     return std::nullopt;
+}
+
+/// A number flag of a catalogue scene's conditions and where it goes in the scene.
+struct ConditionFlag {
+    const char* name;
+    double min;
+    double max;
+    void (*set)(sim::Scene&, double);
+};
+
+constexpr ConditionFlag kConditionFlags[] = {
+    {"camber", 0.0, 0.3, [](sim::Scene& s, double v) { s.ground.camberSlope = v; }},
+    {"crown-y", -kMaxRangeM, kMaxRangeM, [](sim::Scene& s, double v) { s.ground.crownY = v; }},
+    {"grade", -0.3, 0.3, [](sim::Scene& s, double v) { s.ground.gradeChange = v; }},
+    {"grade-at", -kMaxRangeM, kMaxRangeM, [](sim::Scene& s, double v) { s.ground.gradeAtX = v; }},
+    {"kerb-y", -kMaxRangeM, kMaxRangeM, [](sim::Scene& s, double v) { s.ground.kerbY = v; }},
+    {"kerb-height", 0.0, 1.0, [](sim::Scene& s, double v) { s.ground.kerbHeightM = v; }},
+    {"right-gain", 0.1, 10.0, [](sim::Scene& s, double v) { s.lighting.rightGain = v; }},
+    {"right-offset", -255.0, 255.0, [](sim::Scene& s, double v) { s.lighting.rightOffsetGrey = v; }},
+    {"vignette-left", 0.0, 0.9, [](sim::Scene& s, double v) { s.lighting.vignetteLeft = v; }},
+    {"vignette-right", 0.0, 0.9, [](sim::Scene& s, double v) { s.lighting.vignetteRight = v; }},
+    {"noise", 0.0, kMaxNoise, [](sim::Scene& s, double v) { s.lighting.noiseSigmaGrey = v; }},
+    {"jpeg", 1.0, 100.0, [](sim::Scene& s, double v) { s.lighting.jpegQuality = static_cast<int>(std::lround(v)); }},
+    {"dash", 0.01, kMaxRangeM, [](sim::Scene& s, double v) { s.markings.dashM = v; }},
+    {"gap", 0.0, kMaxRangeM, [](sim::Scene& s, double v) { s.markings.gapM = v; }},
+    {"stop-line", 0.0, kMaxRangeM, [](sim::Scene& s, double v) { s.markings.stopLineX = v; }},
+    {"glossy", 0.0, 1.0,
+     [](sim::Scene& s, double v) {
+         constexpr double kWholeFloorM = 1000.0;
+         s.reflectors.push_back(sim::Reflector{0.0, 0.0, kWholeFloorM, kWholeFloorM, false, v});
+     }},
+};
+
+/// Comma-separated finite numbers (none when the flag is absent); an Error naming the flag otherwise.
+Result<std::vector<double>, Error> numberList(const Args& args, const std::string& name)
+{
+    std::vector<double> values;
+    std::stringstream list(args.get(name));
+    for (std::string item; std::getline(list, item, ',');) {
+        char* end = nullptr;
+        const double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(v)) {
+            return Unexpected(Error{"ugvsense sim --" + name, "bad number '" + item + "' in '" + args.get(name) + "'",
+                                    "give comma-separated numbers, e.g. --" + name + " 1.75,-1.75"});
+        }
+        values.push_back(v);
+    }
+    return values;
+}
+
+/// The conditions of a catalogue scene: the presets of --condition (variant --variant), then the flags.
+Result<void, Error> applyConditionOptions(const Args& args, sim::Scene& scene)
+{
+    const auto variant = args.number("variant", 0, 0, 1000);
+    if (!variant) {
+        return Unexpected(variant.error());
+    }
+    std::stringstream names(args.get("condition"));
+    for (std::string name; std::getline(names, name, ',');) {
+        if (auto applied = sim::applyCondition(scene, name, static_cast<int>(*variant)); !applied) {
+            return Unexpected(Error{"ugvsense sim --condition", applied.error().what, applied.error().fix});
+        }
+    }
+    for (const ConditionFlag& flag : kConditionFlags) {
+        if (args.has(flag.name)) {
+            const auto value = args.number(flag.name, 0.0, flag.min, flag.max);
+            if (!value) {
+                return Unexpected(value.error());
+            }
+            flag.set(scene, *value);
+        }
+    }
+    const auto lanes = numberList(args, "lanes");
+    const auto rails = numberList(args, "rails");
+    const auto shadow = numberList(args, "shadow");
+    const auto puddle = numberList(args, "puddle");
+    for (const auto* list : {&lanes, &rails, &shadow, &puddle}) {
+        if (!*list) {
+            return Unexpected(list->error());
+        }
+    }
+    if (args.has("lanes")) {
+        scene.markings.laneLinesY = *lanes;
+    }
+    if (args.has("rails")) {
+        scene.markings.tracksY = *rails;
+    }
+    if (args.has("shadow")) {
+        if (shadow->size() < 6 || shadow->size() % 2 != 0) {
+            return Unexpected(
+                Error{"ugvsense sim --shadow", "a polygon needs 3 or more x,y corners", "e.g. 5,-9,5,9,9,0"});
+        }
+        sim::Shadow polygon;
+        for (std::size_t i = 0; i + 1 < shadow->size(); i += 2) {
+            polygon.polygon.emplace_back((*shadow)[i], (*shadow)[i + 1]);
+        }
+        scene.shadows.push_back(polygon);
+    }
+    if (args.has("puddle")) {
+        const std::vector<double>& v = *puddle;
+        if (v.size() != 5) {
+            return Unexpected(Error{"ugvsense sim --puddle", "give 5 numbers X,Y,RX,RY,REFL", "e.g. 3,0,0.8,0.5,0.7"});
+        }
+        scene.reflectors.push_back(sim::Reflector{v[0], v[1], v[2], v[3], true, v[4]});
+    }
+    return sim::validate(scene);
 }
 
 /// Creates `out` if needed; an Error (exit 1) when it cannot be created or is not a folder.
@@ -196,6 +305,9 @@ int runCatalogueScene(const Args& args)
     scene->rig.pitchDeg = *pitch;
     scene->rig.rollDeg = *roll;
     scene->rig.heightM = *height;
+    if (auto conditions = applyConditionOptions(args, *scene); !conditions) {
+        return reportFailure(conditions.error());
+    }
 
     const std::filesystem::path out = args.get("out");
     if (auto prepared = prepareOutput(out); !prepared) {
@@ -212,8 +324,9 @@ int runCatalogueScene(const Args& args)
         return reportFailure(written.error());
     }
     std::cout << "wrote scene '" << name << "' (range " << *range << " m, bearing " << *bearing << " deg, "
-              << textureName << ", pitch " << *pitch << " deg, roll " << *roll << " deg, height " << *height
-              << " m) to " << out.string() << ": " << name << "_{left,right,disparity,depth,labels,ids}.png, " << name
+              << textureName << ", pitch " << *pitch << " deg, roll " << *roll << " deg, height " << *height << " m"
+              << (args.has("condition") ? ", conditions " + args.get("condition") : std::string()) << ") to "
+              << out.string() << ": " << name << "_{left,right,disparity,depth,labels,ids}.png, " << name
               << "_sectors.json, calibration.yaml\n";
     return 0;
 }
@@ -346,29 +459,57 @@ int runCourse(const Args& args)
 
 int runSim(int argc, char** argv)
 {
-    Args args("sim",
-              "(--scene NAME | --course NAME) --out DIR [options] | --list\n"
-              "  --scene chessboard: calibration pairs and truth.yaml ([--pairs N] [--seed S] [--noise SIGMA])\n"
-              "  --scene NAME (ugvsense sim --list): one simulator sample with ground truth and calibration.yaml\n"
-              "  --course NAME --out REC.ugvrec: a recording of the drive and REC.ugvrec.truth.csv (truth per frame "
-              "and sector);\n"
-              "  --course NAME --out DIR: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, "
-              "y, yaw)",
-              {{"scene", "NAME", "scene to render: chessboard, or a simulator scene (see --list)", false},
-               {"course", "NAME", "course to render as a sequence (see --list)", false},
-               {"out", "DIR|REC", "output folder (created if missing), or a course's recording REC.ugvrec", false},
-               {"list", "", "print the scene and course names", false},
-               {"range", "M", "simulator scene: obstacle range in metres, default 5", false},
-               {"bearing", "DEG", "simulator scene: obstacle bearing, positive left, default 0", false},
-               {"texture", "NAME", "simulator scene: asphalt|grass|gravel|floor, default asphalt", false},
-               {"pitch", "DEG", "simulator scene: camera pitch, positive down, default 0", false},
-               {"roll", "DEG", "simulator scene: camera roll, positive right side down, default 0", false},
-               {"height", "M", "simulator scene: camera height above the ground, default 0.59", false},
-               {"frames", "N", "course: number of frames to write, default all", false},
-               {"fps", "F", "course: frame rate (poses 1.5 m/s apart in time), default 10", false},
-               {"pairs", "N", "chessboard: number of pairs, default 12", false},
-               {"seed", "S", "random seed (chessboard poses and noise; simulator noise), default 1", false},
-               {"noise", "SIGMA", "chessboard: Gaussian noise in grey levels, default 1", false}});
+    Args args(
+        "sim",
+        "(--scene NAME | --course NAME) --out DIR [options] | --list\n"
+        "  --scene chessboard: calibration pairs and truth.yaml ([--pairs N] [--seed S] [--noise SIGMA])\n"
+        "  --scene NAME (ugvsense sim --list): one simulator sample with ground truth and calibration.yaml\n"
+        "  --course NAME --out REC.ugvrec: a recording of the drive and REC.ugvrec.truth.csv (truth per frame "
+        "and sector);\n"
+        "  --course NAME --out DIR: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, "
+        "y, yaw)",
+        {{"scene", "NAME", "scene to render: chessboard, or a simulator scene (see --list)", false},
+         {"course", "NAME", "course to render as a sequence (see --list)", false},
+         {"out", "DIR|REC", "output folder (created if missing), or a course's recording REC.ugvrec", false},
+         {"list", "", "print the scene and course names", false},
+         {"range", "M", "simulator scene: obstacle range in metres, default 5", false},
+         {"bearing", "DEG", "simulator scene: obstacle bearing, positive left, default 0", false},
+         {"texture", "NAME", "simulator scene: asphalt|grass|gravel|floor, default asphalt", false},
+         {"pitch", "DEG", "simulator scene: camera pitch, positive down, default 0", false},
+         {"roll", "DEG", "simulator scene: camera roll, positive right side down, default 0", false},
+         {"height", "M", "simulator scene: camera height above the ground, default 0.59", false},
+         {"frames", "N", "course: number of frames to write, default all", false},
+         {"fps", "F", "course: frame rate (poses 1.5 m/s apart in time), default 10", false},
+         {"pairs", "N", "chessboard: number of pairs, default 12", false},
+         {"seed", "S", "random seed (chessboard poses and noise; simulator noise), default 1", false},
+         {"noise", "SIGMA", "Gaussian noise in grey levels, default 1 (chessboard) or 1.5 (simulator scene)", false},
+         {"condition", "LIST",
+          "simulator scene: real-world conditions, comma-separated presets (ugvsense sim --list); the flags "
+          "below override them",
+          false},
+         {"variant", "K", "simulator scene: which setting of each --condition preset, default 0", false},
+         {"camber", "SLOPE", "simulator scene: road crown, fall per metre to both sides (0.025 = 2.5 %)", false},
+         {"crown-y", "M", "simulator scene: lateral position (world y) of the crown line, default 0", false},
+         {"grade", "CHANGE", "simulator scene: change of the forward slope (0.04 = +4 %, uphill beyond)", false},
+         {"grade-at", "M", "simulator scene: forward distance of the grade change, default 8", false},
+         {"kerb-height", "M", "simulator scene: kerb height; a flat pavement beyond --kerb-y", false},
+         {"kerb-y", "M", "simulator scene: lateral position of the kerb face, default -2 (right)", false},
+         {"right-gain", "G", "simulator scene: right camera gain relative to the left, default 1.02", false},
+         {"right-offset", "GREY", "simulator scene: right camera offset in grey levels, default 0", false},
+         {"vignette-left", "K", "simulator scene: left vignetting 1 - K (r/r_corner)^2, 0..0.9", false},
+         {"vignette-right", "K", "simulator scene: right vignetting, 0..0.9", false},
+         {"jpeg", "Q", "simulator scene: JPEG-compress both images at quality Q (1..100)", false},
+         {"lanes", "Y,...", "simulator scene: lane lines along x at these lateral positions [m]", false},
+         {"dash", "M", "simulator scene: lane line dash length, default 3", false},
+         {"gap", "M", "simulator scene: gap between dashes, default 6; 0 = solid lines", false},
+         {"stop-line", "X", "simulator scene: a stop line across the view at this forward distance [m]", false},
+         {"rails", "Y,...", "simulator scene: tram tracks (two rails each) centred at these lateral positions", false},
+         {"shadow", "X,Y,X,Y,X,Y...", "simulator scene: a hard shadow (albedo x 0.3) inside this polygon [m]", false},
+         {"puddle", "X,Y,RX,RY,REFL",
+          "simulator scene: an elliptic mirror-like puddle (centre, semi-axes [m], "
+          "reflectance 0..1)",
+          false},
+         {"glossy", "REFL", "simulator scene: the whole floor mirrors with this reflectance (0..1)", false}});
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError("sim", parsed.error());
     }
@@ -377,7 +518,11 @@ int runSim(int argc, char** argv)
         return 0;
     }
     if (args.has("list")) {
-        std::cout << "scenes: " << knownScenes() << "\ncourses: default\n";
+        std::string conditions;
+        for (const auto& name : sim::conditionNames()) {
+            conditions += (conditions.empty() ? "" : ", ") + name;
+        }
+        std::cout << "scenes: " << knownScenes() << "\ncourses: default\nconditions: " << conditions << '\n';
         return 0;
     }
     if (args.has("scene") == args.has("course")) {
