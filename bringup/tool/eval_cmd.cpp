@@ -48,6 +48,8 @@ struct Band {
 };
 constexpr Band kBands[] = {{1.0, 3.0}, {3.0, 6.0}, {6.0, 10.0}, {10.0, 15.0}};
 constexpr int kBandCount = 4;
+constexpr int kTypeColumn = 12;       ///< [chars] type column of the obstacle tables
+constexpr int kGroundTypeColumn = 23; ///< [chars] "ground/type" column of the new grounds' obstacle table
 
 struct BandStats {
     int frames = 0;
@@ -69,9 +71,13 @@ struct SimOptions {
     int emptySeeds = 10;
     std::vector<sim::GroundTexture> emptyTextures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass,
                                                      sim::GroundTexture::Gravel, sim::GroundTexture::PaintedFloor};
-    std::vector<double> doorwayRanges;  ///< [m]
-    std::vector<double> overhangRanges; ///< [m]
-    std::vector<std::string> types;     ///< obstacle types to run (empty: all)
+    std::vector<double> doorwayRanges;                            ///< [m]
+    std::vector<double> overhangRanges;                           ///< [m]
+    std::vector<std::string> types;                               ///< obstacle types to run (empty: all)
+    std::vector<std::string> groundKinds = sim::conditionNames(); ///< the new grounds (sim::applyCondition)
+    int groundSeeds = 6;                                          ///< empty scenes per ground kind (variants cycle)
+    std::vector<std::string> obstacleGrounds = {"camber", "paint", "shadow", "glossy"}; ///< obstacles run over these
+    std::vector<double> groundRanges = {1.5, 2.5, 3.75, 5.25, 7.0, 9.0};                ///< [m] ... at these ranges
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
     bool groundPrior = false; ///< RoiMatcherConfig::groundPrior
 };
@@ -186,6 +192,198 @@ std::optional<SimDetector> makeSimDetector(const SimOptions& o)
     return std::move(detector).value();
 }
 
+/// One obstacle case of the suite: a catalogue scene, optionally over one of the new grounds.
+struct ObstacleCase {
+    std::string type;
+    double rangeM;     ///< [m]
+    double bearingDeg; ///< [deg] (ignored by the types that run across the view)
+    sim::GroundTexture texture;
+    std::string ground; ///< sim::applyCondition name; empty: none
+    int variant;
+};
+
+/// The band of kBands holding `rangeM`, or -1.
+int bandOf(double rangeM)
+{
+    for (int b = 0; b < kBandCount; ++b) {
+        if (rangeM >= kBands[b].lo && rangeM < kBands[b].hi) {
+            return b;
+        }
+    }
+    return -1;
+}
+
+/// Renders and detects the case for every seed and adds its scores to its band in `stats` (kBandCount entries).
+/// @return false on a render/detector failure (printed).
+bool runObstacleCase(const SimOptions& o, SimDetector& det, const ObstacleCase& c, std::vector<BandStats>& stats)
+{
+    sim::RenderResult frame;
+    for (int seed = 1; seed <= o.seeds; ++seed) {
+        auto scene = sim::makeScene(c.type, c.rangeM, honoursBearing(c.type) ? c.bearingDeg : 0.0, c.texture,
+                                    static_cast<std::uint64_t>(seed));
+        const bool made = scene.has_value() && (c.ground.empty() || sim::applyCondition(*scene, c.ground, c.variant));
+        if (!made || !det.run(*scene, frame)) {
+            std::cerr << "ugvsense eval: error: scene " << c.type << (c.ground.empty() ? "" : " over " + c.ground)
+                      << " failed\n";
+            return false;
+        }
+        const int band = bandOf(c.rangeM);
+        if (band < 0) {
+            continue;
+        }
+        const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
+        BandStats& s = stats[static_cast<std::size_t>(band)];
+        ++s.frames;
+        s.spill += score.spillSectors;
+        s.falseClear += score.falseClearSectors;
+        s.gtFrames += score.gtHasObstacle ? 1 : 0;
+        if (score.gtHasObstacle && score.detected) {
+            ++s.detected;
+            s.errors.push_back(score.rangeErrorM);
+            s.withinTolerance += score.rangeErrorM <= rangeTolerance(score.gtRangeM) ? 1 : 0;
+        }
+    }
+    return true;
+}
+
+/// Prints the band rows of one obstacle type (over `ground`, empty: the plain ground) and its 1-10 m verdict line,
+/// and appends a JSON object per band (the keys of "obstacles"; "ground" added when there is one).
+/// @return the sums over the bands within kVerdictMaxRangeM.
+BandStats printTypeRows(const std::string& type, const std::string& ground, const std::vector<BandStats>& stats,
+                        std::ostringstream& json, bool& firstRow)
+{
+    const std::string label = ground.empty() ? type : ground + "/" + type;
+    const int width = ground.empty() ? kTypeColumn : kGroundTypeColumn;
+    BandStats within10;
+    for (int b = 0; b < kBandCount; ++b) {
+        const BandStats& s = stats[static_cast<std::size_t>(b)];
+        if (!ground.empty() && s.frames == 0) {
+            continue; // the grounds run a few ranges only
+        }
+        char band[40];
+        std::snprintf(band, sizeof(band), "%g-%g m", kBands[b].lo, kBands[b].hi);
+        const double p95 = quantile(s.errors, 0.95);
+        char p95Text[24] = "-";
+        if (!s.errors.empty()) {
+            std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
+        }
+        std::printf("%-*s %-8s %6d %6d %8.1f %10s %9.1f %11.2f %11.2f\n", width, label.c_str(), band, s.frames,
+                    s.gtFrames, 100.0 * s.rate(), p95Text, 100.0 * s.withinRate(),
+                    s.frames > 0 ? double(s.spill) / s.frames : 0.0,
+                    s.frames > 0 ? double(s.falseClear) / s.frames : 0.0);
+        json << (firstRow ? "\n" : ",\n") << "      {"
+             << (ground.empty() ? std::string() : "\"ground\": \"" + ground + "\", ") << "\"type\": \"" << type
+             << "\", \"band\": \"" << band << "\", \"frames\": " << s.frames << ", \"gt_frames\": " << s.gtFrames
+             << ", \"detected\": " << s.detected << ", \"detection_rate\": " << jsonNumber(s.rate())
+             << ", \"range_error_p95_m\": " << jsonNumber(s.errors.empty() ? NAN : p95)
+             << ", \"within_tolerance_rate\": " << jsonNumber(s.withinRate()) << ", \"spill_sectors\": " << s.spill
+             << ", \"false_clear_sectors\": " << s.falseClear << "}";
+        firstRow = false;
+        if (kBands[b].hi <= kVerdictMaxRangeM) {
+            within10.gtFrames += s.gtFrames;
+            within10.detected += s.detected;
+            within10.withinTolerance += s.withinTolerance;
+        }
+    }
+    const bool detects = within10.gtFrames > 0 && within10.rate() >= kTargetDetection;
+    const bool inRange = within10.detected > 0 && within10.withinRate() >= kTargetWithinTolerance;
+    std::printf("%-*s 1-10 m   detection %5.1f%% %-4s range within tolerance %5.1f%% %s\n", width, label.c_str(),
+                100.0 * within10.rate(), detects ? "PASS" : "FAIL", 100.0 * within10.withinRate(),
+                inRange ? "PASS" : "FAIL");
+    return within10;
+}
+
+/// What the detector reports wrongly on a new ground with no obstacle (the truth may still hold a kerb).
+struct GroundEmptyStats {
+    int frames = 0;
+    int falseFrames = 0;   ///< frames with a false red/blue sector
+    int falseRedBlue = 0;  ///< sectors reported red/blue whose truth is neither
+    int falseObstacle = 0; ///< sectors reported Obstacle whose truth is not
+    int gtObstacle = 0;    ///< sectors whose truth is Obstacle (the kerb)
+    int missed = 0;        ///< of those, not reported Obstacle
+};
+
+void scoreGroundFrame(const ObstacleSectors& detected, const ObstacleSectors& gt, GroundEmptyStats& s)
+{
+    const auto redBlue = [](const Sector& x) { return x.danger == DangerClass::Red || x.danger == DangerClass::Blue; };
+    int falseRedBlue = 0;
+    for (int i = 0; i < std::min(detected.count, gt.count); ++i) {
+        const Sector& d = detected.sectors[static_cast<std::size_t>(i)];
+        const Sector& g = gt.sectors[static_cast<std::size_t>(i)];
+        falseRedBlue += redBlue(d) && !redBlue(g) ? 1 : 0;
+        s.falseObstacle += d.state == SectorState::Obstacle && g.state != SectorState::Obstacle ? 1 : 0;
+        s.gtObstacle += g.state == SectorState::Obstacle ? 1 : 0;
+        s.missed += g.state == SectorState::Obstacle && d.state != SectorState::Obstacle ? 1 : 0;
+    }
+    ++s.frames;
+    s.falseRedBlue += falseRedBlue;
+    s.falseFrames += falseRedBlue > 0 ? 1 : 0;
+}
+
+/// The new grounds (issue 20): (a) empty scenes over each kind, several seeds cycling its settings; (b) the obstacle
+/// types over a selection of them, scored as the main table. Appends the "grounds" object to `json`.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runGroundsSuite(const SimOptions& o, SimDetector& det, std::ostringstream& json)
+{
+    const std::uint64_t framesBefore = det.frames();
+    const double secondsBefore = det.seconds();
+    std::printf("\nnew grounds, empty scenes (%d seed(s) per kind, its settings cycling over the seeds): false = "
+                "reported red/blue (or Obstacle) where the truth is not; target 0\n",
+                o.groundSeeds);
+    std::printf("%-12s %6s %9s %9s %9s %8s %8s\n", "ground", "frames", "false_frm", "false_rb", "false_obs", "gt_obs",
+                "missed");
+    json << ",\n    \"grounds\": {\n      \"empty\": [";
+    sim::RenderResult frame;
+    for (std::size_t k = 0; k < o.groundKinds.size(); ++k) {
+        const std::string& kind = o.groundKinds[k];
+        GroundEmptyStats s;
+        for (int seed = 1; seed <= o.groundSeeds; ++seed) {
+            auto scene =
+                sim::makeScene("empty", 5.0, 0.0, sim::GroundTexture::Asphalt, static_cast<std::uint64_t>(seed));
+            if (!scene || !sim::applyCondition(*scene, kind, seed - 1) || !det.run(*scene, frame)) {
+                std::cerr << "ugvsense eval: error: empty scene over " << kind << " failed\n";
+                return 1;
+            }
+            scoreGroundFrame(det.sectors(), frame.sectors, s);
+        }
+        std::printf("%-12s %6d %9d %9d %9d %8d %8d %s\n", kind.c_str(), s.frames, s.falseFrames, s.falseRedBlue,
+                    s.falseObstacle, s.gtObstacle, s.missed,
+                    s.falseRedBlue == 0 && s.falseObstacle == 0 ? "PASS" : "FAIL");
+        json << (k == 0 ? "\n" : ",\n") << "        {\"ground\": \"" << kind << "\", \"frames\": " << s.frames
+             << ", \"false_frames\": " << s.falseFrames << ", \"false_red_blue_sectors\": " << s.falseRedBlue
+             << ", \"false_obstacle_sectors\": " << s.falseObstacle << ", \"gt_obstacle_sectors\": " << s.gtObstacle
+             << ", \"missed_sectors\": " << s.missed << "}";
+    }
+    std::printf("\nobstacles over new grounds (ranges");
+    for (const double r : o.groundRanges) {
+        std::printf(" %g", r);
+    }
+    std::printf(" m, bearings taking turns, %d seed(s)):\n", o.seeds);
+    std::printf("%-*s %-8s %6s %6s %8s %10s %9s %11s %11s\n", kGroundTypeColumn, "ground/type", "band", "frames", "gt",
+                "det%", "p95err_m", "in_tol%", "spill/frame", "fclear/frm");
+    json << "\n      ],\n      \"obstacles\": [";
+    bool firstRow = true;
+    for (const std::string& ground : o.obstacleGrounds) {
+        for (const std::string& type : obstacleTypes(o)) {
+            std::vector<BandStats> stats(kBandCount);
+            for (std::size_t i = 0; i < o.groundRanges.size(); ++i) {
+                const ObstacleCase c{
+                    type,   o.groundRanges[i],  o.bearings[i % o.bearings.size()], sim::GroundTexture::Asphalt,
+                    ground, static_cast<int>(i)};
+                if (!runObstacleCase(o, det, c, stats)) {
+                    return 1;
+                }
+            }
+            (void)printTypeRows(type, ground, stats, json, firstRow);
+        }
+    }
+    const auto frames = static_cast<int>(det.frames() - framesBefore);
+    const double seconds = det.seconds() - secondsBefore;
+    std::printf("new grounds: %d frames in %.1f s\n", frames, seconds);
+    json << "\n      ],\n      \"frames\": " << frames << ",\n      \"seconds\": " << jsonNumber(seconds) << "\n    }";
+    return 0;
+}
+
 /// Runs the simulator suite; prints the table and verdicts and appends the JSON object to `json`.
 /// @return 0 when everything ran, 1 on a render/detector failure.
 int runSimSuite(const SimOptions& o, std::ostringstream& json)
@@ -209,26 +407,8 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
                     // The bearings take turns over the cases (not a full product, to keep the run short): each
                     // type and band sees every bearing when cases per band >= bearings.
                     const double bearing = o.bearings[cases++ % o.bearings.size()];
-                    {
-                        for (int seed = 1; seed <= o.seeds; ++seed) {
-                            auto scene = sim::makeScene(type, range, honoursBearing(type) ? bearing : 0.0, texture,
-                                                        static_cast<std::uint64_t>(seed));
-                            if (!scene || !det.run(*scene, frame)) {
-                                std::cerr << "ugvsense eval: error: scene " << type << " failed\n";
-                                return 1;
-                            }
-                            const ObstacleFrameScore score = scoreObstacleFrame(det.sectors(), frame.sectors);
-                            BandStats& s = stats[type][static_cast<std::size_t>(b)];
-                            ++s.frames;
-                            s.spill += score.spillSectors;
-                            s.falseClear += score.falseClearSectors;
-                            s.gtFrames += score.gtHasObstacle ? 1 : 0;
-                            if (score.gtHasObstacle && score.detected) {
-                                ++s.detected;
-                                s.errors.push_back(score.rangeErrorM);
-                                s.withinTolerance += score.rangeErrorM <= rangeTolerance(score.gtRangeM) ? 1 : 0;
-                            }
-                        }
+                    if (!runObstacleCase(o, det, ObstacleCase{type, range, bearing, texture, "", 0}, stats[type])) {
+                        return 1;
                     }
                 }
             }
@@ -301,40 +481,9 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
          << ",\n    \"obstacles\": [";
     bool firstRow = true;
     for (const std::string& type : types) {
-        BandStats within10;
-        for (int b = 0; b < kBandCount; ++b) {
-            const BandStats& s = stats[type][static_cast<std::size_t>(b)];
-            char band[40];
-            std::snprintf(band, sizeof(band), "%g-%g m", kBands[b].lo, kBands[b].hi);
-            const double p95 = quantile(s.errors, 0.95);
-            char p95Text[24] = "-";
-            if (!s.errors.empty()) {
-                std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
-            }
-            std::printf("%-12s %-8s %6d %6d %8.1f %10s %9.1f %11.2f %11.2f\n", type.c_str(), band, s.frames, s.gtFrames,
-                        100.0 * s.rate(), p95Text, 100.0 * s.withinRate(),
-                        s.frames > 0 ? double(s.spill) / s.frames : 0.0,
-                        s.frames > 0 ? double(s.falseClear) / s.frames : 0.0);
-            json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << type << "\", \"band\": \"" << band
-                 << "\", \"frames\": " << s.frames << ", \"gt_frames\": " << s.gtFrames
-                 << ", \"detected\": " << s.detected << ", \"detection_rate\": " << jsonNumber(s.rate())
-                 << ", \"range_error_p95_m\": " << jsonNumber(s.errors.empty() ? NAN : p95)
-                 << ", \"within_tolerance_rate\": " << jsonNumber(s.withinRate()) << ", \"spill_sectors\": " << s.spill
-                 << ", \"false_clear_sectors\": " << s.falseClear << "}";
-            firstRow = false;
-            if (kBands[b].hi <= kVerdictMaxRangeM) {
-                within10.gtFrames += s.gtFrames;
-                within10.detected += s.detected;
-                within10.withinTolerance += s.withinTolerance;
-            }
-        }
-        const bool typeDetects = within10.gtFrames > 0 && within10.rate() >= kTargetDetection;
-        const bool typeRange = within10.detected > 0 && within10.withinRate() >= kTargetWithinTolerance;
-        std::printf("%-12s 1-10 m   detection %5.1f%% %-4s range within tolerance %5.1f%% %s\n", type.c_str(),
-                    100.0 * within10.rate(), typeDetects ? "PASS" : "FAIL", 100.0 * within10.withinRate(),
-                    typeRange ? "PASS" : "FAIL");
-        detectionOk = detectionOk && typeDetects;
-        rangeOk = rangeOk && typeRange;
+        const BandStats within10 = printTypeRows(type, "", stats[type], json, firstRow);
+        detectionOk = detectionOk && within10.gtFrames > 0 && within10.rate() >= kTargetDetection;
+        rangeOk = rangeOk && within10.detected > 0 && within10.withinRate() >= kTargetWithinTolerance;
     }
     const double falseRate = emptyFrames > 0 ? double(emptyFalseFrames) / emptyFrames : 0.0;
     const bool emptyOk = falseRate < kTargetFalseRate;
@@ -371,8 +520,10 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
          << ", \"empty_false_rate\": " << (emptyOk ? "true" : "false")
          << ", \"range_error\": " << (rangeOk ? "true" : "false")
          << ", \"overhang\": " << (overhangFalseFrames == 0 ? "true" : "false")
-         << ", \"doorway\": " << (doorwayOk ? "true" : "false") << "}\n  }";
-    return 0;
+         << ", \"doorway\": " << (doorwayOk ? "true" : "false") << "}";
+    const int rc = o.groundKinds.empty() && o.obstacleGrounds.empty() ? 0 : runGroundsSuite(o, det, json);
+    json << "\n  }";
+    return rc;
 }
 
 /// The approach: each obstacle placed from kApproachFarM down to kApproachNearM, `stepM` nearer each frame (what
@@ -634,9 +785,13 @@ int runEval(int argc, char** argv)
     Args args(
         "eval",
         "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
-        "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--frames-per-case N] [--matcher MODE] "
+        "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
+        "MODE] "
         "[--ground-prior] [--json OUT] [--data DIR] [--skip-missing]",
-        {{"sim", "", "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway)", false},
+        {{"sim", "",
+          "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway, and the new grounds: "
+          "camber, grade, kerb, photometry, paint, rails, shadows, mirrors)",
+          false},
          {"approach", "",
           "simulator: each obstacle placed from 12 m to 1 m, 0.25 m nearer each frame: how far ahead it is seen",
           false},
@@ -655,9 +810,15 @@ int runEval(int argc, char** argv)
          {"verbose", "", "real: a line per sector (truth, ours, outcome)", false},
          {"overlay-dir", "DIR", "real: write an overlay per pair (sector bar: ours; below it the truth)", false},
          {"quick", "",
-          "simulator: a ~20 s smoke version (1 texture, 1 range per band, bearing 0; the approach in 0.5 m steps)",
+          "simulator: a smoke version (1 texture, 1 range per band, bearing 0; new grounds: 2 seeds, obstacles at 4.5 "
+          "m; "
+          "the approach in 0.5 m steps)",
           false},
          {"types", "LIST", "simulator: only these obstacle types, comma-separated (ugvsense sim --list)", false},
+         {"grounds", "LIST",
+          "simulator suite: only these new grounds (ugvsense sim --list, conditions), for the empty scenes and the "
+          "obstacles; none: skip them. Default: every kind empty, the obstacles over camber, paint, shadow, glossy",
+          false},
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
          {"ground-prior", "", "simulator: census SGM's top path follows the ground (RoiMatcherConfig::groundPrior)",
@@ -739,6 +900,8 @@ int runEval(int argc, char** argv)
             o.emptyTextures = o.textures;
             o.doorwayRanges = {3.0};
             o.overhangRanges = {3.0};
+            o.groundSeeds = 2;
+            o.groundRanges = {4.5};
         } else {
             o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::Gravel};
             o.rangesPerBand = {0.25, 0.75};
@@ -760,6 +923,21 @@ int runEval(int argc, char** argv)
                 }
                 o.types.push_back(name);
             }
+        }
+        if (args.has("grounds")) {
+            o.groundKinds.clear();
+            std::stringstream list(args.get("grounds"));
+            for (std::string name; std::getline(list, name, ',');) {
+                const auto& names = sim::conditionNames();
+                if (name != "none" && std::find(names.begin(), names.end(), name) == names.end()) {
+                    return reportUsageError("eval", Error{"ugvsense eval --grounds", "unknown ground '" + name + "'",
+                                                          "see 'ugvsense sim --list' (conditions), or none"});
+                }
+                if (name != "none") {
+                    o.groundKinds.push_back(name);
+                }
+            }
+            o.obstacleGrounds = o.groundKinds;
         }
         o.matcher = matcher;
         o.groundPrior = args.has("ground-prior");

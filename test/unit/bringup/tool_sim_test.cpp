@@ -84,6 +84,53 @@ TEST(ToolSim, MountOptionsReachTheCalibration)
     EXPECT_TRUE(contains(text, "roll_deg: -1.5")) << text;
 }
 
+std::string fileText(const std::filesystem::path& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(ToolSim, ConditionsChangeTheImagesAndTheKerbTheTruth)
+{
+    const auto plain = tempDir("cond-plain");
+    const auto painted = tempDir("cond-paint");
+    const auto kerb = tempDir("cond-kerb");
+
+    ASSERT_EQ(run("sim --scene empty --out " + plain.string()).exitCode, 0);
+    const ToolRun paint =
+        run("sim --scene empty --condition paint,shadow --puddle 3,0,0.8,0.5,0.7 --jpeg 70 --out " + painted.string());
+    const ToolRun kerbRun = run("sim --scene empty --kerb-height 0.15 --kerb-y -2 --out " + kerb.string());
+
+    ASSERT_EQ(paint.exitCode, 0) << paint.output;
+    ASSERT_EQ(kerbRun.exitCode, 0) << kerbRun.output;
+    EXPECT_NE(fileText(painted / "empty_left.png"), fileText(plain / "empty_left.png"));
+    EXPECT_EQ(fileText(painted / "empty_labels.png"), fileText(plain / "empty_labels.png"));
+    EXPECT_EQ(fileText(painted / "empty_disparity.png"), fileText(plain / "empty_disparity.png"));
+    EXPECT_FALSE(contains(fileText(painted / "empty_sectors.json"), "\"obstacle\""));
+    EXPECT_NE(fileText(kerb / "empty_labels.png"), fileText(plain / "empty_labels.png"));
+    EXPECT_TRUE(contains(fileText(kerb / "empty_sectors.json"), "\"obstacle\""));
+}
+
+TEST(ToolSim, BadConditionsFailWithWhatAndFix)
+{
+    const auto dir = tempDir("cond-bad");
+
+    const ToolRun unknown = run("sim --scene empty --condition fog --out " + dir.string());
+    const ToolRun puddle = run("sim --scene empty --puddle 1,2 --out " + dir.string());
+    const ToolRun shadow = run("sim --scene empty --shadow 1,2,3,4 --out " + dir.string());
+    const ToolRun camber = run("sim --scene empty --camber 0.5 --out " + dir.string());
+
+    EXPECT_EQ(unknown.exitCode, 1);
+    EXPECT_TRUE(contains(unknown.output, "unknown condition 'fog'") && contains(unknown.output, "puddle"))
+        << unknown.output;
+    EXPECT_EQ(puddle.exitCode, 1);
+    EXPECT_TRUE(contains(puddle.output, "--puddle")) << puddle.output;
+    EXPECT_EQ(shadow.exitCode, 1);
+    EXPECT_TRUE(contains(shadow.output, "3 or more")) << shadow.output;
+    EXPECT_NE(camber.exitCode, 0);
+    EXPECT_TRUE(contains(camber.output, "--camber")) << camber.output;
+}
+
 TEST(ToolSim, CourseWritesNumberedFramesCalibrationAndPoses)
 {
     const auto dir = tempDir("course");
