@@ -1,16 +1,12 @@
 // ugvsense correlate-eval: scores the correlator's snapshots (JSON lines of correlate_io, as `ugvsense correlate`
-// writes them) against the ground truth of `ugvsense correlate-sim` (format in correlate_sim_cmd.cpp):
-// - GOSPA (c = 5 m, p = 2, alpha = 2) of the static objects at the last snapshot, split into localisation, missed
-//   and false parts;
-// - the mean GOSPA over the snapshots of the mobile objects and of the non-combatants, each snapshot's objects of
-//   that class against the truth sample nearest in time (within half the truth period) of every such object;
-// - the static ID changes: per static truth object, the id of the snapshot object GOSPA assigns to it; a change
-//   counts between consecutive snapshots in which it is assigned both times.
-// Distances are in metres in the tangent plane at the truth's origin.
+// writes them) against the ground truth of `ugvsense correlate-sim` (format in correlate_sim_cmd.cpp); the
+// figures are those of correlate_score.hpp. `--sweep` runs both modes over a grid of simulated worlds instead
+// (correlate_sweep.hpp).
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
@@ -27,6 +23,8 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "correlate_score.hpp"
+#include "correlate_sweep.hpp"
 #include "ugv/bringup/correlate_io.hpp"
 #include "ugv/correlator/geodesy.hpp"
 #include "ugv/correlator/gospa.hpp"
@@ -46,31 +44,10 @@ using nlohmann::json;
 using nlohmann::ordered_json;
 
 constexpr const char* kCommand = "correlate-eval";
-constexpr correlator::GospaParams kGospa{5.0, 2.0}; ///< c = 5 m, p = 2 (alpha = 2 is built in)
-constexpr int kAlpha = 2;
-constexpr double kTimeSlackS = 1e-6;
+constexpr const correlator::GospaParams& kGospa = kScoreGospa;
+constexpr int kAlpha = kScoreAlpha;
 
 // ---- truth ---------------------------------------------------------------------------------------------------
-
-struct TimedPosition {
-    double t = 0.0;
-    Vector2d position = Vector2d::Zero();
-};
-
-struct MovingTrack {
-    OoiClass cls = OoiClass::Mobile;
-    std::vector<TimedPosition> samples; ///< by t
-};
-
-struct Truth {
-    double originLat = 0.0;
-    double originLon = 0.0;
-    double durationS = 0.0;
-    double periodS = 0.0;
-    std::vector<std::string> staticIds;
-    std::vector<Vector2d> statics;             ///< [m] local east, north
-    std::map<std::string, MovingTrack> moving; ///< by id
-};
 
 Result<double, Error> number(const json& j, const char* key)
 {
@@ -250,120 +227,6 @@ Result<std::vector<Snapshot>, Error> readSnapshots(const std::string& path)
     return snapshots;
 }
 
-// ---- scoring -------------------------------------------------------------------------------------------------
-
-/// The snapshot's objects of class `cls`: positions in the plane and their ids.
-struct ClassObjects {
-    std::vector<Vector2d> positions;
-    std::vector<std::string> ids;
-};
-
-ClassObjects objectsOf(const Snapshot& snapshot, OoiClass cls, const correlator::LocalFrame& frame)
-{
-    ClassObjects objects;
-    for (const auto& object : snapshot.objects) {
-        if (object.cls == cls) {
-            objects.positions.push_back(frame.toLocal(object.lat, object.lon));
-            objects.ids.push_back(object.id);
-        }
-    }
-    return objects;
-}
-
-/// Every moving object of `cls` with a sample within half a period of t, at that (nearest) sample.
-std::vector<Vector2d> movingTruthAt(const Truth& truth, OoiClass cls, double t)
-{
-    std::vector<Vector2d> positions;
-    for (const auto& [id, track] : truth.moving) {
-        if (track.cls != cls || track.samples.empty()) {
-            continue;
-        }
-        const auto& samples = track.samples;
-        auto it = std::lower_bound(samples.begin(), samples.end(), t,
-                                   [](const TimedPosition& s, double time) { return s.t < time; });
-        if (it == samples.end() || (it != samples.begin() && t - std::prev(it)->t < it->t - t)) {
-            it = std::prev(it);
-        }
-        if (std::abs(it->t - t) <= truth.periodS / 2.0 + kTimeSlackS) {
-            positions.push_back(it->position);
-        }
-    }
-    return positions;
-}
-
-/// Sums of GOSPA figures over snapshots, for their means.
-struct GospaMean {
-    std::size_t snapshots = 0;
-    double total = 0.0;
-    double localisationPart = 0.0;
-    double missedPart = 0.0;
-    double falsePart = 0.0;
-
-    void add(const GospaResult& r)
-    {
-        ++snapshots;
-        total += r.total;
-        localisationPart += r.localisationPart;
-        missedPart += r.missedPart;
-        falsePart += r.falsePart;
-    }
-    [[nodiscard]] double mean(double sum) const { return snapshots > 0 ? sum / static_cast<double>(snapshots) : 0.0; }
-};
-
-struct Figures {
-    std::size_t snapshots = 0;
-    double firstT = 0.0;
-    double lastT = 0.0;
-    GospaResult staticLast;
-    std::size_t staticEstimates = 0; ///< static objects in the last snapshot
-    GospaMean mobile;
-    GospaMean nonCombatant;
-    std::size_t staticIdChanges = 0;
-};
-
-/// Adds one snapshot's static ID changes to `changes`. `previous` holds, per static truth object, the id assigned
-/// to it in the previous snapshot (empty: none); it is updated to this snapshot's.
-void countIdChanges(const GospaResult& result, const ClassObjects& objects, std::vector<std::string>& previous,
-                    std::size_t& changes)
-{
-    for (std::size_t i = 0; i < previous.size(); ++i) {
-        const int j = result.truthToEstimate[i];
-        const std::string current = j >= 0 ? objects.ids[static_cast<std::size_t>(j)] : std::string();
-        if (!previous[i].empty() && !current.empty() && current != previous[i]) {
-            ++changes;
-        }
-        previous[i] = current;
-    }
-}
-
-Figures score(const std::vector<Snapshot>& snapshots, const Truth& truth)
-{
-    const correlator::LocalFrame frame(truth.originLat, truth.originLon);
-    Figures figures;
-    figures.snapshots = snapshots.size();
-    figures.firstT = snapshots.front().t;
-    figures.lastT = snapshots.back().t;
-    std::vector<std::string> previousIds(truth.statics.size());
-    for (const Snapshot& snapshot : snapshots) {
-        const ClassObjects statics = objectsOf(snapshot, OoiClass::Static, frame);
-        const GospaResult staticResult = correlator::gospa(truth.statics, statics.positions, kGospa);
-        countIdChanges(staticResult, statics, previousIds, figures.staticIdChanges);
-        figures.staticLast = staticResult;
-        figures.staticEstimates = statics.positions.size();
-        const bool covered =
-            snapshot.t >= -truth.periodS / 2.0 && snapshot.t <= truth.durationS + truth.periodS / 2.0 + kTimeSlackS;
-        if (!covered) {
-            continue; // outside the truth's time span: the moving objects' positions are unknown
-        }
-        for (auto [cls, mean] :
-             {std::pair{OoiClass::Mobile, &figures.mobile}, std::pair{OoiClass::NonCombatant, &figures.nonCombatant}}) {
-            mean->add(correlator::gospa(movingTruthAt(truth, cls, snapshot.t),
-                                        objectsOf(snapshot, cls, frame).positions, kGospa));
-        }
-    }
-    return figures;
-}
-
 // ---- output --------------------------------------------------------------------------------------------------
 
 std::size_t movingCount(const Truth& truth, OoiClass cls)
@@ -454,23 +317,72 @@ int reportFailure(const Error& error)
     return 1;
 }
 
+/// --sweep: the options of the grid run (correlate_sweep.hpp).
+int runSweep(const Args& args)
+{
+    constexpr double kMaxSeeds = 1000.0;
+    constexpr double kMaxSeed = 1e15;
+    constexpr double kMaxDurationS = 7.0 * 24.0 * 3600.0;
+    SweepOptions options;
+    options.quick = args.has("quick");
+    const auto seeds = args.number("seeds", options.seeds, 1, kMaxSeeds);
+    const auto firstSeed = args.number("first-seed", static_cast<double>(options.firstSeed), 0, kMaxSeed);
+    const auto duration = args.number("duration", options.quick ? 600.0 : options.durationS, 1, kMaxDurationS);
+    for (const auto* number : {&seeds, &firstSeed, &duration}) {
+        if (!*number) {
+            return reportUsageError(kCommand, number->error());
+        }
+    }
+    options.seeds = static_cast<int>(*seeds);
+    options.firstSeed = static_cast<std::uint64_t>(*firstSeed);
+    options.durationS = *duration;
+    options.only = args.get("only");
+    options.jsonPath = args.get("json");
+    options.requireTargets = args.has("require-targets");
+    return runCorrelateSweep(options);
+}
+
 } // namespace
 
 int runCorrelateEval(int argc, char** argv)
 {
     Args args(kCommand,
               "--snapshots SNAPSHOTS.jsonl --truth TRUTH.jsonl [--json OUT]\n"
+              "       ugvsense correlate-eval --sweep [--quick] [--seeds N] [--first-seed N] [--duration S] "
+              "[--only TEXT] [--json OUT] [--require-targets]\n"
               "  Scores correlator snapshots (the output of 'ugvsense correlate') against the truth of\n"
               "  'ugvsense correlate-sim' with GOSPA (c = 5 m, p = 2, alpha = 2; parts in m^2):\n"
               "  static objects at the last snapshot; mobile objects and non-combatants: the mean over the\n"
               "  snapshots, against the truth sample nearest in time (within half its period); static ID changes:\n"
               "  per true static object, changes of the id assigned to it between consecutive snapshots in which\n"
-              "  it is assigned.",
-              {{"snapshots", "SNAPSHOTS.jsonl", "snapshot lines of 'ugvsense correlate'", true},
-               {"truth", "TRUTH.jsonl", "truth file of 'ugvsense correlate-sim'", true},
-               {"json", "OUT", "also write the figures as JSON to OUT", false}});
+              "  it is assigned.\n"
+              "  --sweep runs both modes over a grid of simulated worlds (two centres, the correlate-sim defaults\n"
+              "  and issue 21's harsh bias scenario, each knob moved alone around them, plus the drift scenario),\n"
+              "  10 seeds per point, and prints per point the median and the worst seed of each mode and the\n"
+              "  issue 21 targets; --json writes the summary.",
+              {{"snapshots", "SNAPSHOTS.jsonl", "snapshot lines of 'ugvsense correlate'", false},
+               {"truth", "TRUTH.jsonl", "truth file of 'ugvsense correlate-sim'", false},
+               {"json", "OUT", "also write the figures (with --sweep: the summary) as JSON to OUT", false},
+               {"sweep", "", "run both modes over the grid of simulated worlds", false},
+               {"quick", "", "with --sweep: four points (the centres and the issue's scenarios), 600 s", false},
+               {"seeds", "N", "with --sweep: seeds per point, default 10", false},
+               {"first-seed", "N", "with --sweep: the first seed, default 1", false},
+               {"duration", "S", "with --sweep: scenario length, default 1800 (--quick: 600)", false},
+               {"only", "TEXT", "with --sweep: only the points whose name contains TEXT", false},
+               {"require-targets", "", "with --sweep: exit 3 when a point misses a target", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
+    }
+    if (args.has("sweep")) {
+        return runSweep(args);
+    }
+    for (const auto& [name, value] : {std::pair{"snapshots", "SNAPSHOTS.jsonl"}, std::pair{"truth", "TRUTH.jsonl"}}) {
+        if (!args.has(name)) {
+            return reportUsageError(kCommand,
+                                    Error{"ugvsense " + std::string(kCommand),
+                                          std::string("missing required option '--") + name + " " + value + "'",
+                                          "see 'ugvsense " + std::string(kCommand) + " --help'"});
+        }
     }
     const auto truth = readTruth(args.get("truth"));
     if (!truth) {

@@ -2,6 +2,7 @@
 // input messages (JSON lines of correlate_io, as `ugvsense correlate` reads them) and its ground truth, a JSON-lines
 // file that `ugvsense correlate-eval` reads (format in kTruthFormat below, printed by --help).
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -76,6 +77,95 @@ Result<double, Error> wholeNumber(const Args& args, const std::string& name, dou
     return value;
 }
 
+/// A knob of the world or the sensor: option name, the config field it sets, and its bounds. The scenario's own
+/// validation (validateScenarioConfig) checks what depends on other fields.
+struct NumberKnob {
+    const char* name;
+    double ScenarioConfig::*field;
+    double min;
+    double max;
+};
+
+/// A knob that is a count (a whole number).
+struct CountKnob {
+    const char* name;
+    int ScenarioConfig::*field;
+    double max;
+};
+
+constexpr double kMaxKnobDistanceM = 100000.0;
+constexpr double kMaxKnobCount = 10000.0;
+constexpr double kMaxKnobRateHz = 100.0;
+constexpr double kHalfTurnDeg = 180.0;
+
+const std::vector<NumberKnob>& numberKnobs()
+{
+    static const std::vector<NumberKnob> knobs{
+        {"area-m", &ScenarioConfig::areaSizeM, 1.0, kMaxKnobDistanceM},
+        {"close-pair-min-m", &ScenarioConfig::closePairMinM, 0.0, kMaxKnobDistanceM},
+        {"close-pair-max-m", &ScenarioConfig::closePairMaxM, 0.0, kMaxKnobDistanceM},
+        {"bearing-sigma-deg", &ScenarioConfig::bearingSigmaDeg, 0.0, kHalfTurnDeg},
+        {"range-sigma-m", &ScenarioConfig::rangeSigmaM, 0.0, kMaxKnobDistanceM},
+        {"range-sigma-fraction", &ScenarioConfig::rangeSigmaFraction, 0.0, 1.0},
+        {"fov-half-deg", &ScenarioConfig::fieldOfViewHalfDeg, 1.0, kHalfTurnDeg},
+        {"min-range-m", &ScenarioConfig::minRangeM, 0.0, kMaxKnobDistanceM},
+        {"max-range-m", &ScenarioConfig::maxRangeM, 0.0, kMaxKnobDistanceM},
+        {"miss", &ScenarioConfig::missProbability, 0.0, 1.0},
+        {"clutter-hz", &ScenarioConfig::clutterRateHz, 0.0, kMaxKnobRateHz},
+        {"track-switch", &ScenarioConfig::trackSwitchProbability, 0.0, 1.0},
+        {"heading-bias-deg", &ScenarioConfig::maxHeadingBiasDeg, 0.0, kHalfTurnDeg},
+        {"offset-m", &ScenarioConfig::maxOffsetM, 0.0, kMaxKnobDistanceM},
+        {"offset-sigma-m", &ScenarioConfig::offsetSigmaM, 0.0, kMaxKnobDistanceM},
+        {"drift", &ScenarioConfig::driftSigmaMPerSqrtS, 0.0, kMaxKnobDistanceM},
+    };
+    return knobs;
+}
+
+const std::vector<CountKnob>& countKnobs()
+{
+    static const std::vector<CountKnob> knobs{
+        {"statics", &ScenarioConfig::staticCount, kMaxKnobCount},
+        {"close-pairs", &ScenarioConfig::closePairCount, kMaxKnobCount},
+        {"mobiles", &ScenarioConfig::mobileCount, kMaxKnobCount},
+        {"noncombatants", &ScenarioConfig::nonCombatantCount, kMaxKnobCount},
+    };
+    return knobs;
+}
+
+/// The world and sensor knobs on top of the setting's preset; an unset option keeps the preset's value.
+Result<void, Error> applyKnobs(const Args& args, ScenarioConfig& config)
+{
+    for (const NumberKnob& knob : numberKnobs()) {
+        const auto value = args.number(knob.name, config.*knob.field, knob.min, knob.max);
+        if (!value) {
+            return Unexpected(value.error());
+        }
+        config.*knob.field = *value;
+    }
+    for (const CountKnob& knob : countKnobs()) {
+        const auto value = wholeNumber(args, knob.name, config.*knob.field, 0, knob.max);
+        if (!value) {
+            return Unexpected(value.error());
+        }
+        config.*knob.field = static_cast<int>(*value);
+    }
+    if (args.has("offset-model")) {
+        const std::string name = args.get("offset-model");
+        const auto model = correlator::parseOffsetModel(name);
+        if (!model) {
+            return Unexpected(Error{"ugvsense " + std::string(kCommand) + " --offset-model",
+                                    "unknown offset model '" + name + "'", "use disc, gaussian or student-t"});
+        }
+        config.offsetModel = *model;
+    }
+    if (args.has("statics-anywhere")) {
+        config.staticPlacement = correlator::StaticPlacement::Anywhere;
+    }
+    // The UAV fixes the first mobiles: never more than there are.
+    config.uavTrackedMobiles = std::min(config.uavTrackedMobiles, config.mobileCount);
+    return {};
+}
+
 /// The scenario config from the command line; usage errors name the option.
 Result<ScenarioConfig, Error> configFrom(const Args& args)
 {
@@ -100,6 +190,9 @@ Result<ScenarioConfig, Error> configFrom(const Args& args)
     config.durationS = *duration;
     config.truthPeriodS = *period;
     config.poseCorrections = args.has("pose-corrections");
+    if (auto knobs = applyKnobs(args, config); !knobs) {
+        return Unexpected(knobs.error());
+    }
     if (auto valid = correlator::validateScenarioConfig(config); !valid) {
         return Unexpected(valid.error());
     }
@@ -136,7 +229,20 @@ ordered_json headerLine(const ScenarioConfig& config, ScenarioSetting setting, c
                         {"max_heading_bias_deg", config.maxHeadingBiasDeg},
                         {"max_offset_m", config.maxOffsetM},
                         {"drift_sigma_m_per_sqrt_s", config.driftSigmaMPerSqrtS},
-                        {"pose_corrections", config.poseCorrections}};
+                        {"pose_corrections", config.poseCorrections},
+                        {"offset_model", correlator::toString(config.offsetModel)},
+                        {"offset_sigma_m", config.offsetSigmaM},
+                        {"area_m", config.areaSizeM},
+                        {"bearing_sigma_deg", config.bearingSigmaDeg},
+                        {"range_sigma_m", config.rangeSigmaM},
+                        {"range_sigma_fraction", config.rangeSigmaFraction},
+                        {"fov_half_deg", config.fieldOfViewHalfDeg},
+                        {"miss", config.missProbability},
+                        {"clutter_hz", config.clutterRateHz},
+                        {"track_switch", config.trackSwitchProbability},
+                        {"close_pairs", config.closePairCount},
+                        {"close_pair_min_m", config.closePairMinM},
+                        {"close_pair_max_m", config.closePairMaxM}};
 }
 
 /// The truth as JSON lines (kTruthFormat): header, UGVs, static objects, moving samples.
@@ -224,7 +330,7 @@ int runCorrelateSim(int argc, char** argv)
 {
     Args args(kCommand,
               "--out OBS.jsonl [--truth TRUTH.jsonl] [--setting clean|bias|drift] [--ugvs N] [--duration S] "
-              "[--seed N] [--period S] [--pose-corrections]\n"
+              "[--seed N] [--period S] [--pose-corrections] [world and sensor knobs, below]\n"
               "  Simulates UGVs patrolling loops and reporting objects of interest (static, mobile, non-combatant)\n"
               "  with range/bearing noise, misses, clutter and track UUID changes, a UAV fixing mobile objects, and\n"
               "  per-UGV pose errors by setting: clean (none), bias (heading bias up to 8 deg, offset up to 1 m),\n"
@@ -238,7 +344,32 @@ int runCorrelateSim(int argc, char** argv)
                {"duration", "S", "scenario length in seconds, default 600", false},
                {"seed", "N", "random seed, default 1 (the settings of one seed share layout and noise)", false},
                {"period", "S", "truth sampling of moving objects (the snapshot period), default 1", false},
-               {"pose-corrections", "", "emit the map builder's exact pose corrections every 60 s per UGV", false}});
+               {"pose-corrections", "", "emit the map builder's exact pose corrections every 60 s per UGV", false},
+               {"area-m", "M", "side of the square area, default 200", false},
+               {"statics", "N", "static OOIs (close pairs included), default 20", false},
+               {"close-pairs", "N", "pairs of statics closer than the others, default 3", false},
+               {"close-pair-min-m", "M", "a close pair's least distance, default 3.5", false},
+               {"close-pair-max-m", "M", "a close pair's greatest distance, default 5", false},
+               {"statics-anywhere", "", "statics anywhere in the area, not only beside the routes", false},
+               {"mobiles", "N", "mobile OOIs, default 4 (the UAV fixes the first 2)", false},
+               {"noncombatants", "N", "non-combatants, default 3", false},
+               {"bearing-sigma-deg", "DEG", "bearing noise sigma, default 1", false},
+               {"range-sigma-m", "M", "range noise sigma at zero range, default 0.1", false},
+               {"range-sigma-fraction", "F", "range noise growth per metre of range, default 0.01", false},
+               {"fov-half-deg", "DEG", "half the field of view, default 60", false},
+               {"min-range-m", "M", "least range seen, default 5", false},
+               {"max-range-m", "M", "greatest range seen, default 25", false},
+               {"miss", "P", "probability of a missed detection, default 0.2", false},
+               {"clutter-hz", "HZ", "false observations per UGV per second, default 0.02", false},
+               {"track-switch", "P", "probability of a new track UUID at any detection, default 0.002", false},
+               {"heading-bias-deg", "DEG", "heading bias uniform in +-DEG per UGV (overrides the setting's)", false},
+               {"offset-model", "NAME",
+                "position offset: disc (uniform, radius --offset-m), gaussian or student-t "
+                "(--offset-sigma-m per axis), default disc",
+                false},
+               {"offset-m", "M", "radius of the disc offset model (overrides the setting's)", false},
+               {"offset-sigma-m", "M", "per-axis scale of the gaussian and student-t offset models", false},
+               {"drift", "SIGMA", "random-walk drift [m/sqrt(s)] per axis (overrides the setting's)", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }

@@ -110,6 +110,18 @@ public:
     bool chance(double probability) { return uniform(0.0, 1.0) < probability; }
     std::size_t index(std::size_t count) { return std::uniform_int_distribution<std::size_t>(0, count - 1)(engine_); }
     int poisson(double mean) { return mean > 0.0 ? std::poisson_distribution<int>(mean)(engine_) : 0; }
+    /// Student's t with 3 degrees of freedom: N(0, 1) / sqrt(chi-square(3) / 3).
+    double studentT3()
+    {
+        constexpr double kDegreesOfFreedom = 3.0;
+        const double z = gaussian();
+        double chi2 = 0.0;
+        for (int i = 0; i < static_cast<int>(kDegreesOfFreedom); ++i) {
+            const double g = gaussian();
+            chi2 += g * g;
+        }
+        return z / std::sqrt(std::max(chi2, std::numeric_limits<double>::min()) / kDegreesOfFreedom);
+    }
 
     /// A random (version 4, RFC 4122 variant) UUID, lower-case 8-4-4-4-12 hex.
     std::string uuid()
@@ -233,8 +245,20 @@ UgvPlan planUgv(const ScenarioConfig& config, std::size_t index, Random& random)
     const double startS = random.uniform(0.0, route.length());
     const double speed = random.uniform(config.ugvMinSpeedMps, config.ugvMaxSpeedMps);
     const double bias = random.uniform(-config.maxHeadingBiasDeg, config.maxHeadingBiasDeg);
-    const double offsetM = config.maxOffsetM * std::sqrt(random.uniform(0.0, 1.0)); // uniform over the disc
-    const Vector2d offset = offsetM * along(random.uniform(0.0, kFullTurnDeg));
+    Vector2d offset = Vector2d::Zero();
+    switch (config.offsetModel) {
+    case OffsetModel::Disc: {
+        const double offsetM = config.maxOffsetM * std::sqrt(random.uniform(0.0, 1.0)); // uniform over the disc
+        offset = offsetM * along(random.uniform(0.0, kFullTurnDeg));
+        break;
+    }
+    case OffsetModel::Gaussian:
+        offset = config.offsetSigmaM * Vector2d(random.gaussian(), random.gaussian());
+        break;
+    case OffsetModel::StudentT:
+        offset = config.offsetSigmaM * Vector2d(random.studentT3(), random.studentT3());
+        break;
+    }
     return UgvPlan{"ugv-" + std::to_string(index + 1), std::move(route), startS, speed, bias, offset};
 }
 
@@ -255,12 +279,22 @@ bool separated(const Vector2d& candidate, const std::vector<StaticObject>& place
                        [&](const StaticObject& other) { return (other.position - candidate).norm() >= minDistanceM; });
 }
 
+/// A static's candidate place by config.staticPlacement.
+Vector2d staticCandidate(const ScenarioConfig& config, const std::vector<UgvPlan>& ugvs, Random& random)
+{
+    if (config.staticPlacement == StaticPlacement::Anywhere) {
+        const double half = config.areaSizeM / 2.0;
+        return {random.uniform(-half, half), random.uniform(-half, half)};
+    }
+    return besideARoute(config, ugvs, random);
+}
+
 Vector2d placeSeparated(const ScenarioConfig& config, const World& world, Random& random)
 {
-    Vector2d candidate = besideARoute(config, world.ugvs, random);
+    Vector2d candidate = staticCandidate(config, world.ugvs, random);
     for (int attempt = 1;
          attempt < kPlacementTries && !separated(candidate, world.statics, config.minStaticSeparationM); ++attempt) {
-        candidate = besideARoute(config, world.ugvs, random);
+        candidate = staticCandidate(config, world.ugvs, random);
     }
     return candidate;
 }
@@ -601,6 +635,7 @@ std::vector<Check> checks(const ScenarioConfig& c)
         {within(c.trackSwitchProbability, 0, 1), "trackSwitchProbability", c.trackSwitchProbability, "in [0, 1]"},
         {within(c.maxHeadingBiasDeg, 0, kHalfTurnDeg), "maxHeadingBiasDeg", c.maxHeadingBiasDeg, "in [0, 180] deg"},
         {within(c.maxOffsetM, 0, kMaxDistanceM), "maxOffsetM", c.maxOffsetM, "in [0, 100000] m"},
+        {within(c.offsetSigmaM, 0, kMaxDistanceM), "offsetSigmaM", c.offsetSigmaM, "in [0, 100000] m"},
         {within(c.driftSigmaMPerSqrtS, 0, kMaxDistanceM), "driftSigmaMPerSqrtS", c.driftSigmaMPerSqrtS,
          "in [0, 100000] m/sqrt(s)"},
         {positive(c.uavPeriodS, kMaxPeriodS), "uavPeriodS", c.uavPeriodS, "in (0, 1e6] s"},
@@ -658,6 +693,29 @@ const char* toString(ScenarioSetting setting) noexcept
         break;
     }
     return "clean";
+}
+
+std::optional<OffsetModel> parseOffsetModel(std::string_view name)
+{
+    for (const auto model : {OffsetModel::Disc, OffsetModel::Gaussian, OffsetModel::StudentT}) {
+        if (name == toString(model)) {
+            return model;
+        }
+    }
+    return std::nullopt;
+}
+
+const char* toString(OffsetModel model) noexcept
+{
+    switch (model) {
+    case OffsetModel::Gaussian:
+        return "gaussian";
+    case OffsetModel::StudentT:
+        return "student-t";
+    case OffsetModel::Disc:
+        break;
+    }
+    return "disc";
 }
 
 Result<void, Error> validateScenarioConfig(const ScenarioConfig& config)

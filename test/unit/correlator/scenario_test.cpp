@@ -589,3 +589,85 @@ TEST(Scenario, InvalidConfigsAreRefusedNamingTheField)
 
 } // namespace
 } // namespace ugv::correlator
+
+namespace ugv::correlator {
+namespace {
+
+/// Per-axis offsets of many UGVs drawn with `model` at scale 1 m (one short scenario, no objects).
+std::vector<double> offsetsOf(OffsetModel model)
+{
+    ScenarioConfig config = scenarioPreset(ScenarioSetting::Clean);
+    config.durationS = 1.0;
+    config.ugvCount = 400;
+    config.staticCount = 0;
+    config.closePairCount = 0;
+    config.mobileCount = 0;
+    config.nonCombatantCount = 0;
+    config.uavTrackedMobiles = 0;
+    config.offsetModel = model;
+    config.offsetSigmaM = 1.0;
+    config.maxOffsetM = 1.0;
+    const Scenario scenario = generated(config);
+    std::vector<double> axes;
+    for (const auto& ugv : scenario.truth.ugvs) {
+        axes.push_back(ugv.offsetEastM);
+        axes.push_back(ugv.offsetNorthM);
+    }
+    return axes;
+}
+
+double fractionBeyond(const std::vector<double>& values, double limit)
+{
+    const auto n = std::count_if(values.begin(), values.end(), [limit](double v) { return std::abs(v) > limit; });
+    return static_cast<double>(n) / static_cast<double>(values.size());
+}
+
+TEST(Scenario, OffsetModelsDrawDiscGaussianAndHeavyTails)
+{
+    const std::vector<double> disc = offsetsOf(OffsetModel::Disc);
+    const std::vector<double> gaussian = offsetsOf(OffsetModel::Gaussian);
+    const std::vector<double> studentT = offsetsOf(OffsetModel::StudentT);
+
+    EXPECT_EQ(fractionBeyond(disc, 1.0), 0.0);
+    // N(0, 1): 4.6 % beyond 2 sigma, none to speak of beyond 4; t(3): 14 % beyond 2, 2.8 % beyond 4.
+    EXPECT_GT(fractionBeyond(gaussian, 1.0), 0.2);
+    EXPECT_LT(fractionBeyond(gaussian, 2.0), 0.09);
+    EXPECT_LT(fractionBeyond(gaussian, 4.0), 0.003);
+    EXPECT_GT(fractionBeyond(studentT, 4.0), 0.01);
+}
+
+TEST(Scenario, OffsetModelNames)
+{
+    for (const auto model : {OffsetModel::Disc, OffsetModel::Gaussian, OffsetModel::StudentT}) {
+        EXPECT_EQ(parseOffsetModel(toString(model)), model);
+    }
+    EXPECT_FALSE(parseOffsetModel("cauchy").has_value());
+}
+
+TEST(Scenario, StaticsAnywhereFillTheAreaNotOnlyTheRouteBands)
+{
+    // Route corners are at most half the area size (100 m) from the centre and statics beside a route at most
+    // 5 + 0.5 x 20 = 15 m from it: none beyond 115 m. Anywhere in the 200 m square, about 5 % are beyond 120 m.
+    constexpr double kBeyondRoutesM = 120.0;
+    ScenarioConfig config = scenarioPreset(ScenarioSetting::Clean);
+    config.durationS = 1.0;
+    config.staticCount = 200;
+    config.closePairCount = 0;
+    config.minStaticSeparationM = 0.0;
+    const auto countBeyond = [&](StaticPlacement placement) {
+        config.staticPlacement = placement;
+        const Scenario scenario = generated(config);
+        std::size_t beyond = 0;
+        for (const Vector2d& p : Plane(scenario.truth).statics) {
+            EXPECT_LE(p.cwiseAbs().maxCoeff(), config.areaSizeM / 2.0 + kExactM);
+            beyond += p.norm() > kBeyondRoutesM ? 1U : 0U;
+        }
+        return beyond;
+    };
+
+    EXPECT_EQ(countBeyond(StaticPlacement::BesideRoutes), 0U);
+    EXPECT_GT(countBeyond(StaticPlacement::Anywhere), 2U);
+}
+
+} // namespace
+} // namespace ugv::correlator

@@ -11,8 +11,9 @@
 ///   from it) at a constant speed in [ugvMinSpeedMps, ugvMaxSpeedMps], from a random point of it, in a random
 ///   direction; its heading is the direction of the current leg;
 /// - static OOIs stand 0.1..0.5 of the sensor's range band beside a random point of a random route (so every one
-///   can be seen), closePairCount pairs of them 3.5..5 m apart; mobile OOIs and non-combatants walk a straight
-///   line of mobileLegM centred beside a route, back and forth, at about mobileSpeedMps;
+///   can be seen), closePairCount pairs of them 3.5..5 m apart; with staticPlacement Anywhere they stand anywhere
+///   in the area instead (some may never be seen, as in a generator that does not know the routes); mobile OOIs and
+///   non-combatants walk a straight line of mobileLegM centred beside a route, back and forth, at about mobileSpeedMps;
 /// - every UGV looks at every object at observationRateHz (the UGVs' sampling instants are staggered within one
 ///   period). An object is seen when its true range is within [minRangeM, maxRangeM] and its bearing within
 ///   +-fieldOfViewHalfDeg, it is not missed (missProbability) and its measured range still falls in the range
@@ -21,9 +22,10 @@
 ///   random class, each with a track of its own;
 /// - a UGV's track UUID for an object is new when it sees the object for the first time, after not seeing it for
 ///   more than trackLossS, and with trackSwitchProbability at any detection;
-/// - pose errors per UGV: heading bias uniform in +-maxHeadingBiasDeg, a constant offset uniform over the disc
-///   of radius maxOffsetM, and a random walk of sigma driftSigmaMPerSqrtS per axis. The reported pose
-///   (ugv_lat/lon/heading) is the true pose plus these errors; range and bearing are measured from the true pose.
+/// - pose errors per UGV: heading bias uniform in +-maxHeadingBiasDeg, a constant offset (offsetModel: uniform over
+///   the disc of radius maxOffsetM; Gaussian with offsetSigmaM per axis; heavy-tailed: Student's t with 3 degrees
+///   of freedom scaled by offsetSigmaM per axis), and a random walk of sigma driftSigmaMPerSqrtS per axis. The reported
+///   pose (ugv_lat/lon/heading) is the true pose plus these errors; range and bearing are measured from the true pose.
 /// - pose corrections (poseCorrections): every poseCorrectionPeriodS, per UGV, one PoseCorrection for its
 ///   sampling instants in [sinceT, untilT] (the first and last of the window; windows do not overlap), sent at
 ///   the end of the window: dHeadingDeg = -bias, (dEastM, dNorthM) = -(offset + mean drift over the window).
@@ -58,6 +60,19 @@ enum class ScenarioSetting {
     Drift, ///< random-walk position drift of 0.05 m per sqrt(s) per axis per UGV
 };
 
+/// How a UGV's constant position offset is drawn.
+enum class OffsetModel {
+    Disc,     ///< uniform over the disc of radius maxOffsetM
+    Gaussian, ///< N(0, offsetSigmaM^2) per axis
+    StudentT, ///< Student's t, 3 degrees of freedom, scaled by offsetSigmaM, per axis (heavy tails)
+};
+
+/// Where static OOIs stand.
+enum class StaticPlacement {
+    BesideRoutes, ///< within the sensor's range band beside a random point of a route (every one can be seen)
+    Anywhere,     ///< uniform over the area
+};
+
 struct ScenarioConfig {
     std::uint64_t seed = 1;
 
@@ -75,7 +90,8 @@ struct ScenarioConfig {
     double ugvMaxSpeedMps = 2.0; ///< [m/s]
 
     // Objects.
-    int staticCount = 20;               ///< static OOIs, close pairs included
+    int staticCount = 20; ///< static OOIs, close pairs included
+    StaticPlacement staticPlacement = StaticPlacement::BesideRoutes;
     int closePairCount = 3;             ///< pairs of static OOIs closePairMinM..closePairMaxM apart
     double closePairMinM = 3.5;         ///< [m]
     double closePairMaxM = 5.0;         ///< [m]
@@ -99,8 +115,10 @@ struct ScenarioConfig {
     double trackSwitchProbability = 0.002; ///< per detection: a new track UUID anyway
 
     // Pose errors (per UGV).
-    double maxHeadingBiasDeg = 0.0;   ///< [deg]
-    double maxOffsetM = 0.0;          ///< [m]
+    double maxHeadingBiasDeg = 0.0; ///< [deg]
+    double maxOffsetM = 0.0;        ///< [m] OffsetModel::Disc
+    OffsetModel offsetModel = OffsetModel::Disc;
+    double offsetSigmaM = 0.0;        ///< [m] per axis, OffsetModel::Gaussian and StudentT
     double driftSigmaMPerSqrtS = 0.0; ///< [m/sqrt(s)] per axis
 
     // UAV feed.
@@ -160,6 +178,10 @@ struct Scenario {
 /// "clean", "bias" or "drift"; nullopt for anything else.
 [[nodiscard]] std::optional<ScenarioSetting> parseScenarioSetting(std::string_view name);
 [[nodiscard]] const char* toString(ScenarioSetting setting) noexcept;
+
+/// "disc", "gaussian" or "student-t"; nullopt for anything else.
+[[nodiscard]] std::optional<OffsetModel> parseOffsetModel(std::string_view name);
+[[nodiscard]] const char* toString(OffsetModel model) noexcept;
 
 /// @return an error naming the first field out of its valid range (and the range), or success.
 Result<void, Error> validateScenarioConfig(const ScenarioConfig& config);
