@@ -45,6 +45,11 @@ constexpr double kMaxWalkSpeedMps = 2.5; ///< farther than a person walks since 
 constexpr double kReachSigmas = 3.0;
 constexpr double kReachMaxAgeS = 20.0; ///< an object unseen longer than this is only reached through its gate
 constexpr int kMinSamplesToSolve = 10;
+// Learnt noise (learnNoise).
+constexpr double kMadToSigma = 1.4826;         ///< sigma of a Gaussian over its median absolute deviation
+constexpr double kMaxNoiseScale = 5.0;         ///< the measured spread is trusted up to this x the configured one
+constexpr int kMinNoiseSamples = 30;           ///< fewer residuals of a UGV: the configured model
+constexpr int kMinNoiseObjectObservations = 6; ///< objects seen this often give residuals
 constexpr double kMaxPriorObservations = 20.0; ///< a folded prior is worth at most this many observations
 
 double mahalanobis2(const Eigen::Vector2d& d, const Eigen::Matrix2d& cov)
@@ -116,12 +121,12 @@ void ImprovedCorrelator::projectSample(int ugv, const Sample& s, Eigen::Vector2d
         return;
     }
     const Eigen::Vector2d across(ray.y(), -ray.x());
-    const double sr = config_.rangeSigmaM + config_.rangeSigmaFraction * s.rangeM;
+    const double sr = u.rangeScale * (config_.rangeSigmaM + config_.rangeSigmaFraction * s.rangeM);
     const bool knownPose = u.solved || corrected;
     const double headingSigma =
         withPose ? (knownPose ? kSolvedHeadingSigmaDeg : config_.headingBiasSigmaDeg) * kDegToRad : 0.0;
-    const double sc2 =
-        std::pow(s.rangeM * config_.bearingSigmaDeg * kDegToRad, 2) + std::pow(s.rangeM * headingSigma, 2);
+    const double sc2 = std::pow(s.rangeM * u.bearingScale * config_.bearingSigmaDeg * kDegToRad, 2) +
+                       std::pow(s.rangeM * headingSigma, 2);
     const double offset = withPose ? (knownPose ? kSolvedOffsetSigmaM : config_.offsetSigmaM) : 0.0;
     *cov = sr * sr * ray * ray.transpose() + sc2 * across * across.transpose() +
            offset * offset * Eigen::Matrix2d::Identity();
@@ -658,6 +663,48 @@ void ImprovedCorrelator::solve()
     }
     // Windows after the last solved one start from its offset.
     rebuildObjects();
+    learnNoise();
+    rebuildObjects();
+}
+
+void ImprovedCorrelator::learnNoise()
+{
+    std::vector<std::vector<double>> rangeResiduals(ugvs_.size());
+    std::vector<std::vector<double>> crossResiduals(ugvs_.size());
+    for (const StaticObject& so : statics_) {
+        if (!so.alive || so.observations < static_cast<std::uint64_t>(kMinNoiseObjectObservations)) {
+            continue;
+        }
+        for (const int ti : so.tracks) {
+            const Track& track = tracks_[static_cast<std::size_t>(ti)];
+            const auto u = static_cast<std::size_t>(track.ugv);
+            for (const TrackWindow& tw : track.windows) {
+                for (const Sample& smp : tw.samples) {
+                    Eigen::Vector2d p;
+                    projectSample(track.ugv, smp, p, nullptr);
+                    const Eigen::Vector2d d = p - so.mean;
+                    const Eigen::Vector2d ray = (p - smp.ugvPos).normalized();
+                    const Eigen::Vector2d across(ray.y(), -ray.x());
+                    const double sr = config_.rangeSigmaM + config_.rangeSigmaFraction * smp.rangeM;
+                    const double sc = smp.rangeM * config_.bearingSigmaDeg * kDegToRad;
+                    rangeResiduals[u].push_back(std::abs(d.dot(ray)) / sr);
+                    crossResiduals[u].push_back(std::abs(d.dot(across)) / sc);
+                }
+            }
+        }
+    }
+    const auto robustScale = [](std::vector<double>& v) {
+        if (v.size() < static_cast<std::size_t>(kMinNoiseSamples)) {
+            return 1.0;
+        }
+        const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+        std::nth_element(v.begin(), mid, v.end());
+        return std::clamp(kMadToSigma * *mid, 1.0, kMaxNoiseScale);
+    };
+    for (std::size_t u = 0; u < ugvs_.size(); ++u) {
+        ugvs_[u].rangeScale = robustScale(rangeResiduals[u]);
+        ugvs_[u].bearingScale = robustScale(crossResiduals[u]);
+    }
 }
 
 // ------------------------------------------------------------------------------------------------------ mobile
@@ -1133,6 +1180,16 @@ std::optional<ImprovedCorrelator::PoseError> ImprovedCorrelator::poseError(const
         return std::nullopt;
     }
     return PoseError{ugvs_[static_cast<std::size_t>(it->second)].headingBias / kDegToRad, offsetAt(it->second, t)};
+}
+
+std::optional<ImprovedCorrelator::NoiseScale> ImprovedCorrelator::noiseScale(const std::string& ugv) const
+{
+    const auto it = ugvIndex_.find(ugv);
+    if (it == ugvIndex_.end()) {
+        return std::nullopt;
+    }
+    const Ugv& u = ugvs_[static_cast<std::size_t>(it->second)];
+    return NoiseScale{u.rangeScale, u.bearingScale};
 }
 
 } // namespace ugv::correlator

@@ -431,3 +431,51 @@ TEST(ImprovedCorrelator, ASplitKeepsTheIdForTheLargerPartEvenWhenTheSmallerFound
 
 } // namespace
 } // namespace ugv::correlator
+
+#include "ugv/correlator/scenario.hpp"
+
+namespace ugv::correlator {
+namespace {
+
+/// Mode improved over a generated clean scenario of `config`'s sensor (600 s, seed 1).
+ImprovedCorrelator runOn(const ScenarioConfig& config)
+{
+    auto scenario = generateScenario(config);
+    EXPECT_TRUE(scenario.has_value());
+    ImprovedCorrelator sut;
+    for (const Message& m : scenario.value().messages) {
+        (void)sut.add(m);
+    }
+    return sut;
+}
+
+TEST(ImprovedCorrelator, LearnsEachUgvsNoiseFromItsResidualsAndWidensOnlyWithWhatIsMeasured)
+{
+    ScenarioConfig noisy = scenarioPreset(ScenarioSetting::Clean);
+    noisy.bearingSigmaDeg = 3.0; // 3x the configured 1 deg
+    noisy.rangeSigmaM = 0.3;     // 3x the configured 0.1 m + 1 %
+    noisy.rangeSigmaFraction = 0.03;
+    const ScenarioConfig asConfigured = scenarioPreset(ScenarioSetting::Clean);
+
+    const ImprovedCorrelator wide = runOn(noisy);
+    const ImprovedCorrelator tight = runOn(asConfigured);
+
+    for (const char* ugv : {"ugv-1", "ugv-3", "ugv-5"}) {
+        const auto measured = wide.noiseScale(ugv);
+        ASSERT_TRUE(measured.has_value());
+        EXPECT_GT(measured->bearing, 2.0) << ugv;
+        EXPECT_LT(measured->bearing, 4.0) << ugv;
+        EXPECT_GT(measured->range, 2.0) << ugv;
+        EXPECT_LT(measured->range, 4.0) << ugv;
+        const auto configured = tight.noiseScale(ugv);
+        ASSERT_TRUE(configured.has_value());
+        EXPECT_LT(configured->bearing, 1.5) << ugv;
+        EXPECT_LT(configured->range, 1.5) << ugv;
+        EXPECT_GE(configured->bearing, 1.0) << ugv; // never below the configured model
+        EXPECT_GE(configured->range, 1.0) << ugv;
+    }
+    EXPECT_FALSE(wide.noiseScale("ugv-9").has_value());
+}
+
+} // namespace
+} // namespace ugv::correlator

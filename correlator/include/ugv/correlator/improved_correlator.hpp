@@ -7,7 +7,9 @@
 /// - keeps every static observation in the UGV's frame (reported pose, range, bearing; a bounded reservoir per
 ///   track and offset window) so that pose corrections and estimated pose errors re-project it exactly;
 /// - models each observation's error: range sigma a + b r, bearing sigma, plus the UGV's remaining pose
-///   uncertainty; associates by Mahalanobis distance (chi-square gate) instead of a fixed radius;
+///   uncertainty; associates by Mahalanobis distance (chi-square gate) instead of a fixed radius; the noise is
+///   learnt per UGV from its residuals after every solve (learnNoise): the gates widen with what is measured,
+///   never below the configured model;
 /// - estimates, every solvePeriodS, each UGV's heading bias (constant) and position offset (per offsetWindowS
 ///   window, a random walk between windows) jointly with the static objects, by sparse Gauss-Newton least
 ///   squares with Eigen (zero-mean priors fix the gauge: the fleet on average is unbiased);
@@ -83,6 +85,14 @@ public:
     };
     [[nodiscard]] std::optional<PoseError> poseError(const std::string& ugv, double t) const;
 
+    /// A UGV's learnt noise: the measured spread of its range and cross-range residuals over the configured
+    /// model's, each at least 1 (tests, diagnostics).
+    struct NoiseScale {
+        double range = 1.0;
+        double bearing = 1.0;
+    };
+    [[nodiscard]] std::optional<NoiseScale> noiseScale(const std::string& ugv) const;
+
 private:
     struct Sample {
         double t = 0.0;
@@ -127,6 +137,10 @@ private:
         std::vector<Eigen::Vector2d> offsets;    ///< estimated, per window
         std::vector<PoseCorrection> corrections; ///< explicit, from the map builder
         bool solved = false;
+        /// Learnt noise (learnNoise): the measured spread of this UGV's residuals over the configured one, per
+        /// direction, never below 1 (the configured model is the floor: gates only widen with what is measured).
+        double rangeScale = 1.0;
+        double bearingScale = 1.0;
     };
     /// The line a mobile object walks back and forth: centre + a u, a in [lo, hi], at `speed`.
     struct Line {
@@ -177,6 +191,9 @@ private:
               const Eigen::Matrix2d& measurementCov, double weight = 1.0) const;
     void refit(StaticObject& object) const;
     void solve();
+    /// Each UGV's noise scales from the residuals of its stored static samples about their objects (robust
+    /// spread: 1.4826 x the median absolute residual, in range and across the ray, over the configured sigma).
+    void learnNoise();
     void rebuildObjects();
     void mergeStatics();
     void dropTentative(double t);
