@@ -410,6 +410,13 @@ void ImprovedCorrelator::splitStatics()
     }
 }
 
+bool ImprovedCorrelator::sameObject(const StaticObject& x, const StaticObject& y) const
+{
+    const Eigen::Matrix2d cov =
+        x.info.inverse() + y.info.inverse() + 2.0 * kFloorSigmaM * kFloorSigmaM * Eigen::Matrix2d::Identity();
+    return mahalanobis2(x.mean - y.mean, cov) < config_.gateChi2;
+}
+
 void ImprovedCorrelator::mergeStatics()
 {
     for (std::size_t a = 0; a < statics_.size(); ++a) {
@@ -419,9 +426,7 @@ void ImprovedCorrelator::mergeStatics()
             if (!x.alive || !y.alive || x.info.determinant() <= 0.0 || y.info.determinant() <= 0.0) {
                 continue;
             }
-            const Eigen::Matrix2d cov =
-                x.info.inverse() + y.info.inverse() + 2.0 * kFloorSigmaM * kFloorSigmaM * Eigen::Matrix2d::Identity();
-            if (mahalanobis2(x.mean - y.mean, cov) >= config_.gateChi2) {
+            if (!sameObject(x, y)) {
                 continue;
             }
             StaticObject& kept = x.order <= y.order ? x : y;
@@ -1095,9 +1100,16 @@ Snapshot ImprovedCorrelator::snapshot(double t)
         return s;
     }
     rules::Placed threats;
+    std::vector<const StaticObject*> published; // in creation order (statics_ is), so the older come first
     for (const StaticObject& so : statics_) {
         if (!so.alive || so.observations < static_cast<std::uint64_t>(config_.minStaticObservations) ||
             so.info.determinant() <= 0.0) {
+            continue;
+        }
+        // A duplicate of an older object (a churned track UUID that missed the gate at first) is not shown while
+        // it waits for the next merge: its id would steal the object's for a while and then vanish.
+        if (std::any_of(published.begin(), published.end(),
+                        [&](const StaticObject* older) { return sameObject(*older, so); })) {
             continue;
         }
         ObjectEstimate e;
@@ -1121,6 +1133,7 @@ Snapshot ImprovedCorrelator::snapshot(double t)
         }
         e.ugvs.assign(names.begin(), names.end());
         e.zoneDiameterM = kStaticZoneDiameterM;
+        published.push_back(&so);
         threats.emplace_back(so.mean, s.objects.size());
         s.objects.push_back(std::move(e));
     }

@@ -479,3 +479,45 @@ TEST(ImprovedCorrelator, LearnsEachUgvsNoiseFromItsResidualsAndWidensOnlyWithWha
 
 } // namespace
 } // namespace ugv::correlator
+
+namespace ugv::correlator {
+namespace {
+
+/// ugv-1 sees a post from t = 0 with track "a". At t = 30 s its track UUID churns: the new track "a2" starts with
+/// an outlier (range 4 m long), outside the gate of the post's object, so a second object is made; its later
+/// (exact) readings pull it onto the post. Until the next merge (the solve at 120 s) it is a duplicate: not shown,
+/// the post keeps its first id. A second post 4 m away, seen apart, is shown as its own object all along.
+TEST(ImprovedCorrelator, ADuplicateUnderAChurnedTrackIsNotShownBeforeItMergesAndTheOlderIdStays)
+{
+    const Scene scene;
+    ImprovedCorrelator sut;
+    const Eigen::Vector2d post(0, 20);
+    const Eigen::Vector2d neighbour(4, 20);
+    std::string firstId;
+    std::size_t mostShown = 0;
+    for (int step = 0; step < 220; ++step) {
+        const double t = step * 0.5;
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "n", OoiClass::Static, {0, 0}, neighbour)).has_value());
+        Observation o = scene.see(t, "ugv-1", t < 30.0 ? "a" : "a2", OoiClass::Static, {0, 0}, post);
+        if (t == 30.0) {
+            o.rangeM += 4.0;
+        }
+        ASSERT_TRUE(sut.add(o).has_value());
+        const Snapshot s = sut.snapshot(t);
+        mostShown = std::max(mostShown, s.objects.size());
+        for (const ObjectEstimate& e : s.objects) {
+            if ((scene.local(e) - post).norm() < 1.5) {
+                if (firstId.empty()) {
+                    firstId = e.id;
+                }
+                EXPECT_EQ(e.id, firstId) << "t " << t;
+            }
+        }
+    }
+    EXPECT_FALSE(firstId.empty());
+    EXPECT_EQ(mostShown, 2U);
+    EXPECT_EQ(sut.snapshot(110).objects.size(), 2U);
+}
+
+} // namespace
+} // namespace ugv::correlator

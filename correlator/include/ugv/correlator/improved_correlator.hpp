@@ -20,8 +20,9 @@
 ///   the velocity (a manoeuvre); UAV fixes are precise measurements that confirm, the fixes of one instant
 ///   assigned together (an optimal assignment), one beyond every gate to an object it could have walked to;
 /// - never changes a published id: merges keep the earliest; a track stays with its object, unless the object's
-///   tracks form two groups far apart (associated while the pose errors were unknown): then it splits, and
-///   the group with more observations keeps the id.
+///   tracks form two groups far apart (associated while the pose errors were unknown): then it splits, and the
+///   group with more observations keeps the id; a duplicate of an older object (a churned track UUID whose first
+///   reading missed the gate) is not shown until the next merge folds it in (the older id stays).
 ///
 /// Thread-safety: thread-bound. RT-safe: no (the lowest-priority task).
 
@@ -195,6 +196,8 @@ private:
     /// spread: 1.4826 x the median absolute residual, in range and across the ray, over the configured sigma).
     void learnNoise();
     void rebuildObjects();
+    /// Two static objects within the merge gate of each other (their estimates' covariances and the floor).
+    [[nodiscard]] bool sameObject(const StaticObject& x, const StaticObject& y) const;
     void mergeStatics();
     void dropTentative(double t);
     void splitStatics();
