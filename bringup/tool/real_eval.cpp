@@ -22,7 +22,7 @@ namespace ugv::tool {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-constexpr double kKittiScale = 256.0;   ///< KITTI GT: disparity = value / 256
+constexpr double kKittiScale = 256.0;     ///< KITTI GT: disparity = value / 256
 constexpr int kBaselineDisparities = 128; ///< the issue's plain pipeline: StereoSGBM, 128 disparities, block 5
 constexpr int kBaselineBlock = 5;
 constexpr int kBaselineMinPoints = 20; ///< the dense baseline's robust nearest (mismatch blobs have a few pixels)
@@ -114,10 +114,10 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         }
         const std::vector<std::string> f = splitCsv(line);
         if (f.size() != header.size()) {
-            return Unexpected(Error{path.string() + ":" + std::to_string(lineNo),
-                                    std::to_string(f.size()) + " fields, the header has " +
-                                        std::to_string(header.size()),
-                                    "repair the line"});
+            return Unexpected(
+                Error{path.string() + ":" + std::to_string(lineNo),
+                      std::to_string(f.size()) + " fields, the header has " + std::to_string(header.size()),
+                      "repair the line"});
         }
         RealPair p;
         const auto at = [&](const char* key) -> const std::string& { return f[column[key]]; };
@@ -135,8 +135,8 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
             p.baselineM = std::stod(at("baseline_m"));
             p.doffs = std::stod(at("doffs_px"));
         } catch (const std::exception&) {
-            return Unexpected(Error{path.string() + ":" + std::to_string(lineNo), "a number does not parse",
-                                    "repair the line"});
+            return Unexpected(
+                Error{path.string() + ":" + std::to_string(lineNo), "a number does not parse", "repair the line"});
         }
         pairs.push_back(p);
     }
@@ -208,7 +208,8 @@ Result<cv::Mat, Error> baselineDisparity(const cv::Mat& left, const cv::Mat& rig
     return out;
 }
 
-/// Road plane of a full-frame CV_32F disparity: RANSAC in metres on the points of the bottom third within 30 m
+/// Road plane of a full-frame CV_32F disparity: RANSAC in metres on the points of the bottom third and the middle
+/// third of the columns (the road ahead, not a verge beside it) within 30 m
 /// (a plane whose normal is within 30 deg of the camera's down axis, the camera 0.2-5 m above it; inliers within
 /// 8 cm), refined by least squares (the smallest eigenvector of the inliers' scatter). Metric rather than in
 /// disparity (fitGround) so that the truth does not depend on a pixel tolerance, and with no inlier fraction: the
@@ -224,7 +225,7 @@ Result<vision::GroundPlane, Error> roadPlane(const cv::Mat& disparity, const vis
     std::vector<cv::Vec3d> points;
     for (int v = disparity.rows - disparity.rows / 3; v < disparity.rows; v += kStep) {
         const float* row = disparity.ptr<float>(v);
-        for (int u = 0; u < disparity.cols; u += kStep) {
+        for (int u = disparity.cols / 3; u < disparity.cols - disparity.cols / 3; u += kStep) {
             if (!(row[u] > 0.0F) || !std::isfinite(row[u])) {
                 continue;
             }
@@ -462,11 +463,11 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             left.release();
         }
         const cv::Size size(pair.width, pair.height);
-        if (left.empty() || right.empty() || gtRaw.type() != CV_16UC1 || left.size() != size ||
-            right.size() != size || gtRaw.size() != size) {
+        if (left.empty() || right.empty() || gtRaw.type() != CV_16UC1 || left.size() != size || right.size() != size ||
+            gtRaw.size() != size) {
             std::cerr << "ugvsense eval: error: " << pair.name << ": cannot read " << pair.left.string() << ", "
-                      << pair.right.string() << " and the 16-bit GT " << pair.gt.string() << " of size "
-                      << pair.width << "x" << pair.height << '\n';
+                      << pair.right.string() << " and the 16-bit GT " << pair.gt.string() << " of size " << pair.width
+                      << "x" << pair.height << '\n';
             return 1;
         }
         cv::Mat gt;
@@ -494,8 +495,8 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         if (auto baseRoad = roadPlane(*baseDisparity, projection)) {
             RealScoringRules denseRules = rules;
             denseRules.minPoints = kBaselineMinPoints;
-            baseline = sectorsFromTruth(sectorTruth(*baseDisparity, firstRow, *baseRoad, projection, ours, denseRules),
-                                        ours);
+            baseline =
+                sectorsFromTruth(sectorTruth(*baseDisparity, firstRow, *baseRoad, projection, ours, denseRules), ours);
         } else {
             baseline = ours;
             initSectors(baseline, ours.count, ours.sectors[static_cast<std::size_t>(ours.count - 1)].bearingMaxDeg * 2);
@@ -518,8 +519,8 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         const vision::GroundPlane& g = run->detector->ground();
         std::printf("%-12s %5d | %4d %4d %4d %4d %4d  h %4.2f p %5.1f%s | %4d %4d %4d %4d  (GT road h %4.2f p %5.1f)\n",
                     pair.name.c_str(), o.gtObstacle, o.correct, o.missed, o.tooNear, o.falseSectors, o.negativeNoDrop,
-                    g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct,
-                    b.missed, b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
+                    g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct, b.missed,
+                    b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
         if (options.verbose) {
             static constexpr const char* kOutcome[] = {"not scored", "correct", "too near", "missed", "FALSE", "ok"};
             for (int s = 0; s < ours.count; ++s) {
@@ -533,12 +534,13 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
                             r.rangeM, kOutcome[static_cast<int>(scoreRealSector(truth[k], r, rules))]);
             }
         }
-        json << (first ? "\n" : ",\n") << "    {\"pair\": \"" << pair.name << "\", \"truth_has_drop\": "
-             << (truthHasDrop ? "true" : "false") << ", \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
+        json << (first ? "\n" : ",\n") << "    {\"pair\": \"" << pair.name
+             << "\", \"truth_has_drop\": " << (truthHasDrop ? "true" : "false")
+             << ", \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
              << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
-             << ", \"gt_height_m\": " << jsonNumber(road->heightM) << ", \"gt_pitch_deg\": "
-             << jsonNumber(road->pitchDeg()) << "}, \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b)
-             << "}";
+             << ", \"gt_height_m\": " << jsonNumber(road->heightM)
+             << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg()) << "}, \"ours\": " << tallyJson(o)
+             << ", \"opencv\": " << tallyJson(b) << "}";
         first = false;
         if (!options.overlayDir.empty()) {
             cv::Mat colour = cv::imread(pair.left.string(), cv::IMREAD_COLOR);
@@ -552,7 +554,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             for (int s = 0; s < ours.count; ++s) {
                 const SectorTruth& t = truth[static_cast<std::size_t>(s)];
                 oursColours.push_back(stateColour(ours.sectors[static_cast<std::size_t>(s)]));
-                truthColours.push_back(!t.scored        ? cv::Scalar(128, 128, 128)
+                truthColours.push_back(!t.scored         ? cv::Scalar(128, 128, 128)
                                        : t.hasObstacle() ? cv::Scalar(0, 0, 255)
                                                          : cv::Scalar(0, 190, 0));
             }
@@ -560,8 +562,9 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             if (!colour.empty() && full) {
                 const cv::Mat image = makeOverlay(colour, *full, *run->detector, config, projection);
                 const cv::Mat plain = image(cv::Rect(0, 0, image.cols, pair.height)); // without the danger bar
-                written = cv::imwrite(out.string(), appendSectorBar(appendSectorBar(plain, ours, oursColours, projection),
-                                                                    ours, truthColours, projection));
+                written =
+                    cv::imwrite(out.string(), appendSectorBar(appendSectorBar(plain, ours, oursColours, projection),
+                                                              ours, truthColours, projection));
             }
             if (!written) {
                 std::cerr << "ugvsense eval: error: cannot write the overlay " << out.string() << '\n';

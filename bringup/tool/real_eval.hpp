@@ -43,12 +43,12 @@ struct RealScoringRules {
 
 /// What a sector holds by a point set (GT or the baseline's), relative to a road plane.
 struct SectorTruth {
-    double coverage = 0.0;                   ///< GT pixels / analysed pixels of the sector's columns
-    bool scored = false;                     ///< coverage >= minCoverage
-    int obstaclePoints = 0;                  ///< points 0.25-2.5 m high within 25 m
-    double obstacleRangeM = kNoRange;        ///< [m] robust nearest of those, kNoRange when < minPoints
-    double kerbRangeM = kNoRange;            ///< [m] the same for points >= 0.10 m high
-    int dropPoints = 0;                      ///< points >= 0.25 m below the road within 25 m
+    double coverage = 0.0;            ///< GT pixels / analysed pixels of the sector's columns
+    bool scored = false;              ///< coverage >= minCoverage
+    int obstaclePoints = 0;           ///< points 0.25-2.5 m high within 25 m
+    double obstacleRangeM = kNoRange; ///< [m] robust nearest of those, kNoRange when < minPoints
+    double kerbRangeM = kNoRange;     ///< [m] the same for points >= 0.10 m high
+    int dropPoints = 0;               ///< points >= 0.25 m below the road within 25 m
     [[nodiscard]] bool hasObstacle() const { return obstacleRangeM < kNoRange; }
     static constexpr double kNoRange = 1e9;
 };
@@ -76,13 +76,13 @@ RealOutcome scoreRealSector(const SectorTruth& truth, const Sector& reported, co
 
 /// Totals of one detector over pairs.
 struct RealTally {
-    int scored = 0;         ///< scored sectors
-    int gtObstacle = 0;     ///< scored sectors whose truth has an obstacle
-    int correct = 0;        ///< of those
-    int missed = 0;         ///< of those
-    int tooNear = 0;        ///< of those
-    int falseSectors = 0;   ///< scored sectors without GT obstacle, reported Obstacle
-    int negativeNoDrop = 0; ///< Negative sectors (any, scored or not) on pairs whose truth has no drop
+    int scored = 0;                   ///< scored sectors
+    int gtObstacle = 0;               ///< scored sectors whose truth has an obstacle
+    int correct = 0;                  ///< of those
+    int missed = 0;                   ///< of those
+    int tooNear = 0;                  ///< of those
+    int falseSectors = 0;             ///< scored sectors without GT obstacle, reported Obstacle
+    int negativeNoDrop = 0;           ///< Negative sectors (any, scored or not) on pairs whose truth has no drop
     std::vector<double> rangeErrorsM; ///< |reported - truth| of the correct sectors
     void add(RealOutcome outcome, const SectorTruth& truth, const Sector& reported);
     void merge(const RealTally& other);
@@ -91,11 +91,11 @@ struct RealTally {
 };
 
 struct RealEvalOptions {
-    std::filesystem::path dir;          ///< the real-stereo folder (index.csv)
-    std::filesystem::path overlayDir;   ///< per-pair overlays when not empty
-    std::string mount;                  ///< "" (found), or "H,PITCH,ROLL" given to every pair
-    std::vector<std::string> pairs;     ///< only these pairs (empty: all)
-    bool verbose = false;               ///< a line per sector: truth, ours, outcome
+    std::filesystem::path dir;        ///< the real-stereo folder (index.csv)
+    std::filesystem::path overlayDir; ///< per-pair overlays when not empty
+    std::string mount;                ///< "" (found), or "H,PITCH,ROLL" given to every pair
+    std::vector<std::string> pairs;   ///< only these pairs (empty: all)
+    bool verbose = false;             ///< a line per sector: truth, ours, outcome
 };
 
 /// Runs the evaluation; prints a table per pair and the totals, appends `"real": {...}` to `json`.

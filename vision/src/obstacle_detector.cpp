@@ -59,6 +59,10 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
     ObstacleVerifierConfig verifierConfig = config.verifier;
     verifierConfig.width = roi.width;
     verifierConfig.height = roi.height;
+    if (config.refineMinRangeM > 0.0) {
+        verifierConfig.refineMaxGroundPx =
+            static_cast<float>(projection.fx * projection.baselineM / config.refineMinRangeM);
+    }
     auto verifierResult = ObstacleVerifier::create(verifierConfig);
     if (!verifierResult) {
         return Unexpected(std::move(verifierResult).error());
@@ -68,6 +72,10 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
                          std::move(verifierResult).value(), roi);
     SectorBuilderConfig groundOnlyConfig = config.sectors;
     groundOnlyConfig.minSupport = config.groundOnlyMinSupport;
+    // Its sparse map holds only labelled edge pixels, no ground: nothing to learn the local ground or the noise from.
+    groundOnlyConfig.useLocalGround = false;
+    groundOnlyConfig.heightNoiseFactor = 0.0F;
+    groundOnlyConfig.dropNoiseFactor = 0.0F;
     auto groundOnly = SectorBuilder::create(groundOnlyConfig, projection, roi, roi.y + config.marginRows);
     if (!groundOnly) {
         return Unexpected(std::move(groundOnly).error());

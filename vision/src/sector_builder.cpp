@@ -14,6 +14,7 @@ namespace {
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr int kKinds = 2; // 0 positive, 1 negative
 constexpr float kDisparityScale = 16.0F;
+constexpr int kMaxProfileRows = 2048; ///< analysed rows the row profile's noise estimate looks at
 
 /// Vehicle axes in camera coordinates, exactly as GroundPlane::toVehicle builds them: forward f and left l
 /// (both of norm 1 / invNorm) and up u (unit).
@@ -55,9 +56,9 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
                                       std::to_string(kMaxSectors)));
     }
     if (!(config.minHeightM > 0.0F) || !(config.minDepthM > 0.0F) || !(config.rangeBinM > 0.0F) ||
-        !(config.maxRangeM >= 0.0F) || !(config.maxRangeDisparityPx > 0.0F) || config.minSupport < 1 || config.minDropSupport < 1 ||
-        config.maxStrayVotes < 1 || config.maxStrayDropVotes < 1 || !(config.dropSupportRangeM > 0.0F) ||
-        config.clusterWindowM < 0.0F || config.clusterFraction < 0.0F ||
+        !(config.maxRangeM >= 0.0F) || !(config.maxRangeDisparityPx > 0.0F) || config.minSupport < 1 ||
+        config.minDropSupport < 1 || config.maxStrayVotes < 1 || config.maxStrayDropVotes < 1 ||
+        !(config.dropSupportRangeM > 0.0F) || config.clusterWindowM < 0.0F || config.clusterFraction < 0.0F ||
         !(config.rangePercentile >= 0.0F && config.rangePercentile < 1.0F) ||
         !(config.dropRangePercentile >= 0.0F && config.dropRangePercentile < 1.0F) ||
         !(config.clearGroundFraction > 0.0F && config.clearGroundFraction <= 1.0F) || config.labelWeight < 0 ||
@@ -70,6 +71,15 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         config.minFarTallVotes < 1) {
         return Unexpected(configError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
+    }
+    const LocalGroundConfig& lg = config.localGround;
+    if (!(lg.bandM > 0.0F) || !(lg.binM > 0.0F) || lg.minPoints < 1 || !(lg.stepM >= 0.0F) || !(lg.maxSlope >= 0.0F) ||
+        !(lg.maxOffsetM >= 0.0F) || !(config.minDropShare >= 0.0F && config.minDropShare <= 1.0F) ||
+        config.minRimVotes < 0 || !(config.rimWindowFraction >= 0.0F) || !(config.explainWindowM >= 0.0F) ||
+        !(config.heightNoiseFactor >= 0.0F) || !(config.dropNoiseFactor >= 0.0F) ||
+        !(config.dropProfileNoiseFactor >= 0.0F) || config.dropProfileMinLabels < 0) {
+        return Unexpected(configError("a local-ground or drop-evidence setting is out of range (band, bin > 0, "
+                                      "minPoints >= 1, share in [0, 1], the others >= 0)"));
     }
     if (!(projection.fx > 0.0) || !(projection.fy > 0.0) || !(projection.baselineM > 0.0)) {
         return Unexpected(Error{"SectorBuilder::create", "projection has no positive focal length and baseline", ""});
@@ -86,8 +96,8 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
             static_cast<float>(projection.fx * projection.baselineM / static_cast<double>(config.maxRangeDisparityPx));
     }
     if (!(sut.config_.maxRangeM > config.rangeBinM)) {
-        return Unexpected(configError("maxRangeM " + std::to_string(sut.config_.maxRangeM) +
-                                      " is not above rangeBinM"));
+        return Unexpected(
+            configError("maxRangeM " + std::to_string(sut.config_.maxRangeM) + " is not above rangeBinM"));
     }
     sut.projection_ = projection;
     sut.roi_ = roi;
@@ -102,13 +112,19 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     sut.histograms_.assign(n * kKinds * static_cast<std::size_t>(sut.bins_), 0U);
     sut.extremes_.assign(sut.histograms_.size(), 0.0F);
     sut.tallVotes_.assign(n * static_cast<std::size_t>(sut.bins_), 0U);
+    sut.groundByRange_.assign(sut.tallVotes_.size(), 0U);
+    sut.dropDistance_.assign(sut.tallVotes_.size(), 0.0F);
     sut.groundVotes_.assign(n, 0U);
     sut.farGroundVotes_.assign(n, 0U);
     sut.profileRows_ = roi.y + roi.height - firstRow;
     sut.rowCount_.assign(n * static_cast<std::size_t>(sut.profileRows_), 0U);
     sut.rowResidual_.assign(sut.rowCount_.size(), 0.0F);
     sut.rowCrossing_.assign(sut.rowCount_.size(), 0.0F);
+    sut.rowDropLabels_.assign(sut.rowCount_.size(), 0U);
+    sut.noiseHistogram_.assign(256, 0U);
     sut.kindVotes_.assign(n * kKinds, 0U);
+    sut.points_.resize(static_cast<std::size_t>(roi.width) * static_cast<std::size_t>(sut.profileRows_));
+    sut.localGround_.configure(config.localGround, config.sectorCount, sut.config_.maxRangeM);
     sut.pixelsPerSector_.assign(n, 0U);
     const float binDeg = sut.hfovDeg_ / static_cast<float>(config.sectorCount);
     sut.boundaryCos_.assign(n + 1, 0.0);
@@ -168,8 +184,26 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
             minTall = static_cast<std::uint32_t>(std::max(static_cast<float>(config_.minFarTallVotes),
                                                           static_cast<float>(config_.minTallVotes) * scale));
         }
-        if (tall != nullptr && tallVotes < minTall) {
+        if (!drop && tallVotes < minTall) {
             continue; // a face that never rises above minHeightM: a bump, not an obstacle
+        }
+        // Where the ground ends, the rays that would have met it within the window go down into the drop: the
+        // negative votes must outnumber the ground seen at those ranges (a matcher's error on a road leaves the
+        // road around it).
+        if (drop && static_cast<float>(votes) < config_.minDropShare * static_cast<float>(votes + tallVotes)) {
+            continue;
+        }
+        // ... and the ground must be seen up to it: a near rim, the last ground before the drop. Below-ground
+        // disparities in the nearest rows with no ground in front of them are no evidence of a drop.
+        if (drop) {
+            const int rimBins = std::max(1, static_cast<int>(config_.rimWindowFraction * r0 / config_.rangeBinM));
+            std::uint32_t rim = 0;
+            for (int b = std::max(0, start - rimBins); b < start; ++b) {
+                rim += tall[b];
+            }
+            if (rim < static_cast<std::uint32_t>(config_.minRimVotes)) {
+                continue;
+            }
         }
         // A drop's visible part shrinks with the square of its range (a strip of wall, not a face): beyond
         // dropSupportRangeM it needs proportionally fewer votes, never fewer than minDropSupport.
@@ -191,7 +225,7 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
                 break;
             }
         }
-        return Cluster{static_cast<int>(votes), (static_cast<float>(b) + 0.5F) * config_.rangeBinM};
+        return Cluster{static_cast<int>(votes), (static_cast<float>(b) + 0.5F) * config_.rangeBinM, start, end};
     }
     return Cluster{};
 }
@@ -199,19 +233,22 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
 SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
 {
     constexpr int kMaxBlendRows = 2;
+    constexpr int kMaxWallRows = 12; ///< rows above the wall that may show the far rim
     const int first = std::max(0, s - 1);
     const int last = std::min(config_.sectorCount - 1, s + 1);
     const auto rows = static_cast<std::size_t>(profileRows_);
     struct Row {
         std::uint32_t count = 0;
-        float residual = 0.0F; ///< mean [px]
-        float crossing = 0.0F; ///< mean [m]
+        std::uint32_t labels = 0; ///< negative labels
+        float residual = 0.0F;    ///< mean [px]
+        float crossing = 0.0F;    ///< mean [m]
     };
     const auto rowOf = [&](int v) noexcept {
         Row r;
         for (int k = first; k <= last; ++k) {
             const std::size_t i = static_cast<std::size_t>(k) * rows + static_cast<std::size_t>(v);
             r.count += rowCount_[i];
+            r.labels += rowDropLabels_[i];
             r.residual += rowResidual_[i];
             r.crossing += rowCrossing_[i];
         }
@@ -222,7 +259,25 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
         return r;
     };
     const auto minPixels = static_cast<std::uint32_t>(config_.dropProfileMinPixels);
-    const float tau = config_.dropProfileResidualPx;
+    // The threshold: dropProfileResidualPx, or the spread of this frame's row means over the far rows (1.4826 x
+    // their median absolute value: the rows are residuals from the local ground, centred on 0) times the noise
+    // factor, whichever is larger.
+    std::array<float, kMaxProfileRows> spread{};
+    int spreadCount = 0;
+    for (int v = 0; v < profileRows_ && spreadCount < kMaxProfileRows; ++v) {
+        const Row r = rowOf(v);
+        if (r.count >= minPixels && r.crossing >= config_.dropProfileMinRangeM && r.crossing < config_.maxRangeM) {
+            spread[static_cast<std::size_t>(spreadCount++)] = std::abs(r.residual);
+        }
+    }
+    float noise = 0.0F;
+    if (spreadCount > 0) {
+        auto* middle = spread.data() + spreadCount / 2;
+        std::nth_element(spread.data(), middle, spread.data() + spreadCount);
+        noise = 1.4826F * *middle;
+    }
+    const float tau = std::max(config_.dropProfileResidualPx, config_.dropProfileNoiseFactor * noise);
+    bool suspect = false;
     // From the nearest row up: the first rim beyond dropProfileMinRangeM.
     for (int v = profileRows_ - 1; v >= 2; --v) {
         const Row rim = rowOf(v);
@@ -263,10 +318,25 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
             if (ownCount == 0 || !(ownResidual < -tau * static_cast<float>(ownCount) * 0.5F)) {
                 continue;
             }
+            // The far rim: above the wall, within kMaxWallRows, the ground comes back to its plane. A road that
+            // bends down (a grade change) goes on below the plane and has none.
+            bool farRim = false;
+            for (int w = w2 - 1; w >= std::max(0, w2 - kMaxWallRows) && !farRim; --w) {
+                const Row r = rowOf(w);
+                farRim = r.count >= minPixels && r.residual > -0.5F * tau;
+            }
+            // A wall seen by one cue only, or with no far rim, is not a drop; but the ground is not seen to be
+            // free there either (Unknown, never Clear).
+            if (!farRim || wall1.labels + wall2.labels < static_cast<std::uint32_t>(config_.dropProfileMinLabels)) {
+                suspect = true;
+                continue;
+            }
             return Cluster{static_cast<int>(wall1.count + wall2.count), 0.5F * (rim.crossing + wall1.crossing)};
         }
     }
-    return Cluster{};
+    Cluster none;
+    none.suspect = suspect;
+    return none;
 }
 
 BuildStatus SectorBuilder::build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
@@ -299,12 +369,15 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     std::fill(histograms_.begin(), histograms_.end(), 0U);
     std::fill(extremes_.begin(), extremes_.end(), 0.0F);
     std::fill(tallVotes_.begin(), tallVotes_.end(), 0U);
+    std::fill(groundByRange_.begin(), groundByRange_.end(), 0U);
+    std::fill(dropDistance_.begin(), dropDistance_.end(), 0.0F);
     std::fill(groundVotes_.begin(), groundVotes_.end(), 0U);
     std::fill(farGroundVotes_.begin(), farGroundVotes_.end(), 0U);
     std::fill(kindVotes_.begin(), kindVotes_.end(), 0U);
     std::fill(rowCount_.begin(), rowCount_.end(), 0U);
     std::fill(rowResidual_.begin(), rowResidual_.end(), 0.0F);
     std::fill(rowCrossing_.begin(), rowCrossing_.end(), 0.0F);
+    std::fill(rowDropLabels_.begin(), rowDropLabels_.end(), 0U);
 
     const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
     // Disparities below minDisparity16 are farther than maxRangeM even straight ahead: skipped early.
@@ -314,33 +387,45 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     const auto labelWeight = static_cast<std::uint32_t>(config_.labelWeight);
 
     const auto groundHeight = static_cast<float>(ground.heightM);
+    groundHeight_ = groundHeight;
     const float faceHeight = config_.faceHeightFraction * config_.minHeightM;
-    const auto vote = [&](int s, int v, float range, float z, int d16, const std::uint8_t* label, int u) noexcept {
+    float dropResidualPx = 0.0F;  // set between the passes, from the frame's ground noise
+    float heightNoisePerM = 0.0F; // [m/m] likewise
+    const auto vote = [&](int s, int v, float range, float zLocal, float zPlane, int d16,
+                          std::uint8_t labelValue) noexcept {
         // Row profile: residual d - d_g = d z / h (d / d_g = h / (h - z) along one ray) and the ray's ground
         // crossing, range h / (h - z) (a function of the pixel only; only rays that meet the ground ahead).
-        if (z < groundHeight) {
+        if (zPlane < groundHeight) {
             const std::size_t row =
                 static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_) + static_cast<std::size_t>(v);
             ++rowCount_[row];
-            rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * z / groundHeight;
-            rowCrossing_[row] += range * groundHeight / (groundHeight - z);
+            rowDropLabels_[row] += labelValue == kLabelNegative ? 1U : 0U;
+            rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * zPlane / groundHeight;
+            rowCrossing_[row] += range * groundHeight / (groundHeight - zPlane);
         }
+        const float z = zLocal;
         int kind = -1;
-        if (z > faceHeight) {
+        // The height noise grows with the range (a disparity error e moves a ground point's height by
+        // h r e / (fx B)): beyond where it reaches minHeightM / heightNoiseFactor, a positive vote must rise above
+        // heightNoiseFactor times it.
+        const float noiseHeight = heightNoisePerM * range;
+        if (z > std::max(faceHeight, noiseHeight)) {
             kind = 0;
-        } else if (z < -config_.minDepthM ||
-                   (z < -config_.minDropDepthM && range * -z >= config_.minDropGapM * (groundHeight - z))) {
+        } else if ((z < -config_.minDepthM ||
+                    (z < -config_.minDropDepthM && range * -z >= config_.minDropGapM * (groundHeight - z))) &&
+                   static_cast<float>(d16) / kDisparityScale * z / groundHeight < -dropResidualPx) {
             kind = 1;
         } else {
             ++groundVotes_[static_cast<std::size_t>(s)];
+            ++groundByRange_[static_cast<std::size_t>(s) * bins + static_cast<std::size_t>(range / config_.rangeBinM)];
             farGroundVotes_[static_cast<std::size_t>(s)] += range >= config_.clearRangeM ? 1U : 0U;
             return;
         }
         const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
-        const bool labelled = label != nullptr && label[u] == wanted;
+        const bool labelled = labelValue == wanted;
         const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
         // Face votes (below minHeightM) support a cluster but do not forbid Clear by themselves.
-        const bool tall = kind == 1 || z > config_.minHeightM;
+        const bool tall = kind == 1 || z > std::max(config_.minHeightM, noiseHeight);
         if (!labelled && !config_.useDenseCue) {
             kindVotes_[slot] += tall ? 1U : 0U; // unconfirmed: not an obstacle, but it forbids Clear
             return;
@@ -348,10 +433,14 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
         // A drop's range is where the ground ends: the ray from the camera (height h) to the point below the
         // ground crosses the ground plane at h / (h - z) of the point's horizontal range (the near rim).
+        const float ownRange = range;
         if (kind == 1) {
             range *= static_cast<float>(ground.heightM / (ground.heightM - static_cast<double>(z)));
         }
         const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
+        if (kind == 1) {
+            dropDistance_[static_cast<std::size_t>(s) * bins + bin] += ownRange * static_cast<float>(weight);
+        }
         histograms_[slot * bins + bin] += weight;
         float& extreme = extremes_[slot * bins + bin];
         extreme = std::max(extreme, std::fabs(z));
@@ -363,6 +452,19 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         }
     };
 
+    // First pass: every analysed pixel's sector, range and height above the plane (and the local ground's
+    // histograms); second pass: the votes, with heights above the local ground.
+    std::size_t pointCount = 0;
+    localGround_.clear();
+    const auto collect = [&](int s, int v, float range, float z, int d16, const std::uint8_t* label, int u) noexcept {
+        points_[pointCount++] = PixelPoint{range,
+                                           z,
+                                           static_cast<std::int16_t>(s),
+                                           static_cast<std::int16_t>(v),
+                                           static_cast<std::int16_t>(d16),
+                                           label != nullptr ? label[u] : static_cast<std::uint8_t>(0)};
+        localGround_.add(s, range, z);
+    };
     if (reference) {
         for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
             const std::int16_t* d16 = disparity16.row(v);
@@ -383,7 +485,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
                 if (s < 0 || s >= config_.sectorCount) {
                     continue;
                 }
-                vote(s, v - (firstRow_ - roi_.y), range, static_cast<float>(p.z), d16[u], label, u);
+                collect(s, v - (firstRow_ - roi_.y), range, static_cast<float>(p.z), d16[u], label, u);
             }
         }
     } else {
@@ -441,10 +543,22 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
                 if (range >= config_.maxRangeM) {
                     continue;
                 }
-                vote(s, v - (firstRow_ - roi_.y), range, static_cast<float>(ground.heightM + z * (up0 + up1 * uu)),
-                     d16[u], label, u);
+                collect(s, v - (firstRow_ - roi_.y), range, static_cast<float>(ground.heightM + z * (up0 + up1 * uu)),
+                        d16[u], label, u);
             }
         }
+    }
+
+    if (config_.useLocalGround) {
+        localGround_.fit();
+    }
+    disparityNoisePx_ = groundNoise(pointCount);
+    heightNoisePerM = config_.heightNoiseFactor * disparityNoisePx_ * groundHeight /
+                      static_cast<float>(projection_.fx * projection_.baselineM);
+    dropResidualPx = config_.dropNoiseFactor * disparityNoisePx_;
+    for (std::size_t i = 0; i < pointCount; ++i) {
+        const PixelPoint& p = points_[i];
+        vote(p.sector, p.row, p.rangeM, p.z - localGround_.at(p.sector, p.rangeM), p.z, p.d16, p.label);
     }
 
     initSectors(sectors_, config_.sectorCount, hfovDeg_);
@@ -453,16 +567,33 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     sectors_.degraded = false;
     const auto heightWindowBins = static_cast<int>(std::ceil(0.10F / config_.rangeBinM)); // as the GT: 0.10 m
     for (int s = 0; s < config_.sectorCount; ++s) {
-        Sector& out = sectors_.sectors[static_cast<std::size_t>(s)];
         const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
-        const Cluster positive =
+        positives_[static_cast<std::size_t>(s)] =
             nearestCluster(&histograms_[slot0 * bins], &tallVotes_[static_cast<std::size_t>(s) * bins],
                            config_.rangePercentile, false);
-        Cluster negative = nearestCluster(&histograms_[(slot0 + 1) * bins], nullptr, config_.dropRangePercentile, true);
+    }
+    for (int s = 0; s < config_.sectorCount; ++s) {
+        const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
+        Cluster negative =
+            nearestCluster(&histograms_[(slot0 + 1) * bins], &groundByRange_[static_cast<std::size_t>(s) * bins],
+                           config_.dropRangePercentile, true);
+        if (negative.votes > 0 && explainedByObstacle(s, negative, positives_)) {
+            negative = Cluster{};
+        }
         if (const Cluster far = profileDrop(s);
             far.votes > 0 && (negative.votes == 0 || far.rangeM < negative.rangeM)) {
             negative = far;
+        } else {
+            negative.suspect = negative.suspect || far.suspect;
         }
+        negatives_[static_cast<std::size_t>(s)] = negative;
+    }
+    keepContinuousDrops();
+    for (int s = 0; s < config_.sectorCount; ++s) {
+        Sector& out = sectors_.sectors[static_cast<std::size_t>(s)];
+        const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
+        const Cluster& positive = positives_[static_cast<std::size_t>(s)];
+        const Cluster& negative = negatives_[static_cast<std::size_t>(s)];
         const bool havePositive = positive.votes > 0;
         const bool haveNegative = negative.votes > 0;
         if (havePositive || haveNegative) {
@@ -483,7 +614,8 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
             // Stray votes that make no cluster still forbid Clear: a far drop seen over too few pixels is
             // Unknown, never Clear.
             const bool stray = kindVotes_[slot0] >= static_cast<std::uint32_t>(config_.maxStrayVotes) ||
-                               kindVotes_[slot0 + 1] >= static_cast<std::uint32_t>(config_.maxStrayDropVotes);
+                               kindVotes_[slot0 + 1] >= static_cast<std::uint32_t>(config_.maxStrayDropVotes) ||
+                               negative.suspect;
             const auto pixels = static_cast<float>(pixelsPerSector_[static_cast<std::size_t>(s)]);
             const float groundFraction =
                 pixels > 0.0F ? static_cast<float>(groundVotes_[static_cast<std::size_t>(s)]) / pixels : 0.0F;
@@ -499,6 +631,86 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     widenDrops();
     closeGaps();
     return BuildStatus::Ok;
+}
+
+void SectorBuilder::keepContinuousDrops() noexcept
+{
+    // A drop's rim is a line on the ground: a neighbouring sector sees it too, at a range that follows. A negative
+    // cluster alone among its neighbours is a matcher's error on a weak or saturated patch.
+    const int n = config_.sectorCount;
+    std::array<bool, kMaxSectors> keep{};
+    for (int s = 0; s < n; ++s) {
+        const Cluster& c = negatives_[static_cast<std::size_t>(s)];
+        if (c.votes == 0) {
+            continue;
+        }
+        for (int k = std::max(0, s - 1); k <= std::min(n - 1, s + 1); ++k) {
+            const Cluster& other = negatives_[static_cast<std::size_t>(k)];
+            keep[static_cast<std::size_t>(s)] =
+                keep[static_cast<std::size_t>(s)] ||
+                (k != s && other.votes > 0 &&
+                 std::abs(other.rangeM - c.rangeM) <= config_.clusterFraction * c.rangeM + config_.explainWindowM);
+        }
+    }
+    for (int s = 0; s < n; ++s) {
+        Cluster& c = negatives_[static_cast<std::size_t>(s)];
+        if (c.votes > 0 && !keep[static_cast<std::size_t>(s)]) {
+            c = Cluster{};
+            c.suspect = true; // seen, not confirmed: Unknown, never Clear
+        }
+    }
+}
+
+bool SectorBuilder::explainedByObstacle(int s, const Cluster& drop,
+                                        const std::array<Cluster, kMaxSectors>& positives) const noexcept
+{
+    const auto bins = static_cast<std::size_t>(bins_);
+    const std::size_t slot = (static_cast<std::size_t>(s) * kKinds + 1U) * bins;
+    float votes = 0.0F;
+    float distance = 0.0F;
+    for (int b = drop.firstBin; b < drop.endBin; ++b) {
+        votes += static_cast<float>(histograms_[slot + static_cast<std::size_t>(b)]);
+        distance += dropDistance_[static_cast<std::size_t>(s) * bins + static_cast<std::size_t>(b)];
+    }
+    if (!(votes > 0.0F)) {
+        return false;
+    }
+    const float own = distance / votes; // [m] mean own range of the drop's pixels
+    for (int k = std::max(0, s - 1); k <= std::min(config_.sectorCount - 1, s + 1); ++k) {
+        const Cluster& p = positives[static_cast<std::size_t>(k)];
+        if (p.votes > 0 && std::abs(p.rangeM - own) <= config_.clusterFraction * own + config_.explainWindowM) {
+            return true;
+        }
+    }
+    return false;
+}
+
+float SectorBuilder::groundNoise(std::size_t pointCount) noexcept
+{
+    // 1.4826 x the median |d - d_ground| [px] of the ground-like pixels (within the local ground's band): the
+    // matcher's noise on this frame's ground, robust to the obstacles' pixels.
+    constexpr float kBinsPerPx = 32.0F;
+    std::fill(noiseHistogram_.begin(), noiseHistogram_.end(), 0U);
+    std::uint32_t total = 0;
+    for (std::size_t i = 0; i < pointCount; ++i) {
+        const PixelPoint& p = points_[i];
+        const float dz = p.z - localGround_.at(p.sector, p.rangeM);
+        if (!(std::abs(dz) < config_.localGround.bandM)) {
+            continue;
+        }
+        const float residual = std::abs(static_cast<float>(p.d16) / kDisparityScale * dz) / groundHeight_;
+        const auto bin = std::min(noiseHistogram_.size() - 1, static_cast<std::size_t>(residual * kBinsPerPx));
+        ++noiseHistogram_[bin];
+        ++total;
+    }
+    std::uint32_t cumulative = 0;
+    for (std::size_t b = 0; b < noiseHistogram_.size(); ++b) {
+        cumulative += noiseHistogram_[b];
+        if (2U * cumulative > total) {
+            return 1.4826F * (static_cast<float>(b) + 0.5F) / kBinsPerPx;
+        }
+    }
+    return 0.0F;
 }
 
 void SectorBuilder::reportNeighbour(Sector& out, const Sector& from) const noexcept

@@ -438,6 +438,23 @@ SectorBuilderConfig profileOnly()
     return config;
 }
 
+/// The ground-mismatch stage's view of a disparity map: every pixel more than 0.3 px below the ground labelled
+/// negative (the second cue a row-profile drop needs).
+cv::Mat labelsBelowGround(const cv::Mat& d16)
+{
+    const ugv::vision::DisparityPlane plane = kGround.disparityPlane(kProjection);
+    cv::Mat labels(d16.size(), CV_8UC1, cv::Scalar(0));
+    for (int v = 0; v < d16.rows; ++v) {
+        for (int u = 0; u < d16.cols; ++u) {
+            const int d = d16.at<std::int16_t>(v, u);
+            if (d > 0 && d / 16.0 < plane.at(u + kRoi.x, v + kRoi.y) - 0.3) {
+                labels.at<std::uint8_t>(v, u) = ugv::vision::kLabelNegative;
+            }
+        }
+    }
+    return labels;
+}
+
 void expectNoObstacle(const ObstacleSectors& sectors)
 {
     for (int i = 0; i < sectors.count; ++i) {
@@ -453,8 +470,9 @@ TEST(SectorBuilder, FarWallTooShallowForPixelVotesIsFoundByTheRowProfile)
     auto sut = makeBuilder(config);
     cv::Mat d16 = groundDisparity();
     paintFarWall(d16, 9.0, 10.0);
+    const cv::Mat labels = labelsBelowGround(d16);
 
-    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 1U, 0), BuildStatus::Ok);
     const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
     EXPECT_EQ(ahead.state, SectorState::Obstacle);
     EXPECT_EQ(ahead.kind, ObstacleKind::Negative);
@@ -463,9 +481,24 @@ TEST(SectorBuilder, FarWallTooShallowForPixelVotesIsFoundByTheRowProfile)
     // The same scene with the profile limited to rims beyond 10 m: nothing else could have found it.
     config.dropProfileMinRangeM = 10.0F;
     auto without = makeBuilder(config);
-    ASSERT_EQ(without.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    ASSERT_EQ(without.build(view16(d16), view(labels), kGround, 1U, 0), BuildStatus::Ok);
     EXPECT_NE(without.sectors().sectors[static_cast<std::size_t>(sectorOf(without.sectors(), 0.0))].state,
               SectorState::Obstacle);
+}
+
+TEST(SectorBuilder, ARowProfileDropNeedsTheSecondCueAndIsNeverClearWithoutIt)
+{
+    // The far wall of the test above with no label of the ground-mismatch stage: one cue only, no drop; its rows
+    // below the ground still keep the sector from Clear.
+    auto sut = makeBuilder(profileOnly());
+    cv::Mat d16 = groundDisparity();
+    paintFarWall(d16, 9.0, 10.0);
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_NE(ahead.kind, ObstacleKind::Negative);
+    EXPECT_NE(ahead.state, SectorState::Clear);
 }
 
 TEST(SectorBuilder, AFarWallIsFoundAboveABlendedOrThinnedBottomRow)
@@ -475,7 +508,8 @@ TEST(SectorBuilder, AFarWallIsFoundAboveABlendedOrThinnedBottomRow)
     // all but every 8th pixel); both hide the rim right below the wall, and the wall is still found above them.
     const auto ahead = [](const cv::Mat& d16) {
         auto sut = makeBuilder(profileOnly());
-        EXPECT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+        const cv::Mat labels = labelsBelowGround(d16);
+        EXPECT_EQ(sut.build(view16(d16), view(labels), kGround, 1U, 0), BuildStatus::Ok);
         return sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
     };
     cv::Mat wall = groundDisparity();

@@ -55,6 +55,9 @@ struct DetectorConfig {
     /// Votes a cluster needs on the ground-only (overload) path, whose votes are edge pixels only (a box's
     /// uniform faces give none; the dense path's minSupport would miss it).
     int groundOnlyMinSupport = 12;
+    /// The verifier re-matches below-ground pixels only where the ground is at least this far [m]: its
+    /// refineMaxGroundPx is set from the rig, fx B / this (the default rig: 55 px).
+    double refineMinRangeM = 3.0;
 };
 
 /// Outcome of the last ObstacleDetector::process(); no strings on the frame path.

@@ -58,7 +58,7 @@ struct ObstacleVerifierConfig {
     /// range error of holes at 3-6 m, hence not 5 m). Re-matching every below-ground pixel cost up to 40 ms more
     /// on some frames of the default course; with this bound the run's detect p99 is 56 ms against 45 ms without
     /// the re-match (`toolchain/host.sh run`).
-    float refineMaxGroundPx = 55.0F;
+    float refineMaxGroundPx = 55.0F; ///< ObstacleDetector sets it from the rig (DetectorConfig::refineMinRangeM)
 };
 
 enum class VerifyStatus : std::uint8_t {

@@ -43,6 +43,7 @@
 /// Thread-safety: thread-bound (build() writes the internal buffers). RT-safe: build() yes (no allocation, no
 /// exception); create() no.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -51,42 +52,46 @@
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/local_ground.hpp"
 #include "ugv/vision/rectifier.hpp"
 
 namespace ugv::vision {
 
 struct SectorBuilderConfig {
     int sectorCount = 64;
-    float minHeightM = 0.10F;        ///< [m] positive obstacle points are higher than this
-    float faceHeightFraction = 0.5F; ///< points above this fraction of minHeightM support a positive cluster ...
-    int minTallVotes = 6;            ///< ... which needs this many votes above minHeightM to be an obstacle
-    float minDepthM = 0.10F;         ///< [m] negative obstacle points are deeper than this
-    float minDropDepthM = 0.03F;     ///< [m] ... or deeper than this when the ground they hide is long:
-    float minDropGapM = 0.25F;       ///< [m] the ray to the point crosses the ground this far before it
-                                     ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
-                                     ///< view beyond 4 m, a few centimetres below the ground, behind a gap
-    float maxRangeM = 0.0F;          ///< [m] points farther away are ignored (disparity too coarse); 0: from the
-                                     ///< rig, where the disparity falls to maxRangeDisparityPx (fx B / that)
+    float minHeightM = 0.10F;           ///< [m] positive obstacle points are higher than this
+    float faceHeightFraction = 0.5F;    ///< points above this fraction of minHeightM support a positive cluster ...
+    int minTallVotes = 6;               ///< ... which needs this many votes above minHeightM to be an obstacle
+    float minDepthM = 0.10F;            ///< [m] negative obstacle points are deeper than this
+    float minDropDepthM = 0.03F;        ///< [m] ... or deeper than this when the ground they hide is long:
+    float minDropGapM = 0.25F;          ///< [m] the ray to the point crosses the ground this far before it
+                                        ///< (range (-z) / (h - z)): only the top of a trench's far wall is in
+                                        ///< view beyond 4 m, a few centimetres below the ground, behind a gap
+    float maxRangeM = 0.0F;             ///< [m] points farther away are ignored (disparity too coarse); 0: from the
+                                        ///< rig, where the disparity falls to maxRangeDisparityPx (fx B / that)
     float maxRangeDisparityPx = 13.65F; ///< [px] (a 0.5 px error is 3.7 % of the range there; the default rig,
                                         ///< 546 px x 0.30 m: 12 m; KITTI's, 721 px x 0.53 m: 28 m)
-    float rangeBinM = 0.02F;         ///< [m] histogram resolution
-    float faceSupportRangeM = 5.0F;  ///< [m] a positive cluster farther than r needs minSupport (this / r) votes ...
-    int minFaceSupport = 20;         ///< ... but at least this many ...
-    int minFarTallVotes = 3;         ///< ... and minTallVotes (this / r) tall votes, at least this many
-    int minSupport = 40;             ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
-                                     ///< mismatch blobs on empty ground through: 23..33 votes measured)
-    float dropSupportRangeM = 5.0F;  ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
-    int minDropSupport = 20;         ///< ... but at least this many votes
-    int maxStrayVotes = 8;           ///< positive votes outside any cluster at or above which a sector cannot be Clear
-                           ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
+    float rangeBinM = 0.02F;            ///< [m] histogram resolution
+    float faceSupportRangeM = 5.0F;     ///< [m] a positive cluster farther than r needs minSupport (this / r) votes ...
+    int minFaceSupport = 20;            ///< ... but at least this many ...
+    int minFarTallVotes = 3;            ///< ... and minTallVotes (this / r) tall votes, at least this many
+    int minSupport = 40;                ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
+                                        ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float dropSupportRangeM = 5.0F;     ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
+    int minDropSupport = 20;            ///< ... but at least this many votes
+    int maxStrayVotes = 8;      ///< positive votes outside any cluster at or above which a sector cannot be Clear
+                                ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
     int maxStrayDropVotes = 20; ///< the same for negative votes (far ground is noisier below the plane: 10 would
                                 ///< turn 52 -> 38 sectors of empty ground Unknown)
     /// Far drops by their row profile (see the file comment): a rim beyond dropProfileMinRangeM is a row whose
     /// mean residual disparity is above -dropProfileResidualPx / 2 with two rows above it (the far wall) below
     /// -dropProfileResidualPx (up to two blended or thinned rows between), over the sector and its two
     /// neighbours, each row with at least dropProfileMinPixels valid pixels.
-    float dropProfileMinRangeM = 5.0F;  ///< [m] nearer drops are left to the per-pixel votes
-    float dropProfileResidualPx = 1.0F; ///< [px] (empty ground: row means within +-0.7 px at 9 m measured)
+    float dropProfileMinRangeM = 5.0F;   ///< [m] nearer drops are left to the per-pixel votes
+    float dropProfileResidualPx = 1.0F;  ///< [px] (empty ground: row means within +-0.7 px at 9 m measured) ...
+    float dropProfileNoiseFactor = 4.0F; ///< ... or this many times the frame's own spread of the row means, when
+                                         ///< larger (learnt per frame and sector: a real road's rows wander)
+    int dropProfileMinLabels = 2; ///< negative labels of the ground-mismatch stage the wall rows need (the second cue)
     int dropProfileMinPixels = 6;
     int dropEdgeSectors = 2;           ///< Clear sectors this near a negative obstacle report it (a hole's rim
                                        ///< thins out at its lateral ends); 0 disables
@@ -104,9 +109,24 @@ struct SectorBuilderConfig {
                                        ///< 3 m hides the ground behind it: Unknown, not Clear)
     int labelWeight = 1;               ///< extra votes of a pixel that the label image confirms
     bool useDenseCue = true;           ///< unlabelled pixels above/below the ground vote too
-    float confidenceSupport = 200.0F;  ///< votes that give confidence 1
-    float dangerDistanceM = 1.5F;      ///< [m]
-    float cautionDistanceM = 5.0F;     ///< [m]
+    float heightNoiseFactor = 3.0F;    ///< a positive vote must rise this many times the frame's height noise at
+                                       ///< its range, h r e / (fx B) with e the ground noise [px], when that is
+                                       ///< more than minHeightM (far rows: 0.10 m is in the noise at 20 m on KITTI)
+    float dropNoiseFactor = 2.0F;      ///< a negative vote's residual disparity must exceed this many times the
+                                       ///< frame's ground noise (learnt per frame, SectorBuilder::groundNoisePx())
+    int minRimVotes = 10;              ///< ... and this many ground votes within rimWindowFraction of its range
+    float rimWindowFraction = 0.10F;   ///< in front of it (the near rim: the ground is seen up to the drop)
+    float explainWindowM = 0.5F;       ///< [m] a drop whose pixels lie within this (+ clusterFraction of the range)
+                                       ///< of a positive obstacle of its sector or a neighbour is that obstacle's
+                                       ///< disparity spread down by the matcher (SectorBuilder::explainedByObstacle)
+    float minDropShare = 0.5F;         ///< a negative cluster's votes must be at least this share of its votes
+                                       ///< and the ground votes at the same ranges: where a drop is, the ground
+                                       ///< ends (on a real road a matcher's error below it leaves the road around)
+    bool useLocalGround = true;        ///< heights from the per-sector ground profile (LocalGround), not the plane
+    LocalGroundConfig localGround;
+    float confidenceSupport = 200.0F; ///< votes that give confidence 1
+    float dangerDistanceM = 1.5F;     ///< [m]
+    float cautionDistanceM = 5.0F;    ///< [m]
 };
 
 enum class BuildStatus : std::uint8_t {
@@ -152,14 +172,20 @@ public:
     [[nodiscard]] const ObstacleSectors& sectors() const noexcept { return sectors_; }
     [[nodiscard]] const SectorBuilderConfig& config() const noexcept { return config_; }
     [[nodiscard]] float hfovDeg() const noexcept { return hfovDeg_; }
+    /// The last build's disparity noise on the ground [px]: 1.4826 x the median |d - d_ground| of the pixels near
+    /// the local ground.
+    [[nodiscard]] float groundNoisePx() const noexcept { return disparityNoisePx_; }
 
 private:
     SectorBuilder() = default;
     struct Cluster {
         int votes = 0;
         float rangeM = 0.0F;
+        int firstBin = 0; ///< the window [firstBin, endBin) of range bins
+        int endBin = 0;
+        bool suspect = false; ///< no cluster, but a drop seen without enough evidence: the sector cannot be Clear
     };
-    /// @param[in] tall  votes above minHeightM per bin (positive clusters), or nullptr (drops)
+    /// @param[in] tall  votes above minHeightM per bin (positive clusters), or the ground votes per bin (drops)
     [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram, const std::uint32_t* tall, float percentile,
                                          bool drop) const noexcept;
     BuildStatus buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
@@ -172,8 +198,19 @@ private:
     int bins_ = 0;
     float hfovDeg_ = 0.0F;
     ObstacleSectors sectors_;
-    std::vector<std::uint32_t> histograms_;      ///< [sector][kind 0 positive, 1 negative][bin] votes
-    std::vector<std::uint32_t> tallVotes_;       ///< [sector][bin] positive votes above minHeightM
+    std::vector<std::uint32_t> histograms_;        ///< [sector][kind 0 positive, 1 negative][bin] votes
+    std::vector<std::uint32_t> tallVotes_;         ///< [sector][bin] positive votes above minHeightM
+    std::vector<std::uint32_t> groundByRange_;     ///< [sector][bin] ground votes
+    std::vector<float> dropDistance_;              ///< [sector][bin] sum of the negative votes' own ranges [m]
+    std::array<Cluster, kMaxSectors> positives_{}; ///< the last build's positive clusters
+    std::array<Cluster, kMaxSectors> negatives_{}; ///< ... and negative ones
+    /// Drops only where a neighbouring sector sees one at a range that follows (a rim is a line).
+    void keepContinuousDrops() noexcept;
+    /// A negative cluster whose pixels lie (at their own range, not where their rays cross the ground) where the
+    /// sector or a neighbour has a positive obstacle: the matcher spread that obstacle's disparity down over the
+    /// ground in front of it (the shade under a car), not a drop.
+    [[nodiscard]] bool explainedByObstacle(int s, const Cluster& drop,
+                                           const std::array<Cluster, kMaxSectors>& positives) const noexcept;
     std::vector<float> extremes_;                ///< [sector][kind][bin] max height / depth [m]
     std::vector<std::uint32_t> groundVotes_;     ///< [sector]
     std::vector<std::uint32_t> farGroundVotes_;  ///< [sector] ground votes at or beyond clearRangeM
@@ -194,8 +231,24 @@ private:
     std::vector<std::uint32_t> rowCount_; ///< [sector][row] valid pixels
     std::vector<float> rowResidual_;      ///< [sector][row] sum of d - d_g [px]
     std::vector<float> rowCrossing_;      ///< [sector][row] sum of the ranges where the pixels' rays meet the ground
-    std::vector<double> boundary0_;       ///< [sectorCount + 1] per-row boundary functions g_k(u) = b0 + b1 u
+    std::vector<std::uint32_t> rowDropLabels_; ///< [sector][row] pixels the mismatch stage labels negative
+    std::vector<double> boundary0_;            ///< [sectorCount + 1] per-row boundary functions g_k(u) = b0 + b1 u
     std::vector<double> boundary1_;
+    /// A pixel's geometry, kept from the first pass (points and the local ground) for the second (votes).
+    struct PixelPoint {
+        float rangeM;
+        float z; ///< [m] above the plane
+        std::int16_t sector;
+        std::int16_t row; ///< analysed row index
+        std::int16_t d16;
+        std::uint8_t label;
+    };
+    std::vector<PixelPoint> points_; ///< capacity: every analysed pixel
+    [[nodiscard]] float groundNoise(std::size_t pointCount) noexcept;
+    std::vector<std::uint32_t> noiseHistogram_; ///< |d - d_ground| in 1/32 px bins
+    float disparityNoisePx_ = 0.0F;
+    float groundHeight_ = 0.0F; ///< [m] the last build's plane
+    LocalGround localGround_;
 };
 
 } // namespace ugv::vision

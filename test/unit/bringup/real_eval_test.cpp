@@ -1,0 +1,164 @@
+// `ugvsense eval --real` scoring: the per-sector truth from a synthetic disparity map (a flat road with a box and a
+// kerb), the outcome of every kind of report, and the tallies.
+
+#include "real_eval.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "ugv/vision/ground_plane.hpp"
+
+namespace {
+
+using ugv::ObstacleKind;
+using ugv::ObstacleSectors;
+using ugv::Sector;
+using ugv::SectorState;
+using ugv::tool::RealOutcome;
+using ugv::tool::RealScoringRules;
+using ugv::tool::RealTally;
+using ugv::tool::SectorTruth;
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+constexpr double kCameraHeightM = 1.0;
+const ugv::vision::RectifiedProjection kProj{500.0, 500.0, 319.5, 239.5, 0.5};
+const ugv::vision::GroundPlane kRoad = ugv::vision::GroundPlane::fromMount({kCameraHeightM, 0.0, 0.0});
+
+/// The road's disparity everywhere below the horizon, with a fronto-parallel face of `heightM` at `rangeM` over
+/// the columns [u0, u1) (its pixels from the road up to its top).
+cv::Mat roadWithFace(double rangeM, double heightM, int u0, int u1)
+{
+    cv::Mat d(kHeight, kWidth, CV_32F, cv::Scalar(0));
+    const double fb = kProj.fx * kProj.baselineM;
+    for (int v = 0; v < kHeight; ++v) {
+        for (int u = 0; u < kWidth; ++u) {
+            const double ground = (v - kProj.cy) * kProj.baselineM / kCameraHeightM; // level camera
+            d.at<float>(v, u) = ground > 0.0 ? static_cast<float>(ground) : 0.0F;
+            // The face: rows whose ray at rangeM is between the road and heightM above it.
+            const double y = (v - kProj.cy) * rangeM / kProj.fy; // below the camera at the face's depth
+            if (u >= u0 && u < u1 && y <= kCameraHeightM && y >= kCameraHeightM - heightM && fb / rangeM > ground) {
+                d.at<float>(v, u) = static_cast<float>(fb / rangeM);
+            }
+        }
+    }
+    return d;
+}
+
+ObstacleSectors layout(int count)
+{
+    ObstacleSectors s;
+    const double hfov = 2.0 * std::atan(kWidth / (2.0 * kProj.fx)) * 180.0 / 3.14159265358979323846;
+    ugv::initSectors(s, count, static_cast<float>(hfov));
+    return s;
+}
+
+Sector report(SectorState state, float rangeM = std::numeric_limits<float>::infinity())
+{
+    Sector s;
+    s.state = state;
+    s.kind = state == SectorState::Obstacle ? ObstacleKind::Positive : ObstacleKind::None;
+    s.rangeM = rangeM;
+    return s;
+}
+
+TEST(RealEval, TruthFindsAFaceAtItsRangeOnlyInItsSectors)
+{
+    constexpr double kRangeM = 8.0;
+    const cv::Mat d = roadWithFace(kRangeM, 1.0, 300, 340); // straight ahead
+    const ObstacleSectors sectors = layout(16);
+
+    const auto sut = ugv::tool::sectorTruth(d, kHeight / 2, kRoad, kProj, sectors, RealScoringRules{});
+
+    ASSERT_EQ(sut.size(), 16U);
+    for (int s = 0; s < 16; ++s) {
+        const SectorTruth& t = sut[static_cast<std::size_t>(s)];
+        EXPECT_TRUE(t.scored) << s;
+        if (s == 7 || s == 8) {
+            ASSERT_TRUE(t.hasObstacle()) << s;
+            EXPECT_NEAR(t.obstacleRangeM, kRangeM, 0.05) << s;
+        } else {
+            EXPECT_FALSE(t.hasObstacle()) << s << " at " << t.obstacleRangeM;
+        }
+    }
+}
+
+TEST(RealEval, ALowKerbIsNoObstacleButAKerb)
+{
+    const cv::Mat d = roadWithFace(6.0, 0.15, 0, kWidth); // 15 cm across the whole view
+    const auto sut = ugv::tool::sectorTruth(d, kHeight / 2, kRoad, kProj, layout(8), RealScoringRules{});
+
+    const double edge = 6.0 / std::cos(std::atan(kWidth / (2.0 * kProj.fx))); // [m] the face at the view's edge
+    for (const SectorTruth& t : sut) {
+        EXPECT_FALSE(t.hasObstacle());
+        EXPECT_GE(t.kerbRangeM, 5.95);
+        EXPECT_LE(t.kerbRangeM, edge + 0.05);
+    }
+}
+
+TEST(RealEval, SectorsWithLittleTruthAreNotScored)
+{
+    cv::Mat d = roadWithFace(8.0, 1.0, 300, 340);
+    d.colRange(0, kWidth / 2).setTo(0); // no GT on the right half of the image (left of centre in bearing)
+    const auto sut = ugv::tool::sectorTruth(d, kHeight / 2, kRoad, kProj, layout(8), RealScoringRules{});
+
+    EXPECT_TRUE(sut[0].scored);
+    EXPECT_FALSE(sut[7].scored);
+    EXPECT_EQ(ugv::tool::scoreRealSector(sut[7], report(SectorState::Obstacle, 3.0F), RealScoringRules{}),
+              RealOutcome::NotScored);
+}
+
+TEST(RealEval, EveryOutcome)
+{
+    constexpr RealScoringRules kRules;
+    SectorTruth obstacle;
+    obstacle.scored = true;
+    obstacle.obstacleRangeM = 10.0;
+    SectorTruth free;
+    free.scored = true;
+    SectorTruth kerbOnly = free;
+    kerbOnly.kerbRangeM = 4.0;
+
+    EXPECT_EQ(scoreRealSector(obstacle, report(SectorState::Obstacle, 10.9F), kRules), RealOutcome::Correct);
+    EXPECT_EQ(scoreRealSector(obstacle, report(SectorState::Obstacle, 8.9F), kRules), RealOutcome::TooNear);
+    EXPECT_EQ(scoreRealSector(obstacle, report(SectorState::Obstacle, 11.2F), kRules), RealOutcome::Missed);
+    EXPECT_EQ(scoreRealSector(obstacle, report(SectorState::Clear), kRules), RealOutcome::Missed);
+    EXPECT_EQ(scoreRealSector(obstacle, report(SectorState::Unknown), kRules), RealOutcome::Missed);
+    EXPECT_EQ(scoreRealSector(free, report(SectorState::Obstacle, 5.0F), kRules), RealOutcome::False);
+    EXPECT_EQ(scoreRealSector(free, report(SectorState::Clear), kRules), RealOutcome::FreeOk);
+    EXPECT_EQ(scoreRealSector(free, report(SectorState::Obstacle, 40.0F), kRules), RealOutcome::FreeOk); // beyond 25 m
+    EXPECT_EQ(scoreRealSector(kerbOnly, report(SectorState::Obstacle, 4.5F), kRules), RealOutcome::FreeOk);
+    EXPECT_EQ(scoreRealSector(kerbOnly, report(SectorState::Obstacle, 6.0F), kRules), RealOutcome::False);
+    // An obstacle behind a kerb: the kerb's range counts.
+    SectorTruth both = obstacle;
+    both.kerbRangeM = 5.0;
+    EXPECT_EQ(scoreRealSector(both, report(SectorState::Obstacle, 5.2F), kRules), RealOutcome::Correct);
+}
+
+TEST(RealEval, TallyCountsAndRates)
+{
+    SectorTruth obstacle;
+    obstacle.scored = true;
+    obstacle.obstacleRangeM = 10.0;
+    SectorTruth free;
+    free.scored = true;
+    RealTally sut;
+
+    sut.add(RealOutcome::Correct, obstacle, report(SectorState::Obstacle, 10.5F));
+    sut.add(RealOutcome::TooNear, obstacle, report(SectorState::Obstacle, 5.0F));
+    sut.add(RealOutcome::False, free, report(SectorState::Obstacle, 5.0F));
+    sut.add(RealOutcome::FreeOk, free, report(SectorState::Clear));
+    sut.add(RealOutcome::NotScored, free, report(SectorState::Clear));
+
+    EXPECT_EQ(sut.scored, 4);
+    EXPECT_EQ(sut.gtObstacle, 2);
+    EXPECT_DOUBLE_EQ(sut.correctRate(), 0.5);
+    EXPECT_DOUBLE_EQ(sut.wrongRate(), 0.5);
+    ASSERT_EQ(sut.rangeErrorsM.size(), 1U);
+    EXPECT_NEAR(sut.rangeErrorsM[0], 0.5, 1e-6);
+}
+
+} // namespace

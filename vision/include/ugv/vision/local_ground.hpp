@@ -1,0 +1,65 @@
+#pragma once
+
+/// @file
+/// The real ground's height above the frame's ground plane, per sector along the range (SectorBuilder's local
+/// ground).
+///
+/// A plane is the ground of a test track, not of a street: a cambered road falls off to both sides of its crown
+/// (within a sector, whose lateral offset grows with the range, that is a height linear in the range), a grade
+/// change bends the profile, a verge or a pavement sits a few centimetres higher. Against one plane these read as
+/// obstacles or drops, whatever the threshold. So the heights are measured from a profile learnt from the frame:
+///  - per sector and range bin (binM), a histogram of the heights within +-bandM of the plane (1 cm bins); its mode
+///    is where the ground is: a face (a box, a kerb, a trench's far wall) spreads its pixels over many heights, the
+///    ground piles them up at one;
+///  - per sector, from the vehicle outwards, the surface connected to the nearest ground seen: a bin whose mode
+///    (from at least minPoints pixels, median-filtered over three bins so that a feature one bin deep, like a
+///    trench's far wall, is not taken for the ground's course) follows the extrapolation of the accepted bins within
+///    stepM plus maxSlope per metre moves the profile (level and a slope, at most maxSlope); a bin that jumps is not
+///    ground (a kerb, a pavement, a face, a drop) and the last ground level holds. So a smooth surface (camber, grade)
+///    is followed and a step is not; the profile stays within +-maxOffsetM of the plane.
+///
+/// Thread-safety: thread-bound. RT-safe: everything but configure() (which allocates).
+
+#include <cstdint>
+#include <vector>
+
+namespace ugv::vision {
+
+struct LocalGroundConfig {
+    float bandM = 0.25F;      ///< [m] heights counted, +- from the plane
+    float binM = 1.0F;        ///< [m] range bins
+    int minPoints = 10;       ///< pixels a bin needs to give a mode
+    float stepM = 0.03F;      ///< [m] a bin within this of the extrapolation (plus maxSlope per metre) follows it
+    float maxSlope = 0.06F;   ///< [m/m] the profile's slope against the plane (6 %: camber, grade changes)
+    float maxOffsetM = 0.20F; ///< [m] the profile stays within +- this of the plane
+};
+
+class LocalGround {
+public:
+    /// Allocates for `sectors` x ceil(maxRangeM / binM) bins.
+    void configure(const LocalGroundConfig& config, int sectors, float maxRangeM);
+    /// Forgets the last frame.
+    void clear() noexcept;
+    /// One pixel: sector s, horizontal range [m], height above the plane [m].
+    void add(int s, float rangeM, float z) noexcept;
+    /// Fits every sector's profile from the pixels added since clear().
+    void fit() noexcept;
+    /// The profile's height [m] above the plane in sector s at rangeM (0 before fit()).
+    [[nodiscard]] float at(int s, float rangeM) const noexcept;
+
+private:
+    static constexpr float kHeightBinM = 0.01F;
+    [[nodiscard]] bool mode(int s, int bin, float& z, float& weight) const noexcept;
+    void fitSector(int s) noexcept;
+    /// The median of bin b's mode and those of the nearest bins with one on each side (at most two away).
+    static bool filteredMode(const float* modes, const bool* have, int n, int b, float& z) noexcept;
+
+    LocalGroundConfig config_;
+    int sectors_ = 0;
+    int bins_ = 0;                         ///< range bins
+    int heightBins_ = 0;                   ///< histogram bins per range bin
+    std::vector<std::uint16_t> histogram_; ///< [sector][range bin][height bin]
+    std::vector<float> profile_;           ///< [sector][range bin] height at the bin centre [m]
+};
+
+} // namespace ugv::vision
