@@ -877,6 +877,11 @@ int runEval(int argc, char** argv)
         }
     }
 
+    if (args.has("mount")) {
+        if (auto mount = parseMount(args.get("mount")); !mount) {
+            return reportUsageError("eval", mount.error());
+        }
+    }
     if (args.has("real")) {
         std::error_code ec;
         if (!std::filesystem::is_regular_file(std::filesystem::path(args.get("real")) / "index.csv", ec)) {

@@ -25,7 +25,9 @@ constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kKittiScale = 256.0;     ///< KITTI GT: disparity = value / 256
 constexpr int kBaselineDisparities = 128; ///< the issue's plain pipeline: StereoSGBM, 128 disparities, block 5
 constexpr int kBaselineBlock = 5;
-constexpr int kBaselineMinPoints = 20; ///< the dense baseline's robust nearest (mismatch blobs have a few pixels)
+constexpr int kBaselineMinPoints = 20;  ///< the dense baseline's robust nearest (mismatch blobs have a few pixels)
+constexpr double kTargetCorrect = 0.90; ///< issue 20's targets
+constexpr double kTargetWrong = 0.05;
 
 /// Sector of a bearing [deg] in `layout`, or -1.
 int sectorOf(const ObstacleSectors& layout, double bearingDeg)
@@ -141,17 +143,6 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         pairs.push_back(p);
     }
     return pairs;
-}
-
-Result<vision::Mount, Error> parseMount(const std::string& text)
-{
-    vision::Mount m;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &m.heightM, &m.pitchDeg, &m.rollDeg) != 3 ||
-        !(m.heightM > 0.0 && m.heightM < 10.0) || !(std::abs(m.pitchDeg) < 45.0) || !(std::abs(m.rollDeg) < 45.0)) {
-        return Unexpected(Error{"ugvsense eval --mount", "'" + text + "' is not HEIGHT_M,PITCH_DEG,ROLL_DEG",
-                                "for example --mount 1.65,0,0 (height 0-10 m, pitch and roll within 45 deg)"});
-    }
-    return m;
 }
 
 /// Sectors of a point set as a detector would report them: Obstacle at the robust nearest range, else Clear.
@@ -297,6 +288,17 @@ Result<vision::GroundPlane, Error> roadPlane(const cv::Mat& disparity, const vis
 }
 
 } // namespace
+
+Result<vision::Mount, Error> parseMount(const std::string& text)
+{
+    vision::Mount m;
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &m.heightM, &m.pitchDeg, &m.rollDeg) != 3 ||
+        !(m.heightM > 0.0 && m.heightM < 10.0) || !(std::abs(m.pitchDeg) < 45.0) || !(std::abs(m.rollDeg) < 45.0)) {
+        return Unexpected(Error{"ugvsense eval --mount", "'" + text + "' is not HEIGHT_M,PITCH_DEG,ROLL_DEG",
+                                "for example --mount 1.65,0,0 (height 0-10 m, pitch and roll within 45 deg)"});
+    }
+    return m;
+}
 
 std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, const vision::GroundPlane& road,
                                      const vision::RectifiedProjection& projection, const ObstacleSectors& layout,
@@ -577,6 +579,15 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
     std::printf("total:\n");
     printTally("ours", oursTotal);
     printTally("opencv", baseTotal);
+    const auto verdict = [](bool ok) { return ok ? "PASS" : "FAIL"; };
+    const bool noWorse = oursTotal.correctRate() >= baseTotal.correctRate() &&
+                         oursTotal.tooNear + oursTotal.falseSectors <= baseTotal.tooNear + baseTotal.falseSectors;
+    std::printf("targets (issue 20): correct >= 90 %%: %s; too near + false <= 5 %% of scored: %s; no negative sector "
+                "on pairs without a drop: %s\n",
+                verdict(oursTotal.correctRate() >= kTargetCorrect), verdict(oursTotal.wrongRate() <= kTargetWrong),
+                verdict(oursTotal.negativeNoDrop == 0));
+    std::printf("against the plain OpenCV pipeline: correct no lower and too near + false no more: %s\n",
+                verdict(noWorse));
     json << "\n  ], \"ours\": " << tallyJson(oursTotal) << ", \"opencv\": " << tallyJson(baseTotal) << "}";
     return 0;
 }

@@ -21,10 +21,12 @@
 
 #include <opencv2/core.hpp>
 
+#include "ugv/platform/error.hpp"
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/stereo_calibration.hpp"
 
 namespace ugv::tool {
 
@@ -97,6 +99,9 @@ struct RealEvalOptions {
     std::vector<std::string> pairs;   ///< only these pairs (empty: all)
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
 };
+
+/// "HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.
+Result<vision::Mount, Error> parseMount(const std::string& text);
 
 /// Runs the evaluation; prints a table per pair and the totals, appends `"real": {...}` to `json`.
 /// @return 0, 1 on unreadable data.

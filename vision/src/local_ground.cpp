@@ -90,9 +90,9 @@ void LocalGround::fitSector(int s) noexcept
         have[static_cast<std::size_t>(b)] = mode(s, b, modes[static_cast<std::size_t>(b)], weight);
     }
     // From the vehicle outwards: the ground is the surface connected to the nearest ground seen. A bin whose
-    // filtered mode follows the extrapolation (within stepM, plus maxSlope per metre since the last accepted bin)
-    // is ground and moves the estimate; one that jumps (a kerb, a pavement, a face, a drop) is not, and the last
-    // ground level holds.
+    // filtered mode follows the extrapolation (within stepM plus maxSlope over one bin) is ground and moves the
+    // estimate; one that jumps (a kerb, a pavement, a face, a drop) is not, and the last ground level holds (also
+    // over the bins after it: a pavement stays a step however long it runs).
     float* out = &profile_[static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_)];
     bool started = false;
     float level = 0.0F; // [m] at lastR
@@ -107,7 +107,7 @@ void LocalGround::fitSector(int s) noexcept
             started = true;
             level = z;
             lastR = r;
-        } else if (valid && started && std::abs(z - predicted) <= config_.stepM + config_.maxSlope * (r - lastR)) {
+        } else if (valid && started && std::abs(z - predicted) <= config_.stepM + config_.maxSlope * config_.binM) {
             const float newSlope = std::clamp((z - level) / (r - lastR), -config_.maxSlope, config_.maxSlope);
             slope += 0.5F * (newSlope - slope);
             level = z;

@@ -148,6 +148,30 @@ TEST(GroundEstimator, RecoversPitchedRigsFromSimulatorDisparity)
     }
 }
 
+TEST(GroundEstimator, LocksOnWhenTheConfiguredMountIsOffByTenDegreesFiveDegreesOrThirtyPercent)
+{
+    // The truth is the default rig's mount; the configured mount is off by the amounts issue 20 names, one at a
+    // time and all together. Noise, outliers and an obstacle blob as in the first test.
+    constexpr Mount kTruth{0.59, 0.0, 0.0};
+    const cv::Mat disparity = syntheticDisparity(kTruth, 0.3, 0.15, true, 7);
+    for (const Mount& configured :
+         {Mount{0.59, 10.0, 0.0}, Mount{0.59, -10.0, 0.0}, Mount{0.59, 0.0, 5.0}, Mount{0.59, 0.0, -5.0},
+          Mount{0.59 * 1.3, 0.0, 0.0}, Mount{0.59 * 0.7, 0.0, 0.0}, Mount{0.59 * 1.3, -10.0, 5.0}}) {
+        GroundEstimatorConfig config = makeConfig(1.0);
+        config.mount = configured;
+        auto sut = GroundEstimator::create(config);
+        ASSERT_TRUE(sut.has_value());
+
+        const ugv::vision::GroundEstimate& e = sut->update(view(disparity));
+
+        ASSERT_TRUE(e.reliable) << "configured " << configured.heightM << " m, pitch " << configured.pitchDeg
+                                << ", roll " << configured.rollDeg << ": reason " << static_cast<int>(e.reason);
+        EXPECT_NEAR(e.plane.pitchDeg(), kTruth.pitchDeg, kPitchTolDeg);
+        EXPECT_NEAR(e.plane.rollDeg(), kTruth.rollDeg, kPitchTolDeg);
+        EXPECT_NEAR(e.plane.heightM, kTruth.heightM, kHeightTolM);
+    }
+}
+
 TEST(GroundEstimator, FallsBackToConfiguredPlaneFlagged)
 {
     auto sut = GroundEstimator::create(makeConfig(0.5));
@@ -169,8 +193,8 @@ TEST(GroundEstimator, FallsBackToConfiguredPlaneFlagged)
     rng.fill(garbage, cv::RNG::UNIFORM, -16, 16 * 128);
     expectFallback(sut->update(view(garbage)), GroundFallbackReason::TooFewInliers);
 
-    // Roll 7.5 deg: a clean plane, but outside the 5 deg band.
-    const cv::Mat rolled = syntheticDisparity({0.59, 0.0, 7.5}, 0.2, 0.0, false, 4);
+    // Roll 10 deg: a clean plane, but outside the 8 deg band.
+    const cv::Mat rolled = syntheticDisparity({0.59, 0.0, 10.0}, 0.2, 0.0, false, 4);
     expectFallback(sut->update(view(rolled)), GroundFallbackReason::OutOfBand);
 
     const cv::Mat small(kHeight - 1, kWidth, CV_16SC1, cv::Scalar(0));

@@ -15,7 +15,8 @@
 /// the smoothing restarts from the configured plane.
 ///
 /// No candidate is chosen by its distance to the configured plane, so a mount that is off by the band (the default
-/// admits +-12 deg pitch, +-6 deg roll and +-35 % height) is still found, and a pitching vehicle is followed from
+/// admits +-14 deg pitch, +-8 deg roll and +-45 % height: a mount off by 10 deg, 5 deg or 30 % plus the road's own
+/// grade and camber) is still found, and a pitching vehicle is followed from
 /// frame to frame (the last estimate is always a hypothesis).
 ///
 /// Disparity input: CV_16S fixed point as cv::StereoSGBM outputs (value / 16 = disparity [px]), invalid < 0.
@@ -33,20 +34,20 @@
 namespace ugv::vision {
 
 struct GroundEstimatorConfig {
-    RectifiedProjection projection;     ///< full-frame rectified projection
-    Mount mount;                        ///< configured mount: the prior, the band centre and the fallback
-    int width = 640;                    ///< ROI width [px]
-    int height = 248;                   ///< ROI height [px]
-    int y0 = 232;                       ///< full-frame row of ROI row 0 [px]
-    int sampleStep = 4;                 ///< candidate grid step [px]
-    double inlierTolerancePx = 1.0;     ///< RANSAC / refinement inlier distance [px]
+    RectifiedProjection projection; ///< full-frame rectified projection
+    Mount mount;                    ///< configured mount: the prior, the band centre and the fallback
+    int width = 640;                ///< ROI width [px]
+    int height = 248;               ///< ROI height [px]
+    int y0 = 232;                   ///< full-frame row of ROI row 0 [px]
+    int sampleStep = 4;             ///< candidate grid step [px]
+    double inlierTolerancePx = 1.0; ///< RANSAC / refinement inlier distance [px]
     int ransacIterations = 64;
     std::uint64_t seed = 0x9E3779B97F4A7C15ULL; ///< RANSAC sampling seed (re-applied every update)
     int minInliers = 300;                       ///< absolute minimum of inliers
     double minInlierFraction = 0.15;            ///< minimum inliers / candidates (candidates include obstacles)
-    double heightBandFraction = 0.35;           ///< allowed |height - configured| / configured
-    double pitchBandDeg = 12.0;                 ///< [deg] allowed |pitch - configured|
-    double rollBandDeg = 6.0;                   ///< [deg] allowed |roll - configured|
+    double heightBandFraction = 0.45;           ///< allowed |height - configured| / configured
+    double pitchBandDeg = 14.0;                 ///< [deg] allowed |pitch - configured|
+    double rollBandDeg = 8.0;                   ///< [deg] allowed |roll - configured|
     double smoothing = 0.5;                     ///< weight of the new measurement, (0, 1]; 1 = no smoothing
 };
 

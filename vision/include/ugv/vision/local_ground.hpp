@@ -14,7 +14,7 @@
 ///  - per sector, from the vehicle outwards, the surface connected to the nearest ground seen: a bin whose mode
 ///    (from at least minPoints pixels, median-filtered over three bins so that a feature one bin deep, like a
 ///    trench's far wall, is not taken for the ground's course) follows the extrapolation of the accepted bins within
-///    stepM plus maxSlope per metre moves the profile (level and a slope, at most maxSlope); a bin that jumps is not
+///    stepM plus maxSlope over one bin moves the profile (level and a slope, at most maxSlope); a bin that jumps is not
 ///    ground (a kerb, a pavement, a face, a drop) and the last ground level holds. So a smooth surface (camber, grade)
 ///    is followed and a step is not; the profile stays within +-maxOffsetM of the plane.
 ///
@@ -29,8 +29,8 @@ struct LocalGroundConfig {
     float bandM = 0.25F;      ///< [m] heights counted, +- from the plane
     float binM = 1.0F;        ///< [m] range bins
     int minPoints = 10;       ///< pixels a bin needs to give a mode
-    float stepM = 0.03F;      ///< [m] a bin within this of the extrapolation (plus maxSlope per metre) follows it
-    float maxSlope = 0.06F;   ///< [m/m] the profile's slope against the plane (6 %: camber, grade changes)
+    float stepM = 0.03F;      ///< [m] a bin within this of the extrapolation (plus maxSlope over a bin) follows it
+    float maxSlope = 0.04F;   ///< [m/m] the profile's slope against the plane (4 %: camber, grade changes)
     float maxOffsetM = 0.20F; ///< [m] the profile stays within +- this of the plane
 };
 
