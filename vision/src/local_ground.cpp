@@ -94,8 +94,7 @@ void LocalGround::fitSector(int s) noexcept
     // estimate; one that jumps (a kerb, a pavement, a face, a drop) is not, and the last ground level holds (also
     // over the bins after it: a pavement stays a step however long it runs).
     float* out = &profile_[static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_)];
-    bool started = false;
-    float level = 0.0F; // [m] at lastR
+    float level = 0.0F; // [m] at lastR: the walk starts on the plane, fitted to the whole ROI's ground
     float slope = 0.0F; // [m/m]
     float lastR = 0.0F;
     for (int b = 0; b < bins_; ++b) {
@@ -103,18 +102,14 @@ void LocalGround::fitSector(int s) noexcept
         float z = 0.0F;
         const bool valid = b < n && filteredMode(modes.data(), have.data(), n, b, z);
         const float predicted = level + slope * (r - lastR);
-        if (valid && !started && std::abs(z) <= config_.maxOffsetM) {
-            started = true;
-            level = z;
-            lastR = r;
-        } else if (valid && started && std::abs(z - predicted) <= config_.stepM + config_.maxSlope * config_.binM) {
-            const float newSlope = std::clamp((z - level) / (r - lastR), -config_.maxSlope, config_.maxSlope);
+        if (valid && std::abs(z - predicted) <= config_.stepM + config_.maxSlope * config_.binM) {
+            const float newSlope =
+                r > lastR ? std::clamp((z - level) / (r - lastR), -config_.maxSlope, config_.maxSlope) : 0.0F;
             slope += 0.5F * (newSlope - slope);
             level = z;
             lastR = r;
         }
-        const float value = started ? level : 0.0F; // held, not extrapolated, past the last ground bin
-        out[b] = std::clamp(value, -config_.maxOffsetM, config_.maxOffsetM);
+        out[b] = std::clamp(level, -config_.maxOffsetM, config_.maxOffsetM); // held past the last ground bin
     }
 }
 
