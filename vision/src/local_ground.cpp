@@ -94,15 +94,35 @@ void LocalGround::fitSector(int s) noexcept
     // estimate; one that jumps (a kerb, a pavement, a face, a drop) is not, and the last ground level holds (also
     // over the bins after it: a pavement stays a step however long it runs).
     float* out = &profile_[static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_)];
-    float level = 0.0F; // [m] at lastR: the walk starts on the plane, fitted to the whole ROI's ground
+    // The walk starts at the nearest bin whose level the next bin with a mode confirms (a near curb's top, one bin
+    // deep, is not the ground's level), within maxOffsetM of the plane; without one, on the plane.
+    const float tolerance = config_.stepM + config_.maxSlope * config_.binM;
+    float level = 0.0F; // [m] at lastR
     float slope = 0.0F; // [m/m]
     float lastR = 0.0F;
+    bool confirmed = false;
+    for (int b = 0, previous = -1; b < n && !confirmed; ++b) {
+        float z = 0.0F;
+        if (!filteredMode(modes.data(), have.data(), n, b, z)) {
+            continue;
+        }
+        confirmed = previous >= 0 && std::abs(z - level) <= tolerance; // bin `previous` starts the walk
+        if (!confirmed) {
+            previous = std::abs(z) <= config_.maxOffsetM ? b : -1;
+            level = z;
+            lastR = (static_cast<float>(b) + 0.5F) * config_.binM;
+        }
+    }
+    if (!confirmed) {
+        level = 0.0F;
+        lastR = 0.0F;
+    }
     for (int b = 0; b < bins_; ++b) {
         const float r = (static_cast<float>(b) + 0.5F) * config_.binM;
         float z = 0.0F;
         const bool valid = b < n && filteredMode(modes.data(), have.data(), n, b, z);
         const float predicted = level + slope * (r - lastR);
-        if (valid && std::abs(z - predicted) <= config_.stepM + config_.maxSlope * config_.binM) {
+        if (valid && std::abs(z - predicted) <= tolerance) {
             const float newSlope =
                 r > lastR ? std::clamp((z - level) / (r - lastR), -config_.maxSlope, config_.maxSlope) : 0.0F;
             slope += 0.5F * (newSlope - slope);

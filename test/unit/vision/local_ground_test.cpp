@@ -83,6 +83,21 @@ TEST(LocalGround, IgnoresAFaceAndATrenchWallOneBinDeep)
     }
 }
 
+TEST(LocalGround, StartsOnTheNearestConfirmedLevelNotOnANearCurbTop)
+{
+    auto sut = makeSut();
+    addGround(sut, 0, 1.2F, 1.9F, 60, [](float) { return 0.12F; }); // a curb's top, one bin deep
+    addGround(sut, 0, 2.0F, 15.0F, 60, [](float) { return 0.0F; });
+    addGround(sut, 1, 1.5F, 15.0F, 60, [](float) { return -0.08F; }); // the road 8 cm below the plane throughout
+
+    sut.fit();
+
+    EXPECT_NEAR(sut.at(0, 1.5F), 0.0F, kTolM);
+    EXPECT_NEAR(sut.at(0, 8.0F), 0.0F, kTolM);
+    EXPECT_NEAR(sut.at(1, 2.0F), -0.08F, kTolM);
+    EXPECT_NEAR(sut.at(1, 12.0F), -0.08F, kTolM);
+}
+
 TEST(LocalGround, StaysWithinItsOffsetBound)
 {
     LocalGroundConfig config;
