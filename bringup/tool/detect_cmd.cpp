@@ -53,6 +53,27 @@ cv::Mat readImage(const std::string& path, int flags, std::string& why)
     return image;
 }
 
+const char* fallbackName(vision::GroundFallbackReason reason)
+{
+    switch (reason) {
+    case vision::GroundFallbackReason::None:
+        return "none";
+    case vision::GroundFallbackReason::WrongInput:
+        return "wrong input";
+    case vision::GroundFallbackReason::TooFewCandidates:
+        return "too few valid disparities";
+    case vision::GroundFallbackReason::TooFewInliers:
+        return "too few inliers";
+    case vision::GroundFallbackReason::DegenerateFit:
+        return "degenerate fit";
+    case vision::GroundFallbackReason::OutOfBand:
+        return "outside the band around the mount";
+    }
+    return "unknown";
+}
+
+/// The ground as estimated (plane, reliability, from how many disparities, why it fell back, the noise it measured)
+/// and the sectors.
 bool writeJson(const std::string& path, const vision::ObstacleDetector& det, bool estimated)
 {
     const vision::GroundPlane& g = det.ground();
@@ -63,8 +84,12 @@ bool writeJson(const std::string& path, const vision::ObstacleDetector& det, boo
     out << "{\n  \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
         << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
         << ", \"reliable\": " << (det.groundEstimate().reliable ? "true" : "false") << ", \"source\": \""
-        << (estimated ? "estimated" : "configured mount")
-        << "\"},\n  \"degraded\": " << (det.sectors().degraded ? "true" : "false")
+        << (estimated ? "estimated" : "configured mount") << "\", \"candidates\": " << det.groundEstimate().candidates
+        << ", \"inliers\": " << det.groundEstimate().inliers << ", \"fallback_reason\": \""
+        << fallbackName(det.groundEstimate().reason) << "\""
+        << ", \"disparity_noise_px\": " << jsonNumber(det.groundNoisePx())
+        << ", \"max_range_m\": " << jsonNumber(det.sectorConfig().maxRangeM)
+        << "},\n  \"degraded\": " << (det.sectors().degraded ? "true" : "false")
         << ",\n  \"count\": " << det.sectors().count << ",\n  \"sectors\": " << sectorsJsonArray(det.sectors(), 4)
         << "\n}\n";
     out.flush();

@@ -113,6 +113,8 @@ public:
     /// The ground plane the last frame's sectors used.
     [[nodiscard]] const GroundPlane& ground() const noexcept { return ground_; }
     [[nodiscard]] Rect roi() const noexcept { return roi_; }
+    /// The last frame's disparity noise on the ground [px] (SectorBuilder::groundNoisePx()).
+    [[nodiscard]] float groundNoisePx() const noexcept { return builder_.groundNoisePx(); }
     /// The sector builder's config as used (maxRangeM resolved from the rig).
     [[nodiscard]] const SectorBuilderConfig& sectorConfig() const noexcept { return builder_.config(); }
 
