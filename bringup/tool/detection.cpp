@@ -167,9 +167,8 @@ Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, 
         }
         auto fit = fitGround(matcher->disparity16(), roi, projection);
         if (!fit) {
-            return Unexpected(
-                Error{calibName + ": no mount, and the " + fit.error().where + " failed", fit.error().what,
-                      fit.error().fix});
+            return Unexpected(Error{calibName + ": no mount, and the " + fit.error().where + " failed",
+                                    fit.error().what, fit.error().fix});
         }
         ground = fit->ground;
         out.fit = *fit;
@@ -183,8 +182,7 @@ Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, 
     if (out.detector->status() != vision::DetectorStatus::Ok) {
         return Unexpected(Error{"detector",
                                 "the pipeline failed (status " +
-                                    std::to_string(static_cast<int>(out.detector->status())) +
-                                    "), all sectors unknown",
+                                    std::to_string(static_cast<int>(out.detector->status())) + "), all sectors unknown",
                                 ""});
     }
     return out;

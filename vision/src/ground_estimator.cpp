@@ -53,12 +53,12 @@ Result<GroundEstimator, Error> GroundEstimator::create(const GroundEstimatorConf
     if (config.width < 1 || config.height < 1 || config.sampleStep < 1 || config.y0 < 0) {
         return fail("width, height, sampleStep >= 1 and y0 >= 0 required");
     }
-    if (!(config.inlierTolerancePx > 0.0) || config.ransacIterations < 1 ||
-        config.minInliers < 3 || !(config.minInlierFraction >= 0.0 && config.minInlierFraction <= 1.0)) {
+    if (!(config.inlierTolerancePx > 0.0) || config.ransacIterations < 1 || config.minInliers < 3 ||
+        !(config.minInlierFraction >= 0.0 && config.minInlierFraction <= 1.0)) {
         return fail("tolerances > 0, ransacIterations >= 1, minInliers >= 3, minInlierFraction in [0, 1] required");
     }
-    if (!(config.heightBandFraction > 0.0 && config.heightBandFraction < 1.0) || !(config.pitchBandDeg > 0.0) || !(config.rollBandDeg > 0.0) ||
-        !(config.smoothing > 0.0 && config.smoothing <= 1.0)) {
+    if (!(config.heightBandFraction > 0.0 && config.heightBandFraction < 1.0) || !(config.pitchBandDeg > 0.0) ||
+        !(config.rollBandDeg > 0.0) || !(config.smoothing > 0.0 && config.smoothing <= 1.0)) {
         return fail("bands > 0 (height fraction below 1) and smoothing in (0, 1] required");
     }
     return GroundEstimator(config);
