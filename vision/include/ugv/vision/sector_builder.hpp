@@ -40,6 +40,19 @@
 /// else Unknown (no texture, invalid disparity, too few measurements, obstacles beyond maxRangeM): never a
 /// false Clear. danger = classify(state, range, dangerDistanceM, cautionDistanceM).
 ///
+/// Real ground and real cameras (issue 20). build() makes two passes over the analysed pixels: the first computes
+/// every pixel's sector, range and height above the plane and learns the frame's local ground (LocalGround, per
+/// sector along the range) and its disparity noise on the ground (groundNoisePx()); the second votes with heights
+/// above the local ground. A positive vote must also rise heightNoiseFactor times the height noise at its range
+/// (h r e / (fx B)), a negative one must be dropNoiseFactor times the noise below the ground. A negative cluster
+/// stands only with evidence a matcher's error on a road cannot give: its votes are at least minDropShare of its
+/// votes and the ground votes at its ranges (the ground ends), ground is seen within rimWindowFraction in front of
+/// it (the near rim), a neighbouring sector has one at a range that follows (keepContinuousDrops), and no positive
+/// cluster of the sector or its neighbours lies where its pixels are (explainedByObstacle: the matcher spreads an
+/// obstacle's disparity down over the ground in front of it). The row profile (plane residuals) needs a far rim
+/// above the wall and dropProfileMinLabels negative labels. A drop seen without this evidence makes its sector
+/// Unknown, never Clear (Cluster::suspect). maxRangeM follows from the rig when 0.
+///
 /// Thread-safety: thread-bound (build() writes the internal buffers). RT-safe: build() yes (no allocation, no
 /// exception); create() no.
 
