@@ -7,9 +7,15 @@ rm -rf "$work" && mkdir -p "$work"
 if pgrep -x iox-roudi >/dev/null; then echo "another iox-roudi runs: this test needs its own"; exit 1; fi
 "$tool" sim --course default --frames 6 --out "$work/drive.ugvrec" >/dev/null || exit 1
 start_roudi() {
+    # A RouDi killed with -9 leaves its socket file: wait for the new RouDi's own (another inode), not the stale one.
+    local stale
+    stale=$(stat -c %i /tmp/roudi 2>/dev/null || echo none)
     iox-roudi -c "$config" -l warning >>"$work/roudi.log" 2>&1 &
     roudi=$!
-    for _ in $(seq 50); do [ -S /tmp/roudi ] && sleep 0.3 && return; sleep 0.1; done
+    for _ in $(seq 100); do
+        [ -S /tmp/roudi ] && [ "$(stat -c %i /tmp/roudi 2>/dev/null)" != "$stale" ] && sleep 0.3 && return
+        sleep 0.1
+    done
 }
 trap 'kill $roudi 2>/dev/null; wait $roudi 2>/dev/null' EXIT # TERM: RouDi cleans its shared memory up
 start_roudi
