@@ -699,7 +699,9 @@ float SectorBuilder::groundNoise(std::size_t pointCount) noexcept
             continue;
         }
         const float residual = std::abs(static_cast<float>(p.d16) / kDisparityScale * dz) / groundHeight_;
-        const auto bin = std::min(noiseHistogram_.size() - 1, static_cast<std::size_t>(residual * kBinsPerPx));
+        const float scaled = residual * kBinsPerPx; // NaN or huge (a degenerate plane): the last bin
+        const std::size_t last = noiseHistogram_.size() - 1;
+        const std::size_t bin = scaled < static_cast<float>(last) ? static_cast<std::size_t>(scaled) : last;
         ++noiseHistogram_[bin];
         ++total;
     }
