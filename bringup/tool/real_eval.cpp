@@ -500,8 +500,14 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             baseline =
                 sectorsFromTruth(sectorTruth(*baseDisparity, firstRow, *baseRoad, projection, ours, denseRules), ours);
         } else {
-            baseline = ours;
-            initSectors(baseline, ours.count, ours.sectors[static_cast<std::size_t>(ours.count - 1)].bearingMaxDeg * 2);
+            baseline = ours; // the same layout, nothing known: no road, no sectors
+            for (int k = 0; k < baseline.count; ++k) {
+                Sector& sector = baseline.sectors[static_cast<std::size_t>(k)];
+                const Sector blank;
+                sector.state = blank.state;
+                sector.kind = blank.kind;
+                sector.rangeM = blank.rangeM;
+            }
         }
         bool truthHasDrop = false;
         for (const SectorTruth& t : truth) {

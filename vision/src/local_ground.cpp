@@ -46,7 +46,7 @@ void LocalGround::add(int s, float rangeM, float z) noexcept
     count = count == std::numeric_limits<std::uint16_t>::max() ? count : static_cast<std::uint16_t>(count + 1);
 }
 
-bool LocalGround::mode(int s, int bin, float& z, float& weight) const noexcept
+bool LocalGround::mode(int s, int bin, float& z) const noexcept
 {
     const std::uint16_t* h =
         &histogram_[(static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_) + static_cast<std::size_t>(bin)) *
@@ -73,7 +73,6 @@ bool LocalGround::mode(int s, int bin, float& z, float& weight) const noexcept
         weighted += static_cast<double>(h[i]) * (i - heightBins_ / 2) * kHeightBinM;
     }
     z = static_cast<float>(weighted / sum);
-    weight = static_cast<float>(bestSum);
     return true;
 }
 
@@ -86,8 +85,7 @@ void LocalGround::fitSector(int s) noexcept
     std::array<bool, kMaxBins> have{};
     const int n = std::min(bins_, kMaxBins);
     for (int b = 0; b < n; ++b) {
-        float weight = 0.0F;
-        have[static_cast<std::size_t>(b)] = mode(s, b, modes[static_cast<std::size_t>(b)], weight);
+        have[static_cast<std::size_t>(b)] = mode(s, b, modes[static_cast<std::size_t>(b)]);
     }
     // From the vehicle outwards: the ground is the surface connected to the nearest ground seen. A bin whose
     // filtered mode follows the extrapolation (within stepM plus maxSlope over one bin) is ground and moves the

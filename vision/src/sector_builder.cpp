@@ -260,7 +260,7 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
     };
     const auto minPixels = static_cast<std::uint32_t>(config_.dropProfileMinPixels);
     // The threshold: dropProfileResidualPx, or the spread of this frame's row means over the far rows (1.4826 x
-    // their median absolute value: the rows are residuals from the local ground, centred on 0) times the noise
+    // their median absolute value: the far rows' residuals from the plane, centred on 0) times the noise
     // factor, whichever is larger.
     std::array<float, kMaxProfileRows> spread{};
     int spreadCount = 0;
@@ -459,6 +459,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     const auto collect = [&](int s, int v, float range, float z, int d16, const std::uint8_t* label, int u) noexcept {
         points_[pointCount++] = PixelPoint{range,
                                            z,
+                                           0.0F,
                                            static_cast<std::int16_t>(s),
                                            static_cast<std::int16_t>(v),
                                            static_cast<std::int16_t>(d16),
@@ -552,13 +553,17 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     if (config_.useLocalGround) {
         localGround_.fit();
     }
+    for (std::size_t i = 0; i < pointCount; ++i) {
+        PixelPoint& p = points_[i];
+        p.zLocal = p.z - localGround_.at(p.sector, p.rangeM);
+    }
     disparityNoisePx_ = groundNoise(pointCount);
     heightNoisePerM = config_.heightNoiseFactor * disparityNoisePx_ * groundHeight /
                       static_cast<float>(projection_.fx * projection_.baselineM);
     dropResidualPx = config_.dropNoiseFactor * disparityNoisePx_;
     for (std::size_t i = 0; i < pointCount; ++i) {
         const PixelPoint& p = points_[i];
-        vote(p.sector, p.row, p.rangeM, p.z - localGround_.at(p.sector, p.rangeM), p.z, p.d16, p.label);
+        vote(p.sector, p.row, p.rangeM, p.zLocal, p.z, p.d16, p.label);
     }
 
     initSectors(sectors_, config_.sectorCount, hfovDeg_);
@@ -694,7 +699,7 @@ float SectorBuilder::groundNoise(std::size_t pointCount) noexcept
     std::uint32_t total = 0;
     for (std::size_t i = 0; i < pointCount; ++i) {
         const PixelPoint& p = points_[i];
-        const float dz = p.z - localGround_.at(p.sector, p.rangeM);
+        const float dz = p.zLocal;
         if (!(std::abs(dz) < config_.localGround.bandM)) {
             continue;
         }

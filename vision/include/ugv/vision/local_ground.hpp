@@ -49,7 +49,7 @@ public:
 
 private:
     static constexpr float kHeightBinM = 0.01F;
-    [[nodiscard]] bool mode(int s, int bin, float& z, float& weight) const noexcept;
+    [[nodiscard]] bool mode(int s, int bin, float& z) const noexcept;
     void fitSector(int s) noexcept;
     /// The median of bin b's mode and those of the nearest bins with one on each side (at most two away).
     static bool filteredMode(const float* modes, const bool* have, int n, int b, float& z) noexcept;

@@ -250,7 +250,8 @@ private:
     /// A pixel's geometry, kept from the first pass (points and the local ground) for the second (votes).
     struct PixelPoint {
         float rangeM;
-        float z; ///< [m] above the plane
+        float z;      ///< [m] above the plane
+        float zLocal; ///< [m] above the local ground (set once the local ground is fitted)
         std::int16_t sector;
         std::int16_t row; ///< analysed row index
         std::int16_t d16;
