@@ -146,6 +146,14 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropEdgeSectors = -1; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.closeGapM = -0.1F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.closeGapM = NAN; }));
+    // The local ground and the drop evidence.
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.localGround.binM = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.localGround.minPoints = 0; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropShare = 1.5F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minRimVotes = -1; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropNoiseFactor = NAN; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.maxRangeDisparityPx = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.maxRangeM = 0.01F; })); // not above the range bin
 }
 
 TEST(SectorBuilder, FlatGroundIsClearEverywhere)
