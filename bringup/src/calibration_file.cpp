@@ -2,10 +2,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <sstream>
 #include <utility>
 
 #include <opencv2/core.hpp>
+
+#include "ugv/bringup/yaml_guard.hpp"
 
 namespace ugv::bringup {
 namespace {
@@ -13,6 +16,9 @@ namespace {
 using vision::StereoCalibration;
 
 constexpr const char* kRecalibrate = "re-run 'ugvsense calibrate' to write a new calibration file";
+/// A calibration is about 3 KB and 3 levels deep (a key, an opencv-matrix, its data list). OpenCV 4.6's reader has no
+/// nesting limit (a deep file overflows the stack) and wraps integers modulo 2^32: the text is checked first.
+constexpr YamlLimits kCalibrationLimits{kMaxCalibrationBytes, 8, true};
 
 std::string numberText(double value)
 {
@@ -110,15 +116,44 @@ public:
         return m->reshape(1, 1);
     }
 
-    Result<void, Error> positiveFocal(const std::string& key, const cv::Mat& m) const
+    Result<void, Error> plausibleFocal(const std::string& key, const cv::Mat& m) const
     {
         const double fx = m.at<double>(0, 0);
         const double fy = m.at<double>(1, 1);
-        if (fx <= 0.0 || fy <= 0.0) {
-            return Unexpected(error(
-                key, "focal length fx " + numberText(fx) + ", fy " + numberText(fy) + " not positive", kRecalibrate));
+        const auto plausible = [](double f) { return f >= kMinFocalPx && f <= kMaxFocalPx; };
+        if (!plausible(fx) || !plausible(fy)) {
+            return Unexpected(error(key,
+                                    "focal length fx " + numberText(fx) + ", fy " + numberText(fy) + " not in [" +
+                                        numberText(kMinFocalPx) + ", " + numberText(kMaxFocalPx) + "] px",
+                                    kRecalibrate));
         }
         return {};
+    }
+
+    /// A rotation: orthonormal with determinant +1 (to 1e-3).
+    Result<void, Error> rotation(const std::string& key, const cv::Mat& m) const
+    {
+        if (cv::norm(m.t() * m, cv::Mat::eye(3, 3, CV_64F), cv::NORM_INF) > 1e-3 ||
+            std::abs(cv::determinant(m) - 1.0) > 1e-3) {
+            return Unexpected(error(key, "not a rotation matrix (R^T R != I or det != 1)", kRecalibrate));
+        }
+        return {};
+    }
+
+    /// An integer key (OpenCV writes them without a decimal point) within [min, max].
+    Result<int, Error> integerIn(const std::string& key, int min, int max, const std::string& fix) const
+    {
+        auto value = number(key, root_);
+        if (!value) {
+            return Unexpected(value.error());
+        }
+        if (!root_[key].isInt() || *value < min || *value > max) {
+            return Unexpected(error(key,
+                                    "value " + numberText(*value) + " is not an integer in [" + std::to_string(min) +
+                                        ", " + std::to_string(max) + "]",
+                                    fix));
+        }
+        return static_cast<int>(*value);
     }
 
     [[nodiscard]] const cv::FileNode& root() const { return root_; }
@@ -135,15 +170,18 @@ private:
     }                                                                                                                  \
     auto var = std::move(var##Result).value()
 
-const std::string kBaselineFix = "baseline_m must be in (0, 5] metres";
+const std::string kBaselineFix =
+    "the baseline must be in [" + numberText(kMinBaselineM) + ", " + numberText(kMaxBaselineM) + "] metres";
+const std::string kFocalFix =
+    "a focal length must be in [" + numberText(kMinFocalPx) + ", " + numberText(kMaxFocalPx) + "] pixels";
 
 Result<StereoCalibration, Error> readRectified(const Reader& in, cv::Size size)
 {
-    UGV_TRY_ASSIGN(fx, in.numberIn("fx", 0.0, 1e6, true, in.root(), "fx must be a positive focal length in pixels"));
-    UGV_TRY_ASSIGN(fy, in.numberIn("fy", 0.0, 1e6, true, in.root(), "fy must be a positive focal length in pixels"));
+    UGV_TRY_ASSIGN(fx, in.numberIn("fx", kMinFocalPx, kMaxFocalPx, false, in.root(), kFocalFix));
+    UGV_TRY_ASSIGN(fy, in.numberIn("fy", kMinFocalPx, kMaxFocalPx, false, in.root(), kFocalFix));
     UGV_TRY_ASSIGN(cx, in.numberIn("cx", 0.0, size.width, false, in.root(), "cx must lie inside the image width"));
     UGV_TRY_ASSIGN(cy, in.numberIn("cy", 0.0, size.height, false, in.root(), "cy must lie inside the image height"));
-    UGV_TRY_ASSIGN(baseline, in.numberIn("baseline_m", 0.0, kMaxBaselineM, true, in.root(), kBaselineFix));
+    UGV_TRY_ASSIGN(baseline, in.numberIn("baseline_m", kMinBaselineM, kMaxBaselineM, false, in.root(), kBaselineFix));
     return vision::makeRectifiedCalibration(size, fx, fy, cx, cy, baseline);
 }
 
@@ -164,14 +202,29 @@ Result<StereoCalibration, Error> readFull(const Reader& in, cv::Size size)
     UGV_TRY_ASSIGN(p1, in.matrix("P1", 3, 4));
     UGV_TRY_ASSIGN(p2, in.matrix("P2", 3, 4));
     UGV_TRY_ASSIGN(q, in.matrix("Q", 4, 4));
-    for (const auto& [key, m] : {std::pair<const char*, const cv::Mat*>{"K1", &k1}, {"K2", &k2}, {"P1", &p1}}) {
-        if (auto focal = in.positiveFocal(key, *m); !focal) {
+    for (const auto& [key, m] :
+         {std::pair<const char*, const cv::Mat*>{"K1", &k1}, {"K2", &k2}, {"P1", &p1}, {"P2", &p2}}) {
+        if (auto focal = in.plausibleFocal(key, *m); !focal) {
             return Unexpected(focal.error());
         }
     }
+    for (const auto& [key, m] : {std::pair<const char*, const cv::Mat*>{"R", &r}, {"R1", &r1}, {"R2", &r2}}) {
+        if (auto rotation = in.rotation(key, *m); !rotation) {
+            return Unexpected(rotation.error());
+        }
+    }
     const double baseline = cv::norm(t);
-    if (!(baseline > 0.0) || baseline > kMaxBaselineM) {
+    if (!(baseline >= kMinBaselineM) || baseline > kMaxBaselineM) {
         return Unexpected(in.error("T", "baseline |T| = " + numberText(baseline) + " m", kBaselineFix));
+    }
+    // The rectified pair's baseline: P2(0,3) = -fx * baseline for the right camera of a horizontal pair (what the
+    // detector reads). Zero or positive: the cameras are swapped or P2 is not this T's.
+    const double rectifiedBaseline = -p2.at<double>(0, 3) / p2.at<double>(0, 0);
+    if (!(rectifiedBaseline >= kMinBaselineM) || rectifiedBaseline > kMaxBaselineM) {
+        return Unexpected(in.error("P2",
+                                   "rectified baseline -P2(0,3)/P2(0,0) = " + numberText(rectifiedBaseline) +
+                                       " m (zero or negative: left and right swapped, or P2 is not this rig's)",
+                                   kBaselineFix + "; " + kRecalibrate));
     }
     c.K1 = k1;
     c.D1 = d1;
@@ -207,10 +260,11 @@ Result<StereoCalibration, Error> readFile(const Reader& in)
         return Unexpected(in.error("schema_version", "unsupported schema_version " + numberText(version),
                                    "this build reads schema_version 1; " + std::string(kRecalibrate)));
     }
-    const std::string sizeFix = "image size must be in [1, 16384] pixels";
-    UGV_TRY_ASSIGN(width, in.numberIn("image_width", 0.0, kMaxImageSide, true, in.root(), sizeFix));
-    UGV_TRY_ASSIGN(height, in.numberIn("image_height", 0.0, kMaxImageSide, true, in.root(), sizeFix));
-    const cv::Size size(static_cast<int>(width), static_cast<int>(height));
+    const std::string sizeFix = "image size must be an integer in [" + std::to_string(kMinImageSide) + ", " +
+                                std::to_string(kMaxImageSide) + "] pixels";
+    UGV_TRY_ASSIGN(width, in.integerIn("image_width", kMinImageSide, kMaxImageSide, sizeFix));
+    UGV_TRY_ASSIGN(height, in.integerIn("image_height", kMinImageSide, kMaxImageSide, sizeFix));
+    const cv::Size size(width, height);
     bool rectified = false;
     if (!in.root()["rectified"].empty()) {
         UGV_TRY_ASSIGN(flag, in.number("rectified"));
@@ -227,8 +281,9 @@ Result<StereoCalibration, Error> readFile(const Reader& in)
             return Unexpected(
                 in.error("mount", "not a map", "write mount: {height_m: .., pitch_deg: .., roll_deg: ..}"));
         }
-        UGV_TRY_ASSIGN(h, in.numberIn("height_m", 0.0, kMaxMountHeightM, true, mountNode,
-                                      "mount.height_m must be in (0, 10] metres"));
+        UGV_TRY_ASSIGN(h, in.numberIn("height_m", kMinMountHeightM, kMaxMountHeightM, false, mountNode,
+                                      "mount.height_m must be in [" + numberText(kMinMountHeightM) + ", " +
+                                          numberText(kMaxMountHeightM) + "] metres"));
         UGV_TRY_ASSIGN(p, in.numberIn("pitch_deg", -kMaxMountPitchDeg, kMaxMountPitchDeg, false, mountNode,
                                       "mount.pitch_deg must be in [-45, 45] degrees"));
         UGV_TRY_ASSIGN(r, in.numberIn("roll_deg", -kMaxMountRollDeg, kMaxMountRollDeg, false, mountNode,
@@ -292,6 +347,61 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
     return {};
 }
 
+namespace {
+
+/// The first key given twice in `map` or the maps below it ("mount.height_m"), else empty. OpenCV keeps both.
+std::string duplicateKey(const cv::FileNode& map, const std::string& prefix)
+{
+    std::set<std::string> seen;
+    for (auto it = map.begin(); it != map.end(); ++it) {
+        const cv::FileNode node = *it;
+        const std::string name = prefix + node.name();
+        if (!seen.insert(name).second) {
+            return name;
+        }
+        if (node.isMap()) {
+            if (std::string inner = duplicateKey(node, name + "."); !inner.empty()) {
+                return inner;
+            }
+        }
+    }
+    return {};
+}
+
+/// OpenCV 4.6 puts "(LINE): what" of a parse error in the function name and the function in the message.
+Error parseError(const cv::Exception& e, const std::string& where, const std::string& fix)
+{
+    const std::string& detail = e.func;
+    const auto close = detail.find("): ");
+    if (e.code == cv::Error::StsParseError && !detail.empty() && detail.front() == '(' && close != std::string::npos) {
+        return Error{where + ":" + detail.substr(1, close - 1), "not valid YAML: " + detail.substr(close + 3), fix};
+    }
+    return Error{where, std::string("cannot be read: ") + e.what(), fix};
+}
+
+Result<vision::StereoCalibration, Error> parseText(const std::string& text, const std::string& where,
+                                                   const std::string& fix)
+{
+    if (auto bounded = checkYamlText(text, where, kCalibrationLimits); !bounded) {
+        return Unexpected(bounded.error());
+    }
+    try {
+        const cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+        if (!fs.isOpened() || !fs.root().isMap()) {
+            return Unexpected(Error{where, "not a calibration (no map of keys)", fix});
+        }
+        if (const std::string twice = duplicateKey(fs.root(), ""); !twice.empty()) {
+            return Unexpected(Error{where + ": " + twice, "the key is given twice", "keep one of them"});
+        }
+        const Reader reader(fs.root(), where);
+        return readFile(reader);
+    } catch (const cv::Exception& e) {
+        return Unexpected(parseError(e, where, fix));
+    }
+}
+
+} // namespace
+
 Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path)
 {
     std::error_code ec;
@@ -299,32 +409,16 @@ Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path
         return Unexpected(
             Error{path, "calibration file not found", "give the path of a file written by 'ugvsense calibrate'"});
     }
-    try {
-        const cv::FileStorage fs(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
-        if (!fs.isOpened()) {
-            return Unexpected(Error{path, "cannot open or parse the calibration file", kRecalibrate});
-        }
-        const Reader reader(fs.root(), path);
-        return readFile(reader);
-    } catch (const cv::Exception& e) {
-        return Unexpected(Error{path, std::string("corrupt or truncated YAML: ") + e.err,
-                                "repair the file or " + std::string(kRecalibrate)});
+    auto text = readTextFile(path, kCalibrationLimits.maxBytes, kRecalibrate);
+    if (!text) {
+        return Unexpected(text.error());
     }
+    return parseText(*text, path, "repair the file or " + std::string(kRecalibrate));
 }
 
 Result<vision::StereoCalibration, Error> parseCalibration(const std::string& text, const std::string& where)
 {
-    try {
-        const cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
-        if (!fs.isOpened()) {
-            return Unexpected(Error{where, "cannot parse the calibration", kRecalibrate});
-        }
-        const Reader reader(fs.root(), where);
-        return readFile(reader);
-    } catch (const cv::Exception& e) {
-        return Unexpected(Error{where, std::string("corrupt or truncated YAML: ") + e.err,
-                                "repair the calibration or " + std::string(kRecalibrate)});
-    }
+    return parseText(text, where, "repair the calibration or " + std::string(kRecalibrate));
 }
 
 } // namespace ugv::bringup

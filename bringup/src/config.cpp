@@ -5,14 +5,20 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <functional>
+#include <map>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
+#include "ugv/bringup/yaml_guard.hpp"
+#include "ugv/ipc/dds_bus.hpp"
+
 namespace ugv::bringup {
 namespace {
+
+/// The config is about 100 lines and 3 levels deep; more is not a config (yaml-cpp itself stops at 500 levels).
+constexpr YamlLimits kConfigLimits{256U * 1024U, 16, false};
 
 enum class Kind { Int, Double, Text, Path, Choice };
 
@@ -141,6 +147,8 @@ std::vector<KeySpec> baseKeys()
                   "obstacles closer than this are blue, beyond green [m]", UGV_REF(obstacles.cautionDistanceM)),
         numberKey("obstacles.min_height_m", Kind::Double, 0.02, 2, "positive obstacles taller than this count [m]",
                   UGV_REF(obstacles.minHeightM)),
+        numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
+                  UGV_REF(obstacles.minDepthM)),
         choiceKey<OverloadChoice>(
             "overload.policy",
             "when a frame would miss its deadline: degrade (ground-plane-only sectors, flagged) or drop (queue of one)",
@@ -148,8 +156,6 @@ std::vector<KeySpec> baseKeys()
         numberKey("overload.deadline_factor", Kind::Double, 0.1, 10,
                   "deadline = this many camera periods from exposure to published sectors",
                   UGV_REF(overload.deadlineFactor)),
-        numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
-                  UGV_REF(obstacles.minDepthM)),
         numberKey("handover.spin_us", Kind::Int, 0, 10000,
                   "the vision task polls the frame ring this long before and after each frame is due, instead of "
                   "sleeping (faster wake-up across cores, about this much CPU per frame) [us]; 0 = off",
@@ -332,10 +338,16 @@ public:
 
     void walk(const YAML::Node& map, const std::string& prefix)
     {
+        std::map<std::string, int> seen; // name -> line, for duplicates (yaml-cpp keeps both)
         for (const auto& item : map) {
             const std::string name = item.first.as<std::string>();
             const std::string path = prefix.empty() ? name : prefix + "." + name;
             const YAML::Node& value = item.second;
+            if (const auto [first, fresh] = seen.emplace(name, item.first.Mark().line + 1); !fresh) {
+                error(item.first, path, "is given twice (first at line " + std::to_string(first->second) + ")",
+                      "keep one of them");
+                continue;
+            }
             if (const KeySpec* key = findKey(path)) {
                 setLeaf(*key, value);
             } else if (isSection(path)) {
@@ -402,15 +414,39 @@ public:
         if (config_.correlator.enabled && !config_.dds.enabled) {
             error(at("dds"), "dds.enabled", "is false but the correlator needs the bus", "set dds.enabled: true");
         }
-        for (const char c : config_.dds.rosNamespace) {
-            if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/')) {
-                error(at("dds"), "dds.ros_namespace", "'" + config_.dds.rosNamespace + "' is not a ROS 2 name",
-                      "letters, digits and _ only, e.g. ugv1");
-                break;
-            }
-        }
+        checkNames(at);
         if (config_.calibrationPath.empty()) {
             error(root, "calibration", "is empty", "set it to the file written by 'ugvsense calibrate'");
+        }
+    }
+
+    /// Names the bus carries (bounded at ipc::dds::kMaxNameLength there) and the discovery server list, as the
+    /// service's ipc::dds::validate() reads them, but with the key and line.
+    template <class At>
+    void checkNames(const At& at)
+    {
+        const std::string& id = config_.vehicleId;
+        const bool printable =
+            std::all_of(id.begin(), id.end(), [](char c) { return std::isprint(static_cast<unsigned char>(c)); });
+        if (id.empty() || id.size() > ipc::dds::kMaxNameLength || !printable) {
+            error(at("vehicle_id"), "vehicle_id",
+                  "'" + (printable ? id : std::string("(unprintable)")) + "' (" + std::to_string(id.size()) +
+                      " characters) is not a vehicle name",
+                  "give 1 to " + std::to_string(ipc::dds::kMaxNameLength) + " printable characters, e.g. ugv-1");
+        }
+        const std::string& ns = config_.dds.rosNamespace;
+        const bool nameChars =
+            ns.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_/") ==
+            std::string::npos;
+        if (!ns.empty() && (!nameChars || ns.front() == '/' || ns.back() == '/' || ns.find("//") != std::string::npos ||
+                            ns.size() > ipc::dds::kMaxNameLength)) {
+            error(at("dds"), "dds.ros_namespace", "'" + ns + "' is not a ROS 2 namespace",
+                  "letters, digits, _ and inner single /, at most " + std::to_string(ipc::dds::kMaxNameLength) +
+                      " characters, e.g. ugv1 or team/ugv1");
+        }
+        if (auto servers = ipc::dds::checkDiscoveryServers(config_.dds.discoveryServer, "dds.discovery_server");
+            !servers) {
+            error(at("dds"), "dds.discovery_server", servers.error().what, servers.error().fix);
         }
     }
 
@@ -478,6 +514,9 @@ private:
 Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, const std::string& sourceName,
                                                 const std::string& baseDir)
 {
+    if (auto bounded = checkYamlText(yamlText, sourceName, kConfigLimits); !bounded) {
+        return Unexpected(ConfigErrors{bounded.error()});
+    }
     YAML::Node root;
     try {
         root = YAML::Load(yamlText);
@@ -521,14 +560,12 @@ Result<ServiceConfig, ConfigErrors> loadConfig(const std::string& path)
             ConfigErrors{Error{path, "config file not found or not a regular file",
                                "pass an existing file, e.g. 'ugvsense check-config bringup/config.example.yaml'"}});
     }
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream text;
-    text << in.rdbuf();
-    if (!in) {
-        return Unexpected(ConfigErrors{Error{path, "cannot read the file", "check its permissions"}});
+    auto text = readTextFile(path, kConfigLimits.maxBytes, "pass an existing config file");
+    if (!text) {
+        return Unexpected(ConfigErrors{text.error()});
     }
     const std::string baseDir = std::filesystem::absolute(path, ec).parent_path().string();
-    return parseConfig(text.str(), path, baseDir);
+    return parseConfig(*text, path, baseDir);
 }
 
 std::string formatConfig(const ServiceConfig& config)

@@ -110,13 +110,16 @@ Result<void, Error> validate(const BusConfig& config, const std::string& where)
             return Unexpected(Error{where + " partitions", "an empty partition name", "remove it or name it"});
         }
     }
-    if (!config.discoveryServers.empty()) {
-        rtps::RemoteServerList_t servers;
-        if (auto ok = parseServers(config.discoveryServers, servers, where + " discovery_server"); !ok) {
-            return ok;
-        }
+    return checkDiscoveryServers(config.discoveryServers, where + " discovery_server");
+}
+
+Result<void, Error> checkDiscoveryServers(const std::string& list, const std::string& where)
+{
+    if (list.empty()) {
+        return {};
     }
-    return {};
+    rtps::RemoteServerList_t servers;
+    return parseServers(list, servers, where);
 }
 
 std::string topicName(TopicId id, const BusConfig& config)

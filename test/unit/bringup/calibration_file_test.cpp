@@ -234,7 +234,7 @@ TEST(CalibrationFile, BadBaselineIsNamedWithTheRange)
     const std::string message =
         loadRectifiedText("baseline.yaml", replaced(kRectified, "baseline_m: 0.12", "baseline_m: 0"));
     EXPECT_NE(message.find("baseline.yaml: baseline_m"), std::string::npos) << message;
-    EXPECT_NE(message.find("(0, 5] metres"), std::string::npos) << message;
+    EXPECT_NE(message.find("[0.01, 5] metres"), std::string::npos) << message;
 }
 
 TEST(CalibrationFile, NonPositiveImageSizeIsNamed)
@@ -263,7 +263,7 @@ TEST(CalibrationFile, MountHeightOutOfRangeIsNamed)
     const std::string message = loadRectifiedText(
         "mount-height.yaml", std::string(kRectified) + "mount: { height_m: 12, pitch_deg: 0, roll_deg: 0 }\n");
     EXPECT_NE(message.find("mount-height.yaml: height_m"), std::string::npos) << message;
-    EXPECT_NE(message.find("(0, 10] metres"), std::string::npos) << message;
+    EXPECT_NE(message.find("[0.05, 10] metres"), std::string::npos) << message;
 }
 
 TEST(CalibrationFile, MountPitchAndRollOutOfRangeAreNamed)
@@ -284,3 +284,137 @@ TEST(CalibrationFile, UnwritablePathIsAnError)
 }
 
 } // namespace
+
+// Issue 22: every class of hostile calibration text is refused with the file, line or key, before OpenCV parses it.
+
+constexpr const char* kHeader = "%YAML:1.0\n---\n";
+
+TEST(CalibrationFileHostile, DeepBracketsAreRefusedBeforeOpenCVOverflowsItsStack)
+{
+    constexpr int kLevels = 30000; // 60 KB: under the size limit, so the depth limit must catch it
+    const std::string deep =
+        std::string(kHeader) + "x: " + std::string(kLevels, '[') + std::string(kLevels, ']') + "\n";
+
+    const std::string message = loadRectifiedText("deep-brackets.yaml", deep);
+
+    EXPECT_NE(message.find("deep-brackets.yaml:3: nested deeper than 8 levels"), std::string::npos) << message;
+}
+
+TEST(CalibrationFileHostile, DeepKeyChainIsRefusedWithItsLine)
+{
+    std::string chain;
+    for (int i = 0; i < 20000; ++i) {
+        chain += "x: ";
+    }
+    const std::string message =
+        loadRectifiedText("deep-chain.yaml", std::string(kRectified) + "mount: " + chain + "1\n");
+
+    EXPECT_NE(message.find("deep-chain.yaml:12: nested deeper"), std::string::npos) << message;
+}
+
+TEST(CalibrationFileHostile, OverLongTextIsRefusedBeforeItIsRead)
+{
+    const std::string message = loadRectifiedText(
+        "long.yaml", std::string(kRectified) + "# " + std::string(ugv::bringup::kMaxCalibrationBytes, 'x') + "\n");
+
+    EXPECT_NE(message.find("long.yaml: the file is"), std::string::npos) << message;
+    EXPECT_NE(message.find("more than the 65536"), std::string::npos) << message;
+}
+
+TEST(CalibrationFileHostile, RecordingTextIsCheckedToo)
+{
+    const std::string deep = std::string(kHeader) + "x: " + std::string(30000, '{') + "\n";
+
+    const auto parsed = ugv::bringup::parseCalibration(deep, "rec.ugvrec (its stored calibration)");
+
+    ASSERT_FALSE(parsed.has_value());
+    EXPECT_NE(parsed.error().message().find("rec.ugvrec (its stored calibration):3: nested deeper"), std::string::npos)
+        << parsed.error().message();
+}
+
+TEST(CalibrationFileHostile, IntegerBeyond32BitsIsRefusedNotWrapped)
+{
+    // OpenCV 4.6 reads 4294967536 as 240 (modulo 2^32), inside the image: it would pass the range check.
+    const std::string message = loadRectifiedText("wide.yaml", replaced(kRectified, "cy: 240.", "cy: 4294967536"));
+
+    EXPECT_NE(message.find("wide.yaml:10: integer 4294967536 does not fit in 32 bits"), std::string::npos) << message;
+}
+
+TEST(CalibrationFileHostile, FractionalImageSizeIsRefused)
+{
+    const std::string message =
+        loadRectifiedText("fraction.yaml", replaced(kRectified, "image_width: 640", "image_width: 640.5"));
+
+    EXPECT_NE(message.find("fraction.yaml: image_width: value 640.5 is not an integer in [16, 16384]"),
+              std::string::npos)
+        << message;
+}
+
+TEST(CalibrationFileHostile, TinyFocalBaselineAndMountHeightAreRefused)
+{
+    const std::string fx = loadRectifiedText("tiny-fx.yaml", replaced(kRectified, "fx: 500.", "fx: 1e-300"));
+    EXPECT_NE(fx.find("tiny-fx.yaml: fx: value 1e-300 out of range"), std::string::npos) << fx;
+    const std::string baseline =
+        loadRectifiedText("tiny-baseline.yaml", replaced(kRectified, "baseline_m: 0.12", "baseline_m: 1e-300"));
+    EXPECT_NE(baseline.find("tiny-baseline.yaml: baseline_m: value 1e-300 out of range"), std::string::npos)
+        << baseline;
+    const std::string mount = loadRectifiedText(
+        "tiny-mount.yaml", std::string(kRectified) + "mount: { height_m: 1e-300, pitch_deg: 0, roll_deg: 0 }\n");
+    EXPECT_NE(mount.find("tiny-mount.yaml: height_m: value 1e-300 out of range"), std::string::npos) << mount;
+}
+
+TEST(CalibrationFileHostile, TinyFocalInFullFormIsRefused)
+{
+    const std::string message = loadEditedFull("tiny-focal-full.yaml", "data: [ 540., 0.", "data: [ 1.e-300, 0.");
+    EXPECT_NE(message.find("tiny-focal-full.yaml: K1: focal length fx 1e-300"), std::string::npos) << message;
+}
+
+TEST(CalibrationFileHostile, FullFormWithANonNegativeP2BaselineIsRefused)
+{
+    for (const double sign : {0.0, 1.0}) {
+        StereoCalibration c = makeFull();
+        c.P2.at<double>(0, 3) = sign * std::abs(c.P2.at<double>(0, 3));
+        const auto path = tempPath("p2-baseline.yaml");
+        ASSERT_TRUE(saveCalibration(path.string(), c).has_value());
+
+        const auto loaded = loadCalibration(path.string());
+
+        ASSERT_FALSE(loaded.has_value()) << "P2(0,3) sign " << sign;
+        EXPECT_NE(loaded.error().message().find("p2-baseline.yaml: P2: rectified baseline"), std::string::npos)
+            << loaded.error().message();
+    }
+}
+
+TEST(CalibrationFileHostile, RotationThatIsNoRotationIsRefused)
+{
+    StereoCalibration c = makeFull();
+    c.R1 *= 2.0;
+    const auto path = tempPath("not-rotation.yaml");
+    ASSERT_TRUE(saveCalibration(path.string(), c).has_value());
+
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_FALSE(loaded.has_value());
+    EXPECT_NE(loaded.error().message().find("not-rotation.yaml: R1: not a rotation"), std::string::npos)
+        << loaded.error().message();
+}
+
+TEST(CalibrationFileHostile, DuplicateKeyIsRefused)
+{
+    const std::string top = loadRectifiedText("duplicate.yaml", std::string(kRectified) + "fx: 600.\n");
+    EXPECT_NE(top.find("duplicate.yaml: fx: the key is given twice"), std::string::npos) << top;
+    const std::string inner = loadRectifiedText(
+        "duplicate-mount.yaml",
+        std::string(kRectified) + "mount: { height_m: 0.5, pitch_deg: 0, roll_deg: 0, height_m: 5 }\n");
+    EXPECT_NE(inner.find("duplicate-mount.yaml: mount.height_m: the key is given twice"), std::string::npos) << inner;
+}
+
+TEST(CalibrationFileHostile, SyntaxErrorNamesTheLineNotOpenCVsFunction)
+{
+    const std::string message =
+        loadRectifiedText("syntax.yaml", std::string(kHeader) + "schema_version: 1\na: [1, 2\nb: 3\n");
+
+    EXPECT_NE(message.find("syntax.yaml:5: not valid YAML: "), std::string::npos) << message;
+    EXPECT_EQ(message.find("parseValue"), std::string::npos) << message;
+    EXPECT_EQ(message.find("skipSpaces"), std::string::npos) << message;
+}

@@ -203,6 +203,74 @@ TEST(Config, BinaryGarbageIsAnErrorNotACrash)
     EXPECT_FALSE(result.has_value());
 }
 
+// Issue 22: hostile config text is refused before yaml-cpp reads it (whose own limit said only "bad file").
+TEST(ConfigHostile, DeepNestingIsRefusedWithTheLine)
+{
+    const std::string brackets = std::string(kValidMinimal) + "vehicle_id: " + std::string(40000, '[') + "\n";
+    std::string chain = std::string(kValidMinimal) + "vehicle_id: ";
+    for (int i = 0; i < 40000; ++i) {
+        chain += "x: ";
+    }
+
+    for (const std::string& deep : {brackets, chain + "1\n"}) {
+        const auto errors = parseErrors(deep);
+
+        ASSERT_EQ(errors.size(), 1U);
+        EXPECT_EQ(errors[0].where, "test.yaml:4");
+        EXPECT_NE(errors[0].what.find("nested deeper than 16 levels"), std::string::npos) << errors[0].message();
+    }
+}
+
+TEST(ConfigHostile, OverLongTextIsRefused)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "# " + std::string(300 * 1024, 'x') + "\n");
+
+    ASSERT_EQ(errors.size(), 1U);
+    EXPECT_NE(errors[0].what.find("more than the 262144 a valid file can have"), std::string::npos)
+        << errors[0].message();
+}
+
+TEST(ConfigHostile, NulByteIsRefused)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + std::string("vehicle_id: a\0b\n", 16));
+
+    ASSERT_EQ(errors.size(), 1U);
+    EXPECT_EQ(errors[0].where, "test.yaml:4");
+    EXPECT_NE(errors[0].what.find("NUL byte"), std::string::npos) << errors[0].message();
+}
+
+TEST(ConfigHostile, DuplicateKeyNamesBothLines)
+{
+    const auto top = joined(parseErrors(std::string(kValidMinimal) + "vehicle_id: a\nvehicle_id: b\n"));
+    EXPECT_NE(top.find("test.yaml:5 (vehicle_id): is given twice (first at line 4)"), std::string::npos) << top;
+    const auto inner =
+        joined(parseErrors(std::string(kValidMinimal) + "roi:\n  top_fraction: 0.5\n  top_fraction: 0.6\n"));
+    EXPECT_NE(inner.find("test.yaml:6 (roi.top_fraction): is given twice (first at line 5)"), std::string::npos)
+        << inner;
+}
+
+TEST(ConfigHostile, BusNamesAndDiscoveryServerAreChecked)
+{
+    const auto longId = joined(parseErrors(std::string(kValidMinimal) + "vehicle_id: " + std::string(200, 'v') + "\n"));
+    EXPECT_NE(longId.find("(vehicle_id): '"), std::string::npos) << longId;
+    EXPECT_NE(longId.find("(200 characters) is not a vehicle name (fix: give 1 to 64"), std::string::npos) << longId;
+
+    for (const char* ns : {"/abc/", "abc/", "a//b", "a-b"}) {
+        const auto bad = joined(parseErrors(std::string(kValidMinimal) + "dds:\n  ros_namespace: " + ns + "\n"));
+        EXPECT_NE(bad.find("(dds.ros_namespace): '" + std::string(ns) + "' is not a ROS 2 namespace"),
+                  std::string::npos)
+            << bad;
+    }
+    const auto server = joined(parseErrors(std::string(kValidMinimal) + "dds:\n  discovery_server: not-an-address\n"));
+    EXPECT_NE(server.find("(dds.discovery_server): bad discovery server list 'not-an-address'"), std::string::npos)
+        << server;
+
+    const auto good = parseConfig(std::string(kValidMinimal) +
+                                      "dds:\n  ros_namespace: team/ugv1\n  discovery_server: 192.168.1.10:11811\n",
+                                  "test.yaml", "/etc/ugvsense");
+    EXPECT_TRUE(good.has_value()) << joined(good.error());
+}
+
 TEST(Config, LoadConfigReportsMissingFile)
 {
     const auto result = loadConfig("/nonexistent/ugvsense.yaml");

@@ -71,6 +71,10 @@ struct BusConfig {
 /// Checks the ranges and the discovery server list (before any DDS entity exists).
 Result<void, Error> validate(const BusConfig& config, const std::string& where);
 
+/// Checks a discovery server list "IP:PORT[;IP:PORT...]" as Fast DDS reads it (empty is valid: multicast).
+/// @return an error naming `where` and the list
+Result<void, Error> checkDiscoveryServers(const std::string& list, const std::string& where);
+
 enum class TopicId : std::uint8_t {
     Sectors,
     Health,

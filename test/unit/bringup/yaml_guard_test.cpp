@@ -1,0 +1,67 @@
+#include "ugv/bringup/yaml_guard.hpp"
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace ugv::bringup {
+namespace {
+
+constexpr YamlLimits kLimits{1024, 4, true};
+
+std::string errorOf(const std::string& text)
+{
+    const auto checked = checkYamlText(text, "t.yaml", kLimits);
+    return checked ? std::string() : checked.error().message();
+}
+
+TEST(YamlGuard, AWrittenCalibrationIsWithinTheLimits)
+{
+    constexpr const char* kCalibration = "%YAML:1.0\n---\nschema_version: 1\nK1: !!opencv-matrix\n   rows: 3\n"
+                                         "   cols: 3\n   dt: d\n   data: [ 540., 0., 322.,\n       0., 541., 238., 0., "
+                                         "0., 1. ]\nmount:\n   height_m: 0.5\n   pitch_deg: -2.5\n"
+                                         "note: \"[[[[ x: y: z: 99999999999 # not counted in quotes\"\n";
+
+    EXPECT_EQ(errorOf(kCalibration), "");
+}
+
+TEST(YamlGuard, EachKindOfNestingCounts)
+{
+    EXPECT_NE(errorOf("a: [[[[1]]]]\n").find("t.yaml:1: nested deeper than 4"), std::string::npos);
+    EXPECT_NE(errorOf("a: {b: {c: {d: 1}}}\n").find("t.yaml:1: nested deeper"), std::string::npos);
+    EXPECT_NE(errorOf("a: b: c: d: e: 1\n").find("t.yaml:1: nested deeper"), std::string::npos);
+    EXPECT_NE(errorOf("- - - - - 1\n").find("t.yaml:1: nested deeper"), std::string::npos);
+    EXPECT_NE(errorOf("a:\n b:\n  c:\n   d: 1\n").find("t.yaml:4: nested deeper"), std::string::npos);
+    EXPECT_EQ(errorOf("a: [[1]]\nb: [[2]]\nc:\n d: 1\n"), ""); // closed levels do not add up
+}
+
+TEST(YamlGuard, IntegersBeyondInt32AreRefusedOthersPass)
+{
+    EXPECT_EQ(errorOf("a: 2147483647\nb: -2147483648\nc: 1e300\nd: 4294967536.5\ne: '4294967536'\nf: v4294967536\n"),
+              "");
+    EXPECT_NE(errorOf("a: 2147483648\n").find("t.yaml:1: integer 2147483648 does not fit in 32 bits"),
+              std::string::npos);
+    EXPECT_NE(errorOf("a: -2147483649\n").find("integer -2147483649"), std::string::npos);
+    EXPECT_NE(errorOf("a: [1, 00000000004294967536]\n").find("integer 00000000004294967536"), std::string::npos);
+}
+
+TEST(YamlGuard, SizeAndNulAreRefused)
+{
+    EXPECT_NE(errorOf(std::string(1025, '#')).find("t.yaml: the text is 1025 bytes, more than the 1024"),
+              std::string::npos);
+    EXPECT_NE(errorOf(std::string("a: 1\nb: \0\n", 10)).find("t.yaml:2: holds a NUL byte"), std::string::npos);
+}
+
+TEST(YamlGuard, ReadTextFileRefusesAnOverLongFileBeforeReadingIt)
+{
+    const auto missing = readTextFile("/nonexistent/x.yaml", 10, "give a file");
+    ASSERT_FALSE(missing.has_value());
+    EXPECT_EQ(missing.error().where, "/nonexistent/x.yaml");
+
+    const auto large = readTextFile("/proc/self/exe", 10, "give a file");
+    ASSERT_FALSE(large.has_value());
+    EXPECT_NE(large.error().what.find("more than the 10"), std::string::npos) << large.error().message();
+}
+
+} // namespace
+} // namespace ugv::bringup
