@@ -82,6 +82,19 @@ const char* stageName(Stage stage) noexcept
     return "?";
 }
 
+Result<void, Error> checkCameraSize(const hal::StereoCamera& camera, const vision::StereoCalibration& calibration)
+{
+    if (camera.width() != calibration.imageSize.width || camera.height() != calibration.imageSize.height) {
+        return Unexpected(Error{camera.description(),
+                                "delivers " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()) +
+                                    " frames but the calibration is for " +
+                                    std::to_string(calibration.imageSize.width) + "x" +
+                                    std::to_string(calibration.imageSize.height),
+                                "use the calibration of this camera at this resolution"});
+    }
+    return {};
+}
+
 Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceConfig& config,
                                                         const vision::StereoCalibration& calibration,
                                                         std::unique_ptr<hal::StereoCamera> camera,
@@ -90,13 +103,8 @@ Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceCo
     if (!camera) {
         return Unexpected(Error{"ugvsensed", "no camera", "a bug: pass the opened camera"});
     }
-    if (camera->width() != calibration.imageSize.width || camera->height() != calibration.imageSize.height) {
-        return Unexpected(Error{camera->description(),
-                                "delivers " + std::to_string(camera->width()) + "x" + std::to_string(camera->height()) +
-                                    " frames but the calibration is for " +
-                                    std::to_string(calibration.imageSize.width) + "x" +
-                                    std::to_string(calibration.imageSize.height),
-                                "use the calibration of this camera at this resolution"});
+    if (auto sized = checkCameraSize(*camera, calibration); !sized) {
+        return Unexpected(sized.error());
     }
     if (!(options.deadlineFactor > 0.0) || options.stallPeriods < 1 || options.warmupFrames < 0) {
         return Unexpected(Error{"ugvsensed", "deadline factor, stall periods or warm-up out of range",

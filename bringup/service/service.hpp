@@ -147,6 +147,10 @@ struct ServiceReport {
     std::string threads; ///< rt::formatReport of the tasks
 };
 
+/// The check Service::create makes first (and `ugvsense check-config`): the camera delivers frames of the
+/// calibration's size. The error names the camera (or recording) and both sizes.
+Result<void, Error> checkCameraSize(const hal::StereoCamera& camera, const vision::StereoCalibration& calibration);
+
 class Service {
 public:
     /// Builds the pipeline and the rings and creates the threads (held at their start gate). The iceoryx

@@ -4,9 +4,12 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "dds_bridge.hpp"
+#include "service.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/config.hpp"
 #include "ugv/hal/replay_camera.hpp"
+#include "ugv/ipc/dds_bus.hpp"
 
 namespace ugv::tool {
 
@@ -44,6 +47,14 @@ int runCheckConfig(int argc, char** argv)
         return 1;
     }
     std::cout << bringup::formatConfig(config.value());
+    // The service's own checks at start (runner.cpp, service.cpp), in the same order.
+    if (config->dds.enabled) {
+        if (auto bus = ipc::dds::validate(service::busConfig(*config), path + " dds"); !bus) {
+            std::cerr << "error: " << bus.error().message() << '\n'
+                      << path << ": the bus settings are refused; the service would refuse to start\n";
+            return 1;
+        }
+    }
     if (!args.has("no-calibration") && config->camera.backend == bringup::CameraBackend::Replay) {
         // The service replays with the calibration stored in the recording (runner.cpp), not the config's.
         auto replay = hal::ReplayCamera::open(config->camera.replayPath, hal::ReplayOptions{});
@@ -58,6 +69,12 @@ int runCheckConfig(int argc, char** argv)
         if (!calibration) {
             std::cerr << "error: " << calibration.error().message() << '\n'
                       << path << ": the recording's calibration cannot be used; the service would refuse to start\n";
+            return 1;
+        }
+        if (auto sized = service::checkCameraSize(**replay, *calibration); !sized) {
+            std::cerr << "error: " << sized.error().message() << '\n'
+                      << path << ": the recording's frames do not fit its calibration; the service would refuse to "
+                      << "start\n";
             return 1;
         }
         std::cerr << config->camera.replayPath << ": OK (a recording of " << (*replay)->recordedFrames() << " frames, "

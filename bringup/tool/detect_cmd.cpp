@@ -16,6 +16,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "detection.hpp"
+#include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
@@ -39,6 +40,10 @@ cv::Mat readImage(const std::string& path, int flags, std::string& why)
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
         why = "file not found";
+        return {};
+    }
+    if (auto header = checkImageHeader(path); !header) {
+        why = header.error().what;
         return {};
     }
     cv::Mat image;

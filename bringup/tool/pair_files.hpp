@@ -30,8 +30,14 @@ struct PairListing {
 /// tif, tiff) count.
 Result<PairListing, Error> listPairs(const std::filesystem::path& dir);
 
-/// Reads an image as 8-bit grey; empty on failure (unreadable or not an image).
-cv::Mat readGrey(const std::filesystem::path& path);
+/// Refuses an image whose header (PNG, JPEG, BMP, PGM/PPM) declares a side above bringup::kMaxImageSide or none,
+/// before anything is decoded (a 875 KB PNG declaring 30000x30000 cost imread 1.8 GB and 11 s). Other formats pass
+/// (OpenCV's own limit of 2^30 pixels applies).
+/// @return an error naming the file, the declared size and the limit
+Result<void, Error> checkImageHeader(const std::filesystem::path& path);
+
+/// Reads an image as 8-bit grey after checkImageHeader(); empty on failure, with the reason in `why` when given.
+cv::Mat readGrey(const std::filesystem::path& path, std::string* why = nullptr);
 
 /// Parses "9x6" into inner corners (each in [2, 50]).
 Result<cv::Size, Error> parseBoard(const std::string& command, const std::string& text);

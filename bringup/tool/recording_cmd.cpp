@@ -20,6 +20,8 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "pair_files.hpp"
+#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/bringup/yaml_guard.hpp"
 #include "ugv/hal/recording.hpp"
 
 namespace ugv::tool {
@@ -130,11 +132,16 @@ int runImport(const Args& args)
     for (const std::string& lonely : listing->unpaired) {
         std::cerr << "ugvsense recording: warning: skipped " << lonely << '\n';
     }
-    std::ifstream calibFile(args.get("calib"), std::ios::binary);
-    if (!calibFile) {
-        return fail(Error{args.get("calib"), "cannot read the calibration file", "give the calibration YAML"});
+    // Checked as the service will check it when it replays the recording (a deep or absurd file is refused here).
+    const auto calib = bringup::loadCalibration(args.get("calib"));
+    if (!calib) {
+        return fail(calib.error());
     }
-    const std::string calibration{std::istreambuf_iterator<char>(calibFile), std::istreambuf_iterator<char>()};
+    auto calibration =
+        bringup::readTextFile(args.get("calib"), bringup::kMaxCalibrationBytes, "give the calibration YAML");
+    if (!calibration) {
+        return fail(calibration.error());
+    }
     std::map<std::size_t, std::int64_t> stamps;
     if (args.has("timestamps")) {
         auto read = readTimestamps(args.get("timestamps"));
@@ -148,11 +155,18 @@ int runImport(const Args& args)
     if (first.empty()) {
         return fail(Error{listing->pairs.front().left.string(), "not a readable image", "check the file"});
     }
+    if (first.size() != calib->imageSize) {
+        return fail(Error{listing->pairs.front().left.string(),
+                          "image size " + std::to_string(first.cols) + "x" + std::to_string(first.rows) +
+                              " differs from " + args.get("calib") + "'s " + std::to_string(calib->imageSize.width) +
+                              "x" + std::to_string(calib->imageSize.height),
+                          "give the calibration of these cameras at this resolution"});
+    }
     hal::RecordingWriterOptions options;
     options.overwrite = args.has("force");
     options.syncEveryFrame = false; // an import can be redone: one sync at close
     auto writer = hal::RecordingWriter::create(args.get("out"), static_cast<std::uint32_t>(first.cols),
-                                               static_cast<std::uint32_t>(first.rows), calibration, options);
+                                               static_cast<std::uint32_t>(first.rows), *calibration, options);
     if (!writer) {
         return fail(writer.error());
     }

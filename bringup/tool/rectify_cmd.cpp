@@ -92,10 +92,12 @@ int runRectify(int argc, char** argv)
     double dySum = 0.0;
     int dyPairs = 0;
     for (const auto& files : listing->pairs) {
-        const cv::Mat left = readGrey(files.left);
-        const cv::Mat right = readGrey(files.right);
+        std::string why;
+        const cv::Mat left = readGrey(files.left, &why);
+        const cv::Mat right = left.empty() ? cv::Mat() : readGrey(files.right, &why);
         if (left.empty() || right.empty()) {
-            std::printf("%s: skipped, unreadable image file\n", files.name.c_str());
+            std::printf("%s: skipped, %s: %s\n", files.name.c_str(),
+                        (left.empty() ? files.left : files.right).filename().c_str(), why.c_str());
             continue;
         }
         const ConstImageViewU8 leftView(left.data, left.cols, left.rows, static_cast<std::ptrdiff_t>(left.step));
@@ -104,8 +106,12 @@ int runRectify(int argc, char** argv)
         const vision::RectifyStatus status = rectifier->rectify(leftView, rightView);
         const auto stop = std::chrono::steady_clock::now();
         if (status != vision::RectifyStatus::Ok) {
-            std::printf("%s: skipped, image size %dx%d differs from the calibration's %dx%d\n", files.name.c_str(),
-                        left.cols, left.rows, calib->imageSize.width, calib->imageSize.height);
+            // The left and right images may differ from each other: name the one that differs from the calibration.
+            const bool leftFits = left.size() == calib->imageSize;
+            const cv::Mat& wrong = leftFits ? right : left;
+            std::printf("%s: skipped, %s is %dx%d but the calibration is for %dx%d\n", files.name.c_str(),
+                        (leftFits ? files.right : files.left).filename().c_str(), wrong.cols, wrong.rows,
+                        calib->imageSize.width, calib->imageSize.height);
             continue;
         }
         totalMicros += std::chrono::duration<double, std::micro>(stop - start).count();

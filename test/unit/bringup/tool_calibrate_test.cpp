@@ -11,7 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "ugv/bringup/calibration_file.hpp"
+#include "ugv/hal/recording.hpp"
 
 namespace {
 
@@ -129,6 +132,114 @@ TEST(ToolCalibrate, HelpExitsZero)
     const ToolRun r = run("calibrate --help");
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("usage: ugvsense calibrate"), std::string::npos) << r.output;
+}
+
+// Issue 22: hostile input through the commands, as a user gives it. Each is refused with exit status 1 (no crash)
+// and a message naming the file and the line or key.
+
+void writeText(const std::filesystem::path& path, const std::string& text)
+{
+    std::ofstream(path) << text;
+}
+
+constexpr const char* kRectifiedCalibration = "%YAML:1.0\n---\nschema_version: 1\nrectified: 1\nimage_width: 640\n"
+                                              "image_height: 480\nfx: 500.\nfy: 500.\ncx: 320.\ncy: 240.\n"
+                                              "baseline_m: 0.12\nmount: { height_m: 0.6, pitch_deg: 0, roll_deg: 0 }\n";
+
+/// A folder with left1.png, right1.png (plain grey of these sizes) and calib.yaml (kRectifiedCalibration, 640x480).
+std::filesystem::path pairWithCalibration(const std::string& name, cv::Size left, cv::Size right)
+{
+    const auto dir = tempDir(name);
+    cv::imwrite((dir / "left1.png").string(), cv::Mat(left, CV_8UC1, cv::Scalar(100)));
+    cv::imwrite((dir / "right1.png").string(), cv::Mat(right, CV_8UC1, cv::Scalar(100)));
+    writeText(dir / "calib.yaml", kRectifiedCalibration);
+    return dir;
+}
+
+TEST(ToolHostile, DeepCalibrationIsRefusedByEveryCommandThatReadsOne)
+{
+    const auto dir = tempDir("deep");
+    const auto deep = dir / "deep.yaml";
+    writeText(deep, "%YAML:1.0\n---\nx: " + std::string(30000, '[') + std::string(30000, ']') + "\n");
+    writeText(dir / "config.yaml", "calibration: deep.yaml\ncamera:\n  backend: v4l2\n");
+    ASSERT_EQ(run("sim --scene chessboard --out " + (dir / "pairs").string() + " --pairs 1").exitCode, 0);
+
+    for (const std::string& command : {"check-config " + (dir / "config.yaml").string(),
+                                       "detect --calib " + deep.string() + " --left l.png --right r.png",
+                                       "rectify --calib " + deep.string() + " --images " + (dir / "pairs").string(),
+                                       "recording import --pairs " + (dir / "pairs").string() + " --calib " +
+                                           deep.string() + " --out " + (dir / "r.ugvrec").string()}) {
+        const ToolRun sut = run(command);
+
+        EXPECT_EQ(sut.exitCode, 1) << command << "\n" << sut.output;
+        EXPECT_NE(sut.output.find("deep.yaml:3: nested deeper than 8 levels"), std::string::npos) << command << "\n"
+                                                                                                  << sut.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "r.ugvrec"));
+}
+
+TEST(ToolHostile, CheckConfigRefusesARecordingWhoseFramesDifferFromItsCalibration)
+{
+    const auto dir = tempDir("recording-size");
+    const auto recording = dir / "small.ugvrec";
+    {
+        auto writer = ugv::hal::RecordingWriter::create(recording.string(), 320, 240, kRectifiedCalibration);
+        ASSERT_TRUE(writer.has_value()) << writer.error().message();
+        const std::vector<std::uint8_t> pixels(320 * 240, 128);
+        const ugv::ConstImageViewU8 view(pixels.data(), 320, 240, 320);
+        ASSERT_TRUE(writer->append(0, 0, 0, view, view).has_value());
+    }
+    writeText(dir / "config.yaml", "camera:\n  backend: replay\n  replay_path: small.ugvrec\n");
+
+    const ToolRun sut = run("check-config " + (dir / "config.yaml").string());
+
+    EXPECT_EQ(sut.exitCode, 1) << sut.output;
+    EXPECT_NE(sut.output.find("small.ugvrec"), std::string::npos) << sut.output;
+    EXPECT_NE(sut.output.find("delivers 320x240 frames but the calibration is for 640x480"), std::string::npos)
+        << sut.output;
+    EXPECT_NE(sut.output.find("the service would refuse to start"), std::string::npos) << sut.output;
+}
+
+TEST(ToolHostile, RecordingImportRefusesImagesOfAnotherSizeThanTheCalibration)
+{
+    const auto dir = pairWithCalibration("import-size", cv::Size(320, 240), cv::Size(320, 240));
+
+    const ToolRun sut = run("recording import --pairs " + dir.string() + " --calib " + (dir / "calib.yaml").string() +
+                            " --out " + (dir / "r.ugvrec").string());
+
+    EXPECT_EQ(sut.exitCode, 1) << sut.output;
+    EXPECT_NE(sut.output.find("left1.png: image size 320x240 differs from"), std::string::npos) << sut.output;
+}
+
+TEST(ToolHostile, RectifyNamesTheImageWhoseSizeDiffersFromTheCalibration)
+{
+    const auto dir = pairWithCalibration("rectify-size", cv::Size(640, 480), cv::Size(320, 240));
+
+    const ToolRun sut = run("rectify --calib " + (dir / "calib.yaml").string() + " --images " + dir.string());
+
+    EXPECT_NE(sut.output.find("skipped, right1.png is 320x240 but the calibration is for 640x480"), std::string::npos)
+        << sut.output;
+}
+
+TEST(ToolHostile, ImageDeclaringAHugeSizeIsRefusedBeforeDecoding)
+{
+    const auto dir = tempDir("huge-image");
+    // A PNG signature and an IHDR chunk declaring 30000x30000 (8-bit grey); nothing after it.
+    const std::string header(
+        "\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR\x00\x00\x75\x30\x00\x00\x75\x30\x08\x00\x00\x00\x00", 29);
+    std::ofstream((dir / "left1.png").string(), std::ios::binary) << header;
+    std::ofstream((dir / "right1.png").string(), std::ios::binary) << header;
+    writeText(dir / "calib.yaml", kRectifiedCalibration);
+
+    const ToolRun detect = run("detect --calib " + (dir / "calib.yaml").string() + " --left " +
+                               (dir / "left1.png").string() + " --right " + (dir / "right1.png").string());
+    EXPECT_EQ(detect.exitCode, 1) << detect.output;
+    EXPECT_NE(detect.output.find("left1.png: the header declares 30000x30000 pixels, outside 1..16384"),
+              std::string::npos)
+        << detect.output;
+
+    const ToolRun rectify = run("rectify --calib " + (dir / "calib.yaml").string() + " --images " + dir.string());
+    EXPECT_NE(rectify.output.find("left1.png: the header declares 30000x30000"), std::string::npos) << rectify.output;
 }
 
 } // namespace
