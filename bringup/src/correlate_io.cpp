@@ -1,6 +1,12 @@
 #include "ugv/bringup/correlate_io.hpp"
 
+#include <array>
 #include <cmath>
+#include <set>
+#include <sstream>
+#include <utility>
+#include <variant>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -15,7 +21,74 @@ Error lineError(const std::string& what, const std::string& fix = "")
     return Error{"", what, fix};
 }
 
-/// The number `key` of `j`: present, a number, finite.
+/// Physically plausible ranges of the numeric fields (latitude and longitude are checked by latLon()). Beyond them the
+/// correlator's arithmetic fails: a range of 1e308 m gives NaN positions, a time of 1e17 s no longer advances by a
+/// period, a sigma of 1e19 m breaks the map.
+struct FieldRange {
+    const char* key;
+    double min;
+    double max;
+    const char* unit;
+    const char* fix;
+};
+constexpr const char* kTimeFix = "mission time in seconds; Unix time fits too";
+constexpr const char* kAngleFix = "degrees, e.g. 0..360 or -180..180";
+constexpr std::array kRanges{
+    FieldRange{"t", -kMaxMessageTimeS, kMaxMessageTimeS, "s", kTimeFix},
+    FieldRange{"since_t", -kMaxMessageTimeS, kMaxMessageTimeS, "s", kTimeFix},
+    FieldRange{"until_t", -kMaxMessageTimeS, kMaxMessageTimeS, "s", kTimeFix},
+    FieldRange{"range_m", 0.0, kMaxObservationRangeM, "m", "a sensor's range to the object in metres"},
+    FieldRange{"bearing_deg", -360.0, 360.0, "deg", kAngleFix},
+    FieldRange{"ugv_heading_deg", -360.0, 360.0, "deg", kAngleFix},
+    FieldRange{"d_heading_deg", -360.0, 360.0, "deg", kAngleFix},
+    FieldRange{"d_east_m", -kMaxObservationRangeM, kMaxObservationRangeM, "m", "a pose correction in metres"},
+    FieldRange{"d_north_m", -kMaxObservationRangeM, kMaxObservationRangeM, "m", "a pose correction in metres"},
+};
+
+/// A finite value within the field's range (kRanges; other fields: finite only).
+Result<void, Error> fieldInRange(const char* key, double v)
+{
+    if (!std::isfinite(v)) {
+        return Unexpected(lineError(std::string("field '") + key + "' is not finite"));
+    }
+    for (const FieldRange& r : kRanges) {
+        if (std::string_view(key) == r.key && (v < r.min || v > r.max)) {
+            std::ostringstream what;
+            what << "field '" << key << "' value " << v << " is outside [" << r.min << ", " << r.max << "] " << r.unit;
+            return Unexpected(lineError(what.str(), r.fix));
+        }
+    }
+    return {};
+}
+
+/// Nesting depth and duplicate keys, seen while parsing (nlohmann::json keeps the last of duplicate keys silently).
+class ParseChecks {
+public:
+    bool operator()(int depth, json::parse_event_t event, json& parsed)
+    {
+        if (depth > kMaxJsonDepth && !error_) {
+            error_ = lineError("nested deeper than " + std::to_string(kMaxJsonDepth) + " levels",
+                               "one flat JSON object per line");
+        }
+        if (event == json::parse_event_t::object_start) {
+            keys_.emplace_back();
+        } else if (event == json::parse_event_t::object_end && !keys_.empty()) {
+            keys_.pop_back();
+        } else if (event == json::parse_event_t::key && !keys_.empty() && parsed.is_string() &&
+                   !keys_.back().insert(parsed.get<std::string>()).second && !error_) {
+            error_ = lineError("field '" + parsed.get<std::string>() + "' is given twice", "keep one of them");
+        }
+        return true;
+    }
+    [[nodiscard]] const std::optional<Error>& error() const { return error_; }
+
+private:
+    static constexpr int kMaxJsonDepth = 8;
+    std::vector<std::set<std::string>> keys_;
+    std::optional<Error> error_;
+};
+
+/// The number `key` of `j`: present, a number, finite, within its plausible range (kRanges).
 Result<double, Error> number(const json& j, const char* key)
 {
     const auto it = j.find(key);
@@ -26,8 +99,8 @@ Result<double, Error> number(const json& j, const char* key)
         return Unexpected(lineError(std::string("field '") + key + "' is not a number"));
     }
     const double v = it->get<double>();
-    if (!std::isfinite(v)) {
-        return Unexpected(lineError(std::string("field '") + key + "' is not finite"));
+    if (auto ok = fieldInRange(key, v); !ok) {
+        return Unexpected(ok.error());
     }
     return v;
 }
@@ -145,9 +218,6 @@ Result<Message, Error> observation(const json& j)
     if (auto ok = latLon(o.ugvLat, o.ugvLon, "ugv"); !ok) {
         return Unexpected(ok.error());
     }
-    if (o.rangeM < 0.0) {
-        return Unexpected(lineError("range_m " + std::to_string(o.rangeM) + " is negative"));
-    }
     return Message{o};
 }
 
@@ -228,11 +298,46 @@ json objectJson(const ObjectEstimate& o)
 
 } // namespace
 
+Result<void, Error> checkRanges(const Message& message)
+{
+    std::vector<std::pair<const char*, double>> fields;
+    if (const auto* o = std::get_if<Observation>(&message)) {
+        fields = {
+            {"t", o->t}, {"range_m", o->rangeM}, {"bearing_deg", o->bearingDeg}, {"ugv_heading_deg", o->ugvHeadingDeg}};
+    } else if (const auto* p = std::get_if<PoseCorrection>(&message)) {
+        fields = {{"t", p->t},
+                  {"since_t", p->sinceT},
+                  {"until_t", p->untilT},
+                  {"d_east_m", p->dEastM},
+                  {"d_north_m", p->dNorthM},
+                  {"d_heading_deg", p->dHeadingDeg}};
+    } else {
+        fields = {{"t", std::visit([](const auto& m) { return m.t; }, message)}};
+    }
+    for (const auto& [key, value] : fields) {
+        if (auto ok = fieldInRange(key, value); !ok) {
+            return ok;
+        }
+    }
+    return {};
+}
+
 Result<Message, Error> parseMessageLine(std::string_view line)
 {
-    const json j = json::parse(line, nullptr, false);
+    if (line.size() > kMaxMessageLineBytes) {
+        return Unexpected(lineError("line of " + std::to_string(line.size()) + " bytes, more than " +
+                                        std::to_string(kMaxMessageLineBytes),
+                                    "one JSON object per line"));
+    }
+    ParseChecks checks;
+    const json j = json::parse(
+        line, [&checks](int depth, json::parse_event_t event, json& parsed) { return checks(depth, event, parsed); },
+        false);
     if (j.is_discarded()) {
         return Unexpected(lineError("not valid JSON", "one JSON object per line"));
+    }
+    if (checks.error()) {
+        return Unexpected(*checks.error());
     }
     if (!j.is_object()) {
         return Unexpected(lineError("not a JSON object", "one JSON object per line"));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "ugv/bringup/correlate_io.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 
 namespace ugv::bringup {
@@ -10,14 +11,24 @@ namespace {
 
 using namespace correlator;
 
+constexpr const char* kDroppedFix = "fix the sender; the sample was dropped and counted";
+
 template <class T>
 Result<void, Error> accepted(const T& s, const char* topic, const std::string& sender)
 {
     if (const char* why = ipc::dds::check(s)) {
-        return Unexpected(Error{std::string(topic) + " from '" + sender + "'", why,
-                                "fix the sender; the sample was dropped and counted"});
+        return Unexpected(Error{std::string(topic) + " from '" + sender + "'", why, kDroppedFix});
     }
     return {};
+}
+
+/// The message when its numbers are within the ranges of the JSON input (bringup/correlate_io.hpp).
+Result<Message, Error> plausible(Message m, const char* topic, const std::string& sender)
+{
+    if (auto ok = checkRanges(m); !ok) {
+        return Unexpected(Error{std::string(topic) + " from '" + sender + "'", ok.error().what, kDroppedFix});
+    }
+    return m;
 }
 
 OoiClass toClass(std::uint8_t c)
@@ -46,7 +57,7 @@ Result<Message, Error> fromDds(const msg::OoiObservation& s)
     m.ugvHeadingDeg = s.ugv_heading_deg();
     m.rangeM = s.range_m();
     m.bearingDeg = s.bearing_deg();
-    return Message{m};
+    return plausible(Message{m}, "ugvsense/ooi/observations", m.ugv);
 }
 
 Result<Message, Error> fromDds(const msg::UavObservation& s)
@@ -59,7 +70,7 @@ Result<Message, Error> fromDds(const msg::UavObservation& s)
     m.cls = toClass(s.cls());
     m.lat = s.lat_deg();
     m.lon = s.lon_deg();
-    return Message{m};
+    return plausible(Message{m}, "ugvsense/ooi/uav", s.source().to_string());
 }
 
 Result<Message, Error> fromDds(const msg::ConfirmationState& s)
@@ -71,7 +82,7 @@ Result<Message, Error> fromDds(const msg::ConfirmationState& s)
     m.t = s.t();
     m.id = s.id().to_string();
     m.state = static_cast<Confirmation>(s.state());
-    return Message{m};
+    return plausible(Message{m}, "ugvsense/ooi/confirmations", s.source().to_string());
 }
 
 Result<Message, Error> fromDds(const msg::PoseCorrection& s)
@@ -87,7 +98,7 @@ Result<Message, Error> fromDds(const msg::PoseCorrection& s)
     m.dEastM = s.d_east_m();
     m.dNorthM = s.d_north_m();
     m.dHeadingDeg = s.d_heading_deg();
-    return Message{m};
+    return plausible(Message{m}, "ugvsense/ooi/pose_corrections", s.source().to_string());
 }
 
 void toDds(const Observation& m, std::uint64_t sequence, msg::OoiObservation& out)

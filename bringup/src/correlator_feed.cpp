@@ -11,6 +11,7 @@ using namespace correlator;
 
 namespace {
 constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
+constexpr double kPlusInf = std::numeric_limits<double>::infinity();
 } // namespace
 
 CorrelatorFeed::CorrelatorFeed(bool improved, double periodS, double lateWindowS)
@@ -111,7 +112,13 @@ Result<void, Error> CorrelatorFeed::applyInOrder(const Message& message, double 
     if (std::isnan(state_.nextSnapshotT)) {
         state_.nextSnapshotT = (std::floor(t / periodS_) + 1.0) * periodS_;
     }
-    while (t >= state_.nextSnapshotT) {
+    for (std::size_t taken = 0; t >= state_.nextSnapshotT; ++taken) {
+        if (taken == kMaxSnapshotsPerGap) { // a jump in time: on to the first boundary after t
+            const double next = (std::floor(t / periodS_) + 1.0) * periodS_;
+            state_.skippedSnapshots += static_cast<std::size_t>(std::llround((next - state_.nextSnapshotT) / periodS_));
+            state_.nextSnapshotT = std::max(next, std::nextafter(t, kPlusInf));
+            break;
+        }
         take(state_.nextSnapshotT, onSnapshot, emitFrom);
         state_.nextSnapshotT += periodS_;
     }
@@ -164,8 +171,11 @@ std::size_t CorrelatorFeed::add(std::span<const Message> batch, const OnSnapshot
     accepted.reserve(batch.size());
     for (std::size_t k = 0; k < batch.size(); ++k) {
         const double t = timeOf(batch[k]);
-        if (!std::isfinite(t)) { // the readers refuse these; the order below needs finite times
-            refuse(batch[k], Error{"", "time is not finite", "fix the sender"});
+        if (!(std::abs(t) <= kMaxTimeS)) { // the readers refuse these; the order below needs finite times
+            refuse(batch[k],
+                   Error{"",
+                         "time " + std::to_string(t) + " is not finite or beyond +-" + std::to_string(kMaxTimeS) + " s",
+                         "fix the sender"});
         } else if (t < earliest || (checkpoints_.empty() && isLate(batch[k]))) {
             refuse(batch[k], tooLate(t));
         } else {

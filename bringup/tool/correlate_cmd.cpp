@@ -5,6 +5,7 @@
 // the inputs live from the bus instead (service::LiveCorrelator, the ground station's own code) and writes the
 // last snapshot (and the map) when stopped.
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -57,12 +58,24 @@ cv::Scalar stateColour(const ObjectEstimate& o)
     return o.cls == OoiClass::NonCombatant ? cv::Scalar(200, 120, 40) : cv::Scalar(30, 170, 230); // blue / amber
 }
 
+/// A length in map pixels that OpenCV's drawing takes: finite, within [min, 8 map sizes] (cv::ellipse asserts on an
+/// axis that overflows int).
+double drawable(double px, double min)
+{
+    return std::isfinite(px) ? std::clamp(px, min, 8.0 * kMapSize) : 8.0 * kMapSize;
+}
+
 /// Objects (2-sigma ellipses, ids, confirmation colours, activation zones) and UGVs (triangles) on a metric grid.
 Result<void, Error> drawMap(const std::string& path, const Snapshot& s,
                             const std::map<std::string, bringup::UgvPose>& ugvs)
 {
     if (s.objects.empty() && ugvs.empty()) {
         return Unexpected(Error{path, "nothing to draw: no objects and no UGVs", "check the input"});
+    }
+    for (const ObjectEstimate& o : s.objects) {
+        if (!std::isfinite(o.lat) || !std::isfinite(o.lon)) {
+            return Unexpected(Error{path, "object " + o.id + " has no finite position", "check the input"});
+        }
     }
     double lat0 = 0.0;
     double lon0 = 0.0;
@@ -104,10 +117,11 @@ Result<void, Error> drawMap(const std::string& path, const Snapshot& s,
     for (const ObjectEstimate& o : s.objects) {
         const cv::Point2d c = toPx(frame.toLocal(o.lat, o.lon));
         const cv::Scalar colour = stateColour(o);
-        cv::circle(map, c, static_cast<int>(o.zoneDiameterM / 2.0 * scale), colour, 1, cv::LINE_AA);
+        cv::circle(map, c, static_cast<int>(drawable(o.zoneDiameterM / 2.0 * scale, 0.0)), colour, 1, cv::LINE_AA);
         // 2-sigma ellipse; major_axis_deg is a compass direction, image angles run clockwise from +x (east).
-        const cv::Size2d axes(std::max(2.0 * o.sigmaMajorM * scale, 2.0), std::max(2.0 * o.sigmaMinorM * scale, 2.0));
-        cv::ellipse(map, c, axes, o.majorAxisDeg - 90.0, 0, 360, colour, 2, cv::LINE_AA);
+        const cv::Size2d axes(drawable(2.0 * o.sigmaMajorM * scale, 2.0), drawable(2.0 * o.sigmaMinorM * scale, 2.0));
+        cv::ellipse(map, c, axes, std::isfinite(o.majorAxisDeg) ? o.majorAxisDeg - 90.0 : 0.0, 0, 360, colour, 2,
+                    cv::LINE_AA);
         cv::putText(map, o.id, c + cv::Point2d(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(30, 30, 30));
     }
     for (const auto& [name, p] : ugvs) {
@@ -296,6 +310,7 @@ int runCorrelate(int argc, char** argv)
         last = s;
         out << toJsonLine(s) << '\n';
     };
+    double lastT = NAN;
     while (std::getline(in, line)) {
         ++lineNumber;
         if (line.find_first_not_of(" \t\r") == std::string::npos) {
@@ -306,9 +321,17 @@ int runCorrelate(int argc, char** argv)
             report(message.error());
             continue;
         }
+        const std::size_t skippedBefore = feed.skippedSnapshots();
+        const double t = std::visit([](const auto& m) { return m.t; }, *message);
         if (auto applied = feed.add(*message, write); !applied) {
             report(applied.error());
         }
+        if (feed.skippedSnapshots() > skippedBefore) {
+            std::cerr << args.get("input") << ':' << lineNumber << ": field 't' jumps from " << lastT << " to " << t
+                      << " s: wrote " << bringup::CorrelatorFeed::kMaxSnapshotsPerGap
+                      << " snapshots of the gap and skipped " << feed.skippedSnapshots() - skippedBefore << '\n';
+        }
+        lastT = std::isnan(lastT) ? t : std::max(lastT, t);
     }
     feed.finish(write);
     out.flush();
@@ -322,6 +345,10 @@ int runCorrelate(int argc, char** argv)
     const double snapshotSeconds = std::chrono::duration<double>(feed.snapshotTime()).count();
     const std::size_t messages = feed.applied();
     const std::size_t snapshots = feed.snapshots();
+    if (feed.skippedSnapshots() > 0) {
+        std::printf("%zu snapshot(s) skipped over jumps in time (at most %zu are written for one gap)\n",
+                    feed.skippedSnapshots(), bringup::CorrelatorFeed::kMaxSnapshotsPerGap);
+    }
     std::printf("correlated %zu message(s) (%zu late, put in place by replaying %zu), %zu bad line(s) skipped, %zu "
                 "snapshot(s) to %s; %zu object(s) at t %.1f\n"
                 "correlator: %.3f s in add() (%.0f messages/s), %.3f s in snapshot() (%.1f us each); "
@@ -331,7 +358,14 @@ int runCorrelate(int argc, char** argv)
                 snapshotSeconds, snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0,
                 feed.mode(), feed.storedPoints());
     if (args.has("map")) {
-        if (auto drawn = drawMap(args.get("map"), last, feed.ugvs()); !drawn) {
+        Result<void, Error> drawn;
+        try {
+            drawn = drawMap(args.get("map"), last, feed.ugvs());
+        } catch (const cv::Exception& e) {
+            drawn = Unexpected(Error{args.get("map"), std::string("cannot draw the map: ") + e.what(),
+                                     "check the input's ranges and positions"});
+        }
+        if (!drawn) {
             return fail(drawn.error());
         }
         std::printf("map of t %.1f written to %s\n", last.t, args.get("map").c_str());

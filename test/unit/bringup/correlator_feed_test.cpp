@@ -201,3 +201,77 @@ TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
 
 } // namespace
 } // namespace ugv::bringup
+
+namespace ugv::bringup {
+namespace {
+
+correlator::Observation observationAt(double t)
+{
+    correlator::Observation o;
+    o.t = t;
+    o.ugv = "ugv-1";
+    o.track = "a";
+    o.ugvLat = -34.9;
+    o.ugvLon = 138.6;
+    o.rangeM = 10.0;
+    return o;
+}
+
+// Issue 22: a jump in time gives at most kMaxSnapshotsPerGap snapshots and counts the rest; an absurd time is refused.
+TEST(CorrelatorFeedHostile, AJumpInTimeWritesABoundedNumberOfSnapshots)
+{
+    constexpr double kJumpS = 1e9;
+    CorrelatorFeed sut(true, 1.0, 300.0);
+    std::size_t written = 0;
+    const auto count = [&written](const correlator::Snapshot&) { ++written; };
+    ASSERT_TRUE(sut.add(Message{observationAt(0.0)}, count).has_value());
+
+    ASSERT_TRUE(sut.add(Message{observationAt(kJumpS)}, count).has_value());
+
+    EXPECT_EQ(written, CorrelatorFeed::kMaxSnapshotsPerGap);
+    EXPECT_EQ(sut.skippedSnapshots(), static_cast<std::size_t>(kJumpS) - CorrelatorFeed::kMaxSnapshotsPerGap);
+    ASSERT_TRUE(sut.add(Message{observationAt(kJumpS + 1.0)}, count).has_value());
+    EXPECT_EQ(written, CorrelatorFeed::kMaxSnapshotsPerGap + 1); // the boundary at kJumpS + 1 is written again
+}
+
+TEST(CorrelatorFeedHostile, TimesBeyondTheLimitAreRefused)
+{
+    CorrelatorFeed sut(false, 1.0);
+    std::size_t written = 0;
+    const auto count = [&written](const correlator::Snapshot&) { ++written; };
+    ASSERT_TRUE(sut.add(Message{observationAt(0.0)}, count).has_value());
+
+    const auto refused = sut.add(Message{observationAt(1e17)}, count);
+
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_NE(refused.error().what.find("beyond"), std::string::npos) << refused.error().message();
+    EXPECT_EQ(written, 0U);
+}
+
+TEST(CorrelatorFeedHostile, JsonFieldsOutsideTheirRangesAreRefusedNamingTheField)
+{
+    const std::string base = R"("kind": "observation", "ugv": "u", "track": "a", "class": "static", "ugv_lat": 0, )"
+                             R"("ugv_lon": 0, "ugv_heading_deg": 0, "bearing_deg": 0)";
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {R"({"t": 0, "range_m": 1e19, )" + base + "}", "field 'range_m' value 1e+19 is outside [0, 100000] m"},
+        {R"({"t": 0, "range_m": 1e308, )" + base + "}", "field 'range_m' value 1e+308"},
+        {R"({"t": 1e17, "range_m": 10, )" + base + "}", "field 't' value 1e+17 is outside"},
+        {R"({"t": 0, "range_m": 10, "range_m": 1e300, )" + base + "}", "field 'range_m' is given twice"},
+        {R"({"t": 0, "range_m": 10, "x": [[[[[[[[[[1]]]]]]]]]], )" + base + "}", "nested deeper than 8 levels"},
+        {R"({"t": 0, "kind": "pose_correction", "ugv": "u", "since_t": 0, "until_t": 1, "d_east_m": 1e12, )"
+         R"("d_north_m": 0, "d_heading_deg": 0})",
+         "field 'd_east_m' value 1e+12"},
+        {R"({"t": 0, "range_m": 10, "x": ")" + std::string(kMaxMessageLineBytes, 'x') + "\", " + base + "}",
+         "bytes, more than 65536"},
+    };
+    for (const auto& [line, expected] : cases) {
+        const auto parsed = parseMessageLine(line);
+
+        ASSERT_FALSE(parsed.has_value()) << line.substr(0, 200);
+        EXPECT_NE(parsed.error().message().find(expected), std::string::npos) << parsed.error().message();
+    }
+    EXPECT_TRUE(parseMessageLine(R"({"t": 0, "range_m": 99999, )" + base + "}").has_value());
+}
+
+} // namespace
+} // namespace ugv::bringup

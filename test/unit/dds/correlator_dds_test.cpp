@@ -200,5 +200,22 @@ TEST(CorrelatorDds, HostileSamplesGiveAnErrorNamingTopicAndSender)
     EXPECT_FALSE(list.error().fix.empty());
 }
 
+TEST(CorrelatorDds, AbsurdFiniteNumbersAreRefusedAsFromAJsonLine)
+{
+    msg::OoiObservation o;
+    toDds(Observation{1.0, "ugv-far", "t", OoiClass::Static, -34.9, 138.6, 0.0, 1e19, 0.0}, 1, o);
+    const auto observation = fromDds(o);
+    ASSERT_FALSE(observation);
+    EXPECT_NE(observation.error().where.find("ugv-far"), std::string::npos);
+    EXPECT_NE(observation.error().what.find("field 'range_m' value 1e+19"), std::string::npos)
+        << observation.error().message();
+
+    msg::ConfirmationState c;
+    toDds(Confirm{1e17, "ooi-1", Confirmation::Unknown}, "console-late", 1, c);
+    const auto confirm = fromDds(c);
+    ASSERT_FALSE(confirm);
+    EXPECT_NE(confirm.error().what.find("field 't' value 1e+17"), std::string::npos) << confirm.error().message();
+}
+
 } // namespace
 } // namespace ugv::bringup

@@ -4,6 +4,7 @@
 // live task's logs. The input messages and the output snapshots, in the format of issue 5 (README "Correlator").
 // nlohmann::json.
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -14,10 +15,23 @@
 
 namespace ugv::bringup {
 
-/// One input line -> a message; an error says what is wrong with the line (the caller adds the line number).
-/// Rejects malformed JSON, missing or mistyped fields, NaN/inf, latitude outside [-90, 90], longitude outside
-/// [-180, 180], negative range, an unknown kind, class or state.
+/// Times beyond this are refused [s] (about 317 years: mission time or Unix time; at 1e17 a period no longer
+/// advances a double).
+inline constexpr double kMaxMessageTimeS = 1e10;
+/// Observation ranges and pose corrections beyond this are refused [m].
+inline constexpr double kMaxObservationRangeM = 1e5;
+/// Longer input lines are refused [bytes].
+inline constexpr std::size_t kMaxMessageLineBytes = 64U * 1024U;
+
+/// One input line -> a message; an error says what is wrong with the line and names the field (the caller adds the
+/// line number). Rejects a line over kMaxMessageLineBytes, malformed JSON, nesting deeper than 8, a field given twice,
+/// missing or mistyped fields, NaN/inf, a time beyond +-kMaxMessageTimeS, a range outside [0, kMaxObservationRangeM],
+/// an angle outside [-360, 360], a pose correction beyond kMaxObservationRangeM, latitude outside [-90, 90],
+/// longitude outside [-180, 180], an unknown kind, class or state.
 Result<correlator::Message, Error> parseMessageLine(std::string_view line);
+
+/// The ranges parseMessageLine() checks, on a message from elsewhere (a DDS sample): the error names the field.
+Result<void, Error> checkRanges(const correlator::Message& message);
 
 /// A message as one JSON line (no newline).
 std::string toJsonLine(const correlator::Message& message);

@@ -6,7 +6,9 @@
 /// and `correlate --from-dds`. Same messages in the same order give the same snapshots, by construction.
 ///
 /// Rules: a snapshot is taken at every period boundary of mission time that a message passes (boundaries at
-/// multiples of the period); finish() takes the last one at the last message's time.
+/// multiples of the period), at most kMaxSnapshotsPerGap for one message: the boundaries of a longer gap (a jump in
+/// time) are skipped and counted (skippedSnapshots()); finish() takes the last one at the last message's time. Times
+/// beyond +-kMaxTimeS are refused.
 ///
 /// Late messages (re-sequencing): a message that comes before the latest applied one in the correlator's order
 /// (correlator::appliedBefore: by time, equal times by a fixed rule) is put in its place when it is at most
@@ -58,6 +60,10 @@ public:
     static constexpr std::size_t kMaxHeldMessages = 500'000;
     /// Checkpoint spacing at most [s] (also lateWindowS / 4 at most): what a replay goes back beyond the message.
     static constexpr double kCheckpointSpacingS = 30.0;
+    /// Snapshots one message gives out at most: a jump from t 0 to 1e9 would otherwise ask for 10^9.
+    static constexpr std::size_t kMaxSnapshotsPerGap = 1000;
+    /// Message times beyond +-this are refused [s] (as the JSON reader, bringup/correlate_io.hpp).
+    static constexpr double kMaxTimeS = 1e10;
 
     /// @param improved     mode improved (else original)
     /// @param periodS      snapshot period in mission time [s], > 0
@@ -78,6 +84,8 @@ public:
 
     [[nodiscard]] std::size_t applied() const noexcept { return state_.applied; }
     [[nodiscard]] std::size_t snapshots() const noexcept { return state_.snapshots; }
+    /// Period boundaries skipped because one message passed more than kMaxSnapshotsPerGap of them.
+    [[nodiscard]] std::size_t skippedSnapshots() const noexcept { return state_.skippedSnapshots; }
     /// Late messages put in their place, and the messages applied again for them.
     [[nodiscard]] std::size_t resequenced() const noexcept { return resequenced_; }
     [[nodiscard]] std::size_t replayed() const noexcept { return replayed_; }
@@ -97,6 +105,7 @@ private:
         double nextCheckpointT = NAN;
         std::size_t applied = 0;
         std::size_t snapshots = 0;
+        std::size_t skippedSnapshots = 0;
         std::map<std::string, UgvPose> ugvs;
         std::optional<correlator::Message> last; ///< the last message applied (or refused by the correlator)
     };
