@@ -5,6 +5,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "dds_bridge.hpp"
+#include "frame_pipeline.hpp"
 #include "service.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/config.hpp"
@@ -55,6 +56,22 @@ int runCheckConfig(int argc, char** argv)
             return 1;
         }
     }
+    if (!config->visionEnabled) {
+        std::cerr << path << ": OK (vision off: no camera and no calibration to check)\n";
+        return 0;
+    }
+    // The frame pipeline the service builds at start (the mount, the rectification, the detector's settings).
+    const auto pipelineOk = [&path, &config](const vision::StereoCalibration& calibration, const std::string& source) {
+        bringup::ServiceConfig effective = *config;
+        effective.camera.width = calibration.imageSize.width;
+        effective.camera.height = calibration.imageSize.height;
+        if (auto pipeline = service::FramePipeline::create(calibration, effective); !pipeline) {
+            std::cerr << "error: " << source << ": " << pipeline.error().message() << '\n'
+                      << path << ": the pipeline cannot be built from it; the service would refuse to start\n";
+            return false;
+        }
+        return true;
+    };
     if (!args.has("no-calibration") && config->camera.backend == bringup::CameraBackend::Replay) {
         // The service replays with the calibration stored in the recording (runner.cpp), not the config's.
         auto replay = hal::ReplayCamera::open(config->camera.replayPath, hal::ReplayOptions{});
@@ -77,6 +94,9 @@ int runCheckConfig(int argc, char** argv)
                       << "start\n";
             return 1;
         }
+        if (!pipelineOk(*calibration, config->camera.replayPath)) {
+            return 1;
+        }
         std::cerr << config->camera.replayPath << ": OK (a recording of " << (*replay)->recordedFrames() << " frames, "
                   << (*replay)->width() << "x" << (*replay)->height() << ", with its own calibration)\n";
     } else if (!args.has("no-calibration")) {
@@ -91,6 +111,9 @@ int runCheckConfig(int argc, char** argv)
             std::cerr << "error: " << config->calibrationPath << ": calibrated for " << size.width << "x" << size.height
                       << " but camera.width/height in " << path << " are " << config->camera.width << "x"
                       << config->camera.height << " (fix: recalibrate at the camera resolution or fix the config)\n";
+            return 1;
+        }
+        if (!pipelineOk(*calibration, config->calibrationPath)) {
             return 1;
         }
         std::cerr << config->calibrationPath << ": OK (" << (calibration->rectified ? "rectified" : "full") << " form, "
