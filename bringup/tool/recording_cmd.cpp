@@ -1,5 +1,6 @@
 // ugvsense recording: look into, import and export recordings (hal/recording.hpp).
-// - info REC: geometry, frame count, sequence gaps, duration and rate, corrupt frames and a cut-off tail.
+// - info REC: geometry, frame count, sequence gaps, duration and rate, corrupt frames, a cut-off tail and whether the
+//   stored calibration is usable (exit 1 when not).
 // - import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F]: PNG pairs (left*/right*) to a recording.
 // - export REC --out DIR: frame_NNNNNN_left.png / _right.png, frames.csv (frame, sequence, stamps) and
 //   calibration.yaml.
@@ -76,6 +77,21 @@ int runInfo(const Args& args)
                     static_cast<unsigned long long>(scan->trailingBytes),
                     static_cast<unsigned long long>(scan->frames));
     }
+    // As the service reads it when it replays the recording.
+    const auto calibration =
+        bringup::parseCalibration(reader->info().calibrationText, path + " (its stored calibration)");
+    if (!calibration) {
+        std::printf("calibration: unusable: %s\n", calibration.error().message().c_str());
+        return 1;
+    }
+    const cv::Size frames(static_cast<int>(reader->info().width), static_cast<int>(reader->info().height));
+    if (calibration->imageSize != frames) {
+        std::printf("calibration: for %dx%d, not the frames' size: the service would refuse to replay it\n",
+                    calibration->imageSize.width, calibration->imageSize.height);
+        return 1;
+    }
+    std::printf("calibration: OK (%s form, baseline %.3f m%s)\n", calibration->rectified ? "rectified" : "full",
+                calibration->baselineM(), calibration->mount ? ", with a mount" : ", no mount");
     return 0;
 }
 

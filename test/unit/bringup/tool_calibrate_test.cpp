@@ -23,9 +23,9 @@ struct ToolRun {
     std::string output;
 };
 
-ToolRun run(const std::string& args)
+ToolRun runCommand(const std::string& commandLine)
 {
-    const std::string command = std::string(UGVSENSE_PATH) + " " + args + " 2>&1";
+    const std::string command = commandLine + " 2>&1";
     ToolRun result;
     FILE* pipe = popen(command.c_str(), "r"); // NOLINT(cert-env33-c) test harness runs our own binary
     if (pipe == nullptr) {
@@ -38,6 +38,11 @@ ToolRun run(const std::string& args)
     const int status = pclose(pipe);
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return result;
+}
+
+ToolRun run(const std::string& args)
+{
+    return runCommand(std::string(UGVSENSE_PATH) + " " + args);
 }
 
 std::filesystem::path tempDir(const std::string& name)
@@ -146,6 +151,17 @@ constexpr const char* kRectifiedCalibration = "%YAML:1.0\n---\nschema_version: 1
                                               "image_height: 480\nfx: 500.\nfy: 500.\ncx: 320.\ncy: 240.\n"
                                               "baseline_m: 0.12\nmount: { height_m: 0.6, pitch_deg: 0, roll_deg: 0 }\n";
 
+/// A recording of one grey frame of `size` carrying `calibration` as its stored calibration text.
+void writeRecording(const std::filesystem::path& path, cv::Size size, const std::string& calibration)
+{
+    auto writer = ugv::hal::RecordingWriter::create(path.string(), static_cast<std::uint32_t>(size.width),
+                                                    static_cast<std::uint32_t>(size.height), calibration);
+    ASSERT_TRUE(writer.has_value()) << writer.error().message();
+    const std::vector<std::uint8_t> pixels(static_cast<std::size_t>(size.area()), 128);
+    const ugv::ConstImageViewU8 view(pixels.data(), size.width, size.height, size.width);
+    ASSERT_TRUE(writer->append(0, 0, 0, view, view).has_value());
+}
+
 /// A folder with left1.png, right1.png (plain grey of these sizes) and calib.yaml (kRectifiedCalibration, 640x480).
 std::filesystem::path pairWithCalibration(const std::string& name, cv::Size left, cv::Size right)
 {
@@ -181,14 +197,7 @@ TEST(ToolHostile, DeepCalibrationIsRefusedByEveryCommandThatReadsOne)
 TEST(ToolHostile, CheckConfigRefusesARecordingWhoseFramesDifferFromItsCalibration)
 {
     const auto dir = tempDir("recording-size");
-    const auto recording = dir / "small.ugvrec";
-    {
-        auto writer = ugv::hal::RecordingWriter::create(recording.string(), 320, 240, kRectifiedCalibration);
-        ASSERT_TRUE(writer.has_value()) << writer.error().message();
-        const std::vector<std::uint8_t> pixels(320 * 240, 128);
-        const ugv::ConstImageViewU8 view(pixels.data(), 320, 240, 320);
-        ASSERT_TRUE(writer->append(0, 0, 0, view, view).has_value());
-    }
+    writeRecording(dir / "small.ugvrec", cv::Size(320, 240), kRectifiedCalibration);
     writeText(dir / "config.yaml", "camera:\n  backend: replay\n  replay_path: small.ugvrec\n");
 
     const ToolRun sut = run("check-config " + (dir / "config.yaml").string());
@@ -198,6 +207,28 @@ TEST(ToolHostile, CheckConfigRefusesARecordingWhoseFramesDifferFromItsCalibratio
     EXPECT_NE(sut.output.find("delivers 320x240 frames but the calibration is for 640x480"), std::string::npos)
         << sut.output;
     EXPECT_NE(sut.output.find("the service would refuse to start"), std::string::npos) << sut.output;
+    const ToolRun info = run("recording info " + (dir / "small.ugvrec").string());
+    EXPECT_EQ(info.exitCode, 1) << info.output;
+    EXPECT_NE(info.output.find("calibration: for 640x480, not the frames' size"), std::string::npos) << info.output;
+}
+
+TEST(ToolHostile, ADeepCalibrationInsideARecordingIsRefusedByEveryReader)
+{
+    const auto dir = tempDir("recording-deep");
+    writeRecording(dir / "deep.ugvrec", cv::Size(640, 480),
+                   "%YAML:1.0\n---\nx: " + std::string(30000, '[') + std::string(30000, ']') + "\n");
+    writeText(dir / "config.yaml", "camera:\n  backend: replay\n  replay_path: deep.ugvrec\ndds:\n  enabled: false\n");
+    const std::string expected = "(its stored calibration):3: nested deeper than 8 levels";
+
+    for (const std::string& command : {std::string(UGVSENSE_PATH) + " recording info " + (dir / "deep.ugvrec").string(),
+                                       std::string(UGVSENSE_PATH) + " check-config " + (dir / "config.yaml").string(),
+                                       std::string(UGVSENSED_PATH) + " --config " + (dir / "config.yaml").string()}) {
+        const ToolRun sut = runCommand(command);
+
+        EXPECT_EQ(sut.exitCode, 1) << command << "\n" << sut.output;
+        EXPECT_NE(sut.output.find(expected), std::string::npos) << command << "\n" << sut.output;
+        EXPECT_NE(sut.output.find("deep.ugvrec"), std::string::npos) << command << "\n" << sut.output;
+    }
 }
 
 TEST(ToolHostile, RecordingImportRefusesImagesOfAnotherSizeThanTheCalibration)
