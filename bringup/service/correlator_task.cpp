@@ -216,6 +216,7 @@ void LiveCorrelator::apply(std::span<const correlator::Message> batch)
             inputsLog_ << bringup::toJsonLine(m) << '\n';
         }
     }
+    const std::size_t skippedBefore = feed_.skippedSnapshots();
     stats_.applied += feed_.add(
         batch, [this](const correlator::Snapshot& s) { onSnapshot(s); },
         [this](const correlator::Message& /*message*/, const Error& e) {
@@ -223,6 +224,11 @@ void LiveCorrelator::apply(std::span<const correlator::Message> batch)
             warn("correlator: the correlator refused an input: " + e.message());
         });
     stats_.resequenced = feed_.resequenced();
+    if (feed_.skippedSnapshots() > skippedBefore) {
+        warn("correlator: an input jumped ahead in mission time: " +
+             std::to_string(feed_.skippedSnapshots() - skippedBefore) + " snapshots of the gap skipped (at most " +
+             std::to_string(bringup::CorrelatorFeed::kMaxSnapshotsPerGap) + " are given out for one gap)");
+    }
 }
 
 void LiveCorrelator::waitForInput(std::chrono::milliseconds timeout)

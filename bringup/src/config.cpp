@@ -368,6 +368,10 @@ public:
     void crossCheck(const YAML::Node& root)
     {
         const auto at = [&root](const char* section) { return root[section] ? root[section] : root; };
+        const auto atKey = [&at](const char* section, const char* key) {
+            const YAML::Node s = at(section);
+            return s.IsMap() && s[key] ? s[key] : s;
+        };
         if (config_.obstacles.cautionDistanceM <= config_.obstacles.dangerDistanceM) {
             error(at("obstacles"), "obstacles.caution_distance_m",
                   "value " + formatNumber(config_.obstacles.cautionDistanceM) + " is not above danger_distance_m (" +
@@ -414,7 +418,7 @@ public:
         if (config_.correlator.enabled && !config_.dds.enabled) {
             error(at("dds"), "dds.enabled", "is false but the correlator needs the bus", "set dds.enabled: true");
         }
-        checkNames(at);
+        checkNames(at, atKey);
         if (config_.calibrationPath.empty()) {
             error(root, "calibration", "is empty", "set it to the file written by 'ugvsense calibrate'");
         }
@@ -422,8 +426,8 @@ public:
 
     /// Names the bus carries (bounded at ipc::dds::kMaxNameLength there) and the discovery server list, as the
     /// service's ipc::dds::validate() reads them, but with the key and line.
-    template <class At>
-    void checkNames(const At& at)
+    template <class At, class AtKey>
+    void checkNames(const At& at, const AtKey& atKey)
     {
         const std::string& id = config_.vehicleId;
         const bool printable =
@@ -440,13 +444,13 @@ public:
             std::string::npos;
         if (!ns.empty() && (!nameChars || ns.front() == '/' || ns.back() == '/' || ns.find("//") != std::string::npos ||
                             ns.size() > ipc::dds::kMaxNameLength)) {
-            error(at("dds"), "dds.ros_namespace", "'" + ns + "' is not a ROS 2 namespace",
+            error(atKey("dds", "ros_namespace"), "dds.ros_namespace", "'" + ns + "' is not a ROS 2 namespace",
                   "letters, digits, _ and inner single /, at most " + std::to_string(ipc::dds::kMaxNameLength) +
                       " characters, e.g. ugv1 or team/ugv1");
         }
         if (auto servers = ipc::dds::checkDiscoveryServers(config_.dds.discoveryServer, "dds.discovery_server");
             !servers) {
-            error(at("dds"), "dds.discovery_server", servers.error().what, servers.error().fix);
+            error(atKey("dds", "discovery_server"), "dds.discovery_server", servers.error().what, servers.error().fix);
         }
     }
 

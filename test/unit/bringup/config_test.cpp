@@ -257,12 +257,14 @@ TEST(ConfigHostile, BusNamesAndDiscoveryServerAreChecked)
 
     for (const char* ns : {"/abc/", "abc/", "a//b", "a-b"}) {
         const auto bad = joined(parseErrors(std::string(kValidMinimal) + "dds:\n  ros_namespace: " + ns + "\n"));
-        EXPECT_NE(bad.find("(dds.ros_namespace): '" + std::string(ns) + "' is not a ROS 2 namespace"),
+        EXPECT_NE(bad.find("test.yaml:5 (dds.ros_namespace): '" + std::string(ns) + "' is not a ROS 2 namespace"),
                   std::string::npos)
             << bad;
     }
-    const auto server = joined(parseErrors(std::string(kValidMinimal) + "dds:\n  discovery_server: not-an-address\n"));
-    EXPECT_NE(server.find("(dds.discovery_server): bad discovery server list 'not-an-address'"), std::string::npos)
+    const auto server =
+        joined(parseErrors(std::string(kValidMinimal) + "dds:\n  domain_id: 1\n  discovery_server: not-an-address\n"));
+    EXPECT_NE(server.find("test.yaml:6 (dds.discovery_server): bad discovery server list 'not-an-address'"),
+              std::string::npos)
         << server;
 
     const auto good = parseConfig(std::string(kValidMinimal) +
