@@ -159,6 +159,29 @@ Result<void, Error> latLon(double lat, double lon, const char* what)
     return {};
 }
 
+/// A JSON object of at most `maxBytes`, nested at most 8 deep, no key given twice.
+Result<json, Error> parseObjectLine(std::string_view line, std::size_t maxBytes, const char* fix)
+{
+    if (line.size() > maxBytes) {
+        return Unexpected(
+            lineError("line of " + std::to_string(line.size()) + " bytes, more than " + std::to_string(maxBytes), fix));
+    }
+    ParseChecks checks;
+    json j = json::parse(
+        line, [&checks](int depth, json::parse_event_t event, json& parsed) { return checks(depth, event, parsed); },
+        false);
+    if (j.is_discarded()) {
+        return Unexpected(lineError("not valid JSON", fix));
+    }
+    if (checks.error()) {
+        return Unexpected(*checks.error());
+    }
+    if (!j.is_object()) {
+        return Unexpected(lineError("not a JSON object", fix));
+    }
+    return j;
+}
+
 /// Collects the first error of several field reads.
 class Fields {
 public:
@@ -324,24 +347,11 @@ Result<void, Error> checkRanges(const Message& message)
 
 Result<Message, Error> parseMessageLine(std::string_view line)
 {
-    if (line.size() > kMaxMessageLineBytes) {
-        return Unexpected(lineError("line of " + std::to_string(line.size()) + " bytes, more than " +
-                                        std::to_string(kMaxMessageLineBytes),
-                                    "one JSON object per line"));
+    const auto parsed = parseObjectLine(line, kMaxMessageLineBytes, "one JSON object per line");
+    if (!parsed) {
+        return Unexpected(parsed.error());
     }
-    ParseChecks checks;
-    const json j = json::parse(
-        line, [&checks](int depth, json::parse_event_t event, json& parsed) { return checks(depth, event, parsed); },
-        false);
-    if (j.is_discarded()) {
-        return Unexpected(lineError("not valid JSON", "one JSON object per line"));
-    }
-    if (checks.error()) {
-        return Unexpected(*checks.error());
-    }
-    if (!j.is_object()) {
-        return Unexpected(lineError("not a JSON object", "one JSON object per line"));
-    }
+    const json& j = *parsed;
     auto kind = text(j, "kind");
     if (!kind) {
         return Unexpected(kind.error());
@@ -407,10 +417,12 @@ std::string toJsonLine(const Snapshot& snapshot)
 
 Result<Snapshot, Error> parseSnapshotLine(std::string_view line)
 {
-    const json j = json::parse(line, nullptr, false);
-    if (j.is_discarded() || !j.is_object()) {
-        return Unexpected(lineError("not a JSON object", "one snapshot per line, as `ugvsense correlate` writes"));
+    const auto parsed =
+        parseObjectLine(line, kMaxSnapshotLineBytes, "one snapshot per line, as `ugvsense correlate` writes");
+    if (!parsed) {
+        return Unexpected(parsed.error());
     }
+    const json& j = *parsed;
     auto t = number(j, "t");
     if (!t) {
         return Unexpected(t.error());

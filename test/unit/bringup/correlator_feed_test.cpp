@@ -273,5 +273,18 @@ TEST(CorrelatorFeedHostile, JsonFieldsOutsideTheirRangesAreRefusedNamingTheField
     EXPECT_TRUE(parseMessageLine(R"({"t": 0, "range_m": 99999, )" + base + "}").has_value());
 }
 
+TEST(CorrelatorFeedHostile, SnapshotLinesAreCheckedAsInputLines)
+{
+    const auto twice = parseSnapshotLine(R"({"t": 1, "objects": [], "alerts": [], "t": 2})");
+    ASSERT_FALSE(twice.has_value());
+    EXPECT_NE(twice.error().what.find("field 't' is given twice"), std::string::npos) << twice.error().message();
+
+    const auto far = parseSnapshotLine(R"({"t": 1e17, "objects": [], "alerts": []})");
+    ASSERT_FALSE(far.has_value());
+    EXPECT_NE(far.error().what.find("field 't' value 1e+17"), std::string::npos) << far.error().message();
+
+    EXPECT_TRUE(parseSnapshotLine(R"({"t": 1, "objects": [], "alerts": []})").has_value());
+}
+
 } // namespace
 } // namespace ugv::bringup

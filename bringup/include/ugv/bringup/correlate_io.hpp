@@ -22,6 +22,8 @@ inline constexpr double kMaxMessageTimeS = 1e10;
 inline constexpr double kMaxObservationRangeM = 1e5;
 /// Longer input lines are refused [bytes].
 inline constexpr std::size_t kMaxMessageLineBytes = 64U * 1024U;
+/// Longer snapshot lines are refused [bytes] (about 300 bytes per object).
+inline constexpr std::size_t kMaxSnapshotLineBytes = 64U * 1024U * 1024U;
 
 /// One input line -> a message; an error says what is wrong with the line and names the field (the caller adds the
 /// line number). Rejects a line over kMaxMessageLineBytes, malformed JSON, nesting deeper than 8, a field given twice,
@@ -39,7 +41,8 @@ std::string toJsonLine(const correlator::Message& message);
 /// A snapshot as one JSON line (no newline): {"t", "objects": [...], "alerts": [...]}.
 std::string toJsonLine(const correlator::Snapshot& snapshot);
 
-/// One snapshot line back (correlate-eval).
+/// One snapshot line back (correlate-eval): as parseMessageLine(), a line over kMaxSnapshotLineBytes, nesting deeper
+/// than 8 and a field given twice are refused.
 Result<correlator::Snapshot, Error> parseSnapshotLine(std::string_view line);
 
 } // namespace ugv::bringup
