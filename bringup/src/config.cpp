@@ -430,13 +430,17 @@ public:
     void checkNames(const At& at, const AtKey& atKey)
     {
         const std::string& id = config_.vehicleId;
-        const bool printable =
-            std::all_of(id.begin(), id.end(), [](char c) { return std::isprint(static_cast<unsigned char>(c)); });
+        // No control characters (UTF-8 letters are fine): the name goes into messages and logs.
+        const bool printable = std::none_of(id.begin(), id.end(), [](char c) {
+            const auto u = static_cast<unsigned char>(c);
+            return u < 0x20 || u == 0x7F;
+        });
         if (id.empty() || id.size() > ipc::dds::kMaxNameLength || !printable) {
             error(at("vehicle_id"), "vehicle_id",
                   "'" + (printable ? id : std::string("(unprintable)")) + "' (" + std::to_string(id.size()) +
                       " characters) is not a vehicle name",
-                  "give 1 to " + std::to_string(ipc::dds::kMaxNameLength) + " printable characters, e.g. ugv-1");
+                  "give 1 to " + std::to_string(ipc::dds::kMaxNameLength) +
+                      " characters without control characters, e.g. ugv-1");
         }
         const std::string& ns = config_.dds.rosNamespace;
         const bool nameChars =

@@ -255,6 +255,11 @@ TEST(ConfigHostile, BusNamesAndDiscoveryServerAreChecked)
     EXPECT_NE(longId.find("(vehicle_id): '"), std::string::npos) << longId;
     EXPECT_NE(longId.find("(200 characters) is not a vehicle name (fix: give 1 to 64"), std::string::npos) << longId;
 
+    const auto control = joined(parseErrors(std::string(kValidMinimal) + "vehicle_id: \"ugv\\t1\"\n"));
+    EXPECT_NE(control.find("(vehicle_id): '(unprintable)' (5 characters) is not a vehicle name"), std::string::npos)
+        << control;
+    EXPECT_TRUE(parseConfig(std::string(kValidMinimal) + "vehicle_id: ugv-ä\n", "test.yaml", "/").has_value());
+
     for (const char* ns : {"/abc/", "abc/", "a//b", "a-b"}) {
         const auto bad = joined(parseErrors(std::string(kValidMinimal) + "dds:\n  ros_namespace: " + ns + "\n"));
         EXPECT_NE(bad.find("test.yaml:5 (dds.ros_namespace): '" + std::string(ns) + "' is not a ROS 2 namespace"),
