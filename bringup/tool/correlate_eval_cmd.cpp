@@ -14,6 +14,7 @@
 #include <iterator>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -49,14 +50,23 @@ constexpr int kAlpha = kScoreAlpha;
 
 // ---- truth ---------------------------------------------------------------------------------------------------
 
-Result<double, Error> number(const json& j, const char* key)
+/// The number `key` within [min, max] (a truth file of correlate-sim is within them).
+Result<double, Error> number(const json& j, const char* key, double min, double max)
 {
     const auto it = j.find(key);
     if (it == j.end() || !it->is_number() || !std::isfinite(it->get<double>())) {
         return Unexpected(Error{"", std::string("missing or non-numeric field '") + key + "'", ""});
     }
-    return it->get<double>();
+    const double v = it->get<double>();
+    if (v < min || v > max) {
+        std::ostringstream what;
+        what << "field '" << key << "' value " << v << " is outside [" << min << ", " << max << "]";
+        return Unexpected(Error{"", what.str(), "give the truth file correlate-sim wrote"});
+    }
+    return v;
 }
+
+constexpr double kMaxTruthTimeS = bringup::kMaxMessageTimeS;
 
 Result<std::string, Error> text(const json& j, const char* key)
 {
@@ -69,17 +79,14 @@ Result<std::string, Error> text(const json& j, const char* key)
 
 Result<void, Error> parseHeader(const json& j, Truth& truth)
 {
-    const auto lat = number(j, "origin_lat");
-    const auto lon = number(j, "origin_lon");
-    const auto duration = number(j, "duration_s");
-    const auto period = number(j, "period_s");
+    const auto lat = number(j, "origin_lat", -90.0, 90.0);
+    const auto lon = number(j, "origin_lon", -180.0, 180.0);
+    const auto duration = number(j, "duration_s", 0.0, kMaxTruthTimeS);
+    const auto period = number(j, "period_s", 0.01, 3600.0);
     for (const auto* field : {&lat, &lon, &duration, &period}) {
         if (!*field) {
             return Unexpected(field->error());
         }
-    }
-    if (*period <= 0.0) {
-        return Unexpected(Error{"", "period_s is not positive", ""});
     }
     truth.originLat = *lat;
     truth.originLon = *lon;
@@ -91,8 +98,8 @@ Result<void, Error> parseHeader(const json& j, Truth& truth)
 Result<void, Error> parseStatic(const json& j, const correlator::LocalFrame& frame, Truth& truth)
 {
     const auto id = text(j, "id");
-    const auto lat = number(j, "lat");
-    const auto lon = number(j, "lon");
+    const auto lat = number(j, "lat", -90.0, 90.0);
+    const auto lon = number(j, "lon", -180.0, 180.0);
     if (!id) {
         return Unexpected(id.error());
     }
@@ -110,9 +117,9 @@ Result<void, Error> parseMoving(const json& j, const correlator::LocalFrame& fra
 {
     const auto id = text(j, "id");
     const auto cls = text(j, "class");
-    const auto t = number(j, "t");
-    const auto lat = number(j, "lat");
-    const auto lon = number(j, "lon");
+    const auto t = number(j, "t", -kMaxTruthTimeS, kMaxTruthTimeS);
+    const auto lat = number(j, "lat", -90.0, 90.0);
+    const auto lon = number(j, "lon", -180.0, 180.0);
     for (const auto* field : {&id, &cls}) {
         if (!*field) {
             return Unexpected(field->error());
