@@ -385,6 +385,12 @@ Result<vision::StereoCalibration, Error> parseText(const std::string& text, cons
     if (auto bounded = checkYamlText(text, where, kCalibrationLimits); !bounded) {
         return Unexpected(bounded.error());
     }
+    const std::size_t start = text.find_first_not_of(" \t\r\n");
+    if (start == std::string::npos || text.compare(start, 5, "%YAML") != 0) {
+        return Unexpected(
+            Error{where, "does not start with '%YAML:1.0' (OpenCV reads only that YAML)",
+                  "start the file with the lines '%YAML:1.0' and '---', or " + std::string(kRecalibrate)});
+    }
     try {
         const cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
         if (!fs.isOpened() || !fs.root().isMap()) {

@@ -418,3 +418,10 @@ TEST(CalibrationFileHostile, SyntaxErrorNamesTheLineNotOpenCVsFunction)
     EXPECT_EQ(message.find("parseValue"), std::string::npos) << message;
     EXPECT_EQ(message.find("skipSpaces"), std::string::npos) << message;
 }
+
+TEST(CalibrationFileHostile, TextWithoutTheYamlHeaderIsNamed)
+{
+    const std::string message = loadRectifiedText("no-header.yaml", replaced(kRectified, "%YAML:1.0\n---\n", ""));
+
+    EXPECT_NE(message.find("no-header.yaml: does not start with '%YAML:1.0'"), std::string::npos) << message;
+}
