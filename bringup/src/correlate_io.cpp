@@ -163,8 +163,7 @@ Result<void, Error> latLon(double lat, double lon, const char* what)
 Result<json, Error> parseObjectLine(std::string_view line, std::size_t maxBytes, const char* fix)
 {
     if (line.size() > maxBytes) {
-        return Unexpected(
-            lineError("line of " + std::to_string(line.size()) + " bytes, more than " + std::to_string(maxBytes), fix));
+        return Unexpected(lineError("line over " + std::to_string(maxBytes) + " bytes", fix));
     }
     ParseChecks checks;
     json j = json::parse(
@@ -320,6 +319,24 @@ json objectJson(const ObjectEstimate& o)
 }
 
 } // namespace
+
+bool readBoundedLine(std::istream& in, std::string& line, std::size_t maxBytes)
+{
+    line.clear();
+    std::streambuf* buffer = in.rdbuf();
+    bool any = false;
+    for (int c = buffer->sbumpc(); c != std::char_traits<char>::eof(); c = buffer->sbumpc()) {
+        any = true;
+        if (c == '\n') {
+            return true;
+        }
+        if (line.size() <= maxBytes) {
+            line.push_back(static_cast<char>(c));
+        }
+    }
+    in.setstate(std::ios::eofbit);
+    return any;
+}
 
 Result<void, Error> checkRanges(const Message& message)
 {

@@ -211,7 +211,7 @@ Result<std::vector<Line>, Error> readInput(const std::string& path, std::size_t&
     std::vector<Line> lines;
     std::string text;
     std::uint64_t number = 0;
-    while (std::getline(in, text)) {
+    while (bringup::readBoundedLine(in, text, bringup::kMaxMessageLineBytes)) {
         ++number;
         if (text.find_first_not_of(" \t\r") == std::string::npos) {
             continue;

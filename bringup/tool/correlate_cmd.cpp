@@ -311,7 +311,7 @@ int runCorrelate(int argc, char** argv)
         out << toJsonLine(s) << '\n';
     };
     double lastT = NAN;
-    while (std::getline(in, line)) {
+    while (bringup::readBoundedLine(in, line, bringup::kMaxMessageLineBytes)) {
         ++lineNumber;
         if (line.find_first_not_of(" \t\r") == std::string::npos) {
             continue;

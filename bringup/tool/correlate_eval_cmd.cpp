@@ -142,6 +142,10 @@ Result<void, Error> parseMoving(const json& j, const correlator::LocalFrame& fra
 /// One truth line; the header (kind "scenario") must come first because it holds the plane's origin.
 Result<void, Error> parseTruthLine(const std::string& line, Truth& truth, std::optional<correlator::LocalFrame>& frame)
 {
+    if (line.size() > bringup::kMaxMessageLineBytes) {
+        return Unexpected(Error{"", "line over " + std::to_string(bringup::kMaxMessageLineBytes) + " bytes",
+                                "give the truth file correlate-sim wrote"});
+    }
     const json j = json::parse(line, nullptr, false);
     if (j.is_discarded() || !j.is_object()) {
         return Unexpected(Error{"", "not a JSON object", ""});
@@ -184,7 +188,7 @@ Result<Truth, Error> readTruth(const std::string& path)
     Truth truth;
     std::optional<correlator::LocalFrame> frame;
     std::string line;
-    for (std::size_t number = 1; std::getline(in, line); ++number) {
+    for (std::size_t number = 1; bringup::readBoundedLine(in, line, bringup::kMaxMessageLineBytes); ++number) {
         if (line.empty()) {
             continue;
         }
@@ -212,7 +216,7 @@ Result<std::vector<Snapshot>, Error> readSnapshots(const std::string& path)
     }
     std::vector<Snapshot> snapshots;
     std::string line;
-    for (std::size_t number = 1; std::getline(in, line); ++number) {
+    for (std::size_t number = 1; bringup::readBoundedLine(in, line, bringup::kMaxSnapshotLineBytes); ++number) {
         if (line.empty()) {
             continue;
         }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # `ugvsense correlate` on hostile input (issue 22): absurd finite numbers (range_m 1e19, 1e308, a duplicate key with
-# 1e300, t 1e17) are refused naming the line and the field; a jump in time from 1 to 1e9 s writes a bounded number of
+# 1e300, t 1e17) and a 1 MB line are refused naming the line and the field; a jump in time from 1 to 1e9 s writes a bounded number of
 # snapshots and says so; an object at the largest range accepted still draws a map (cv::ellipse aborted before).
 # Usage: correlate_hostile_test.sh UGVSENSE WORKDIR
 set -u
@@ -19,6 +19,7 @@ obs() { # t track range bearing
     obs 1.0 e 99999 45 # 7: the largest range accepted
     obs 1e9 a 10 0    # 8: a jump of 1e9 s
     obs 1e9 e 99999 45
+    printf '{"t": 1e9, "kind": "observation", "x": "%s"}\n' "$(head -c 1000000 /dev/zero | tr '\0' x)" # 10: 1 MB
 } >"$work/obs.jsonl"
 out=$(timeout 60 "$tool" correlate --mode original --input "$work/obs.jsonl" --output "$work/snap.jsonl" \
     --map "$work/map.png" 2>&1)
@@ -31,7 +32,7 @@ for want in "obs.jsonl:2: skipped: field 'range_m' value 1e+19 is outside [0, 10
     "obs.jsonl:5: skipped: field 't' value 1e+17 is outside [-1e+10, 1e+10] s" \
     "obs.jsonl:8: field 't' jumps from 1 to 1e+09 s: wrote 1000 snapshots of the gap and skipped 999998999" \
     "999998999 snapshot(s) skipped over jumps in time (at most 1000 are written for one gap)" \
-    "4 bad line(s) skipped" "map of t 1000000000.0 written"; do
+    "obs.jsonl:10: skipped: line over 65536 bytes" "5 bad line(s) skipped" "map of t 1000000000.0 written"; do
     grep -qF -- "$want" <<<"$out" || { echo "missing: $want"; exit 1; }
 done
 lines=$(wc -l <"$work/snap.jsonl")

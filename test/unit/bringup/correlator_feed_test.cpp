@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -262,7 +263,7 @@ TEST(CorrelatorFeedHostile, JsonFieldsOutsideTheirRangesAreRefusedNamingTheField
          R"("d_north_m": 0, "d_heading_deg": 0})",
          "field 'd_east_m' value 1e+12"},
         {R"({"t": 0, "range_m": 10, "x": ")" + std::string(kMaxMessageLineBytes, 'x') + "\", " + base + "}",
-         "bytes, more than 65536"},
+         "line over 65536 bytes"},
     };
     for (const auto& [line, expected] : cases) {
         const auto parsed = parseMessageLine(line);
@@ -271,6 +272,20 @@ TEST(CorrelatorFeedHostile, JsonFieldsOutsideTheirRangesAreRefusedNamingTheField
         EXPECT_NE(parsed.error().message().find(expected), std::string::npos) << parsed.error().message();
     }
     EXPECT_TRUE(parseMessageLine(R"({"t": 0, "range_m": 99999, )" + base + "}").has_value());
+}
+
+TEST(CorrelatorFeedHostile, ReadBoundedLineKeepsAtMostOneByteOverTheLimit)
+{
+    std::istringstream in("abc\n" + std::string(100, 'x') + "\nlast");
+    std::string line;
+
+    ASSERT_TRUE(readBoundedLine(in, line, 10));
+    EXPECT_EQ(line, "abc");
+    ASSERT_TRUE(readBoundedLine(in, line, 10));
+    EXPECT_EQ(line, std::string(11, 'x'));
+    ASSERT_TRUE(readBoundedLine(in, line, 10));
+    EXPECT_EQ(line, "last");
+    EXPECT_FALSE(readBoundedLine(in, line, 10));
 }
 
 TEST(CorrelatorFeedHostile, SnapshotLinesAreCheckedAsInputLines)

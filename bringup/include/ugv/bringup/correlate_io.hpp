@@ -5,6 +5,7 @@
 // nlohmann::json.
 
 #include <cstddef>
+#include <istream>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -34,6 +35,11 @@ Result<correlator::Message, Error> parseMessageLine(std::string_view line);
 
 /// The ranges parseMessageLine() checks, on a message from elsewhere (a DDS sample): the error names the field.
 Result<void, Error> checkRanges(const correlator::Message& message);
+
+/// Reads one line (without its newline) keeping at most maxBytes + 1 characters: the rest of a longer line is read
+/// and dropped, so memory stays bounded on a hostile file and the parser still sees that the line is too long.
+/// @return false at the end of the input (nothing read)
+bool readBoundedLine(std::istream& in, std::string& line, std::size_t maxBytes);
 
 /// A message as one JSON line (no newline).
 std::string toJsonLine(const correlator::Message& message);
