@@ -408,7 +408,7 @@ Result<vision::StereoCalibration, Error> parseText(const std::string& text, cons
 
 } // namespace
 
-Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path)
+Result<CalibrationWithText, Error> loadCalibrationWithText(const std::string& path)
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
@@ -419,7 +419,20 @@ Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path
     if (!text) {
         return Unexpected(text.error());
     }
-    return parseText(*text, path, "repair the file or " + std::string(kRecalibrate));
+    auto calibration = parseText(*text, path, "repair the file or " + std::string(kRecalibrate));
+    if (!calibration) {
+        return Unexpected(calibration.error());
+    }
+    return CalibrationWithText{std::move(*calibration), std::move(*text)};
+}
+
+Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path)
+{
+    auto loaded = loadCalibrationWithText(path);
+    if (!loaded) {
+        return Unexpected(loaded.error());
+    }
+    return std::move(loaded->calibration);
 }
 
 Result<vision::StereoCalibration, Error> parseCalibration(const std::string& text, const std::string& where)

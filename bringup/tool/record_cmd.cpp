@@ -8,13 +8,13 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <string>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "ugv/bringup/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
 #include "ugv/platform/clock.hpp"
@@ -68,11 +68,11 @@ int runRecord(int argc, char** argv)
             return reportUsageError(kCommand, value->error());
         }
     }
-    std::ifstream calibFile(args.get("calib"), std::ios::binary);
-    if (!calibFile) {
-        return fail(Error{args.get("calib"), "cannot read the calibration file", "give the camera's calibration"});
+    // Checked as the service checks it when it replays the recording.
+    const auto calibration = bringup::loadCalibrationWithText(args.get("calib"));
+    if (!calibration) {
+        return fail(calibration.error());
     }
-    const std::string calibration{std::istreambuf_iterator<char>(calibFile), std::istreambuf_iterator<char>()};
     (void)::setpriority(PRIO_PROCESS, 0, kNiceness); // low priority: never in the service's way
 
     if (auto runtime = ipc::startRuntime("ugvsense-record"); !runtime) {
@@ -107,10 +107,19 @@ int runRecord(int argc, char** argv)
         }
         const FrameHeader& h = frame.header;
         if (!writer) {
+            const cv::Size calibrated = calibration->calibration.imageSize;
+            if (static_cast<int>(h.width) != calibrated.width || static_cast<int>(h.height) != calibrated.height) {
+                subscriber->release(frame);
+                return fail(Error{args.get("calib"),
+                                  "is for " + std::to_string(calibrated.width) + "x" +
+                                      std::to_string(calibrated.height) + " but the frames are " +
+                                      std::to_string(h.width) + "x" + std::to_string(h.height),
+                                  "give the calibration of this camera at this resolution"});
+            }
             hal::RecordingWriterOptions options;
             options.syncEveryFrame = !args.has("no-sync");
             options.overwrite = args.has("force");
-            auto opened = hal::RecordingWriter::create(args.get("out"), h.width, h.height, calibration, options);
+            auto opened = hal::RecordingWriter::create(args.get("out"), h.width, h.height, calibration->text, options);
             if (!opened) {
                 subscriber->release(frame);
                 return fail(opened.error());

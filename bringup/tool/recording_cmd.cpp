@@ -22,7 +22,6 @@
 #include "commands.hpp"
 #include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
-#include "ugv/bringup/yaml_guard.hpp"
 #include "ugv/hal/recording.hpp"
 
 namespace ugv::tool {
@@ -149,15 +148,11 @@ int runImport(const Args& args)
         std::cerr << "ugvsense recording: warning: skipped " << lonely << '\n';
     }
     // Checked as the service will check it when it replays the recording (a deep or absurd file is refused here).
-    const auto calib = bringup::loadCalibration(args.get("calib"));
-    if (!calib) {
-        return fail(calib.error());
+    const auto loaded = bringup::loadCalibrationWithText(args.get("calib"));
+    if (!loaded) {
+        return fail(loaded.error());
     }
-    auto calibration =
-        bringup::readTextFile(args.get("calib"), bringup::kMaxCalibrationBytes, "give the calibration YAML");
-    if (!calibration) {
-        return fail(calibration.error());
-    }
+    const vision::StereoCalibration* calib = &loaded->calibration;
     std::map<std::size_t, std::int64_t> stamps;
     if (args.has("timestamps")) {
         auto read = readTimestamps(args.get("timestamps"));
@@ -182,7 +177,7 @@ int runImport(const Args& args)
     options.overwrite = args.has("force");
     options.syncEveryFrame = false; // an import can be redone: one sync at close
     auto writer = hal::RecordingWriter::create(args.get("out"), static_cast<std::uint32_t>(first.cols),
-                                               static_cast<std::uint32_t>(first.rows), *calibration, options);
+                                               static_cast<std::uint32_t>(first.rows), loaded->text, options);
     if (!writer) {
         return fail(writer.error());
     }

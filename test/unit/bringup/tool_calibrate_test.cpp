@@ -180,11 +180,13 @@ TEST(ToolHostile, DeepCalibrationIsRefusedByEveryCommandThatReadsOne)
     writeText(dir / "config.yaml", "calibration: deep.yaml\ncamera:\n  backend: v4l2\n");
     ASSERT_EQ(run("sim --scene chessboard --out " + (dir / "pairs").string() + " --pairs 1").exitCode, 0);
 
-    for (const std::string& command : {"check-config " + (dir / "config.yaml").string(),
-                                       "detect --calib " + deep.string() + " --left l.png --right r.png",
-                                       "rectify --calib " + deep.string() + " --images " + (dir / "pairs").string(),
-                                       "recording import --pairs " + (dir / "pairs").string() + " --calib " +
-                                           deep.string() + " --out " + (dir / "r.ugvrec").string()}) {
+    for (const std::string& command :
+         {"check-config " + (dir / "config.yaml").string(),
+          "detect --calib " + deep.string() + " --left l.png --right r.png",
+          "rectify --calib " + deep.string() + " --images " + (dir / "pairs").string(),
+          "recording import --pairs " + (dir / "pairs").string() + " --calib " + deep.string() + " --out " +
+              (dir / "r.ugvrec").string(),
+          "record --out " + (dir / "r.ugvrec").string() + " --calib " + deep.string() + " --frames 1"}) {
         const ToolRun sut = run(command);
 
         EXPECT_EQ(sut.exitCode, 1) << command << "\n" << sut.output;

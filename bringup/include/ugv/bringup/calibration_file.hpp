@@ -46,6 +46,15 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
 /// Thread-safety: reentrant. RT-safe: no.
 Result<vision::StereoCalibration, Error> loadCalibration(const std::string& path);
 
+/// A checked calibration and the text it was read from (what a recording stores).
+struct CalibrationWithText {
+    vision::StereoCalibration calibration;
+    std::string text;
+};
+
+/// As loadCalibration(), keeping the file's text (`recording import --calib`, `record --calib`).
+Result<CalibrationWithText, Error> loadCalibrationWithText(const std::string& path);
+
 /// As loadCalibration() on the text of a calibration file (a recording's stored calibration); errors name `where`.
 Result<vision::StereoCalibration, Error> parseCalibration(const std::string& text, const std::string& where);
 
