@@ -166,6 +166,21 @@ Result<RunResult, Error> runCorrelatorOnly(const bringup::ServiceConfig& config,
 
 } // namespace
 
+Result<bringup::ServiceConfig, Error> withEnvironment(bringup::ServiceConfig config)
+{
+    // NOLINTNEXTLINE(concurrency-mt-unsafe): init, before threads
+    if (const char* domain = std::getenv("UGV_DDS_DOMAIN"); domain != nullptr && *domain != '\0') {
+        char* end = nullptr;
+        const long id = std::strtol(domain, &end, 10);
+        if (*end != '\0' || id < 0 || id > 232) {
+            return Unexpected(Error{"$UGV_DDS_DOMAIN", std::string("'") + domain + "' is not a DDS domain id",
+                                    "give 0..232 or unset it"});
+        }
+        config.dds.domainId = static_cast<int>(id);
+    }
+    return config;
+}
+
 Result<RunResult, Error> runService(const RunOptions& options)
 {
     bringup::ServiceConfig config;
@@ -176,15 +191,11 @@ Result<RunResult, Error> runService(const RunOptions& options)
         }
         config = std::move(*loaded);
     }
-    if (const char* domain = std::getenv("UGV_DDS_DOMAIN"); domain != nullptr && *domain != '\0') {
-        char* end = nullptr;
-        const long id = std::strtol(domain, &end, 10);
-        if (*end != '\0' || id < 0 || id > 232) {
-            return Unexpected(Error{"$UGV_DDS_DOMAIN", std::string("'") + domain + "' is not a DDS domain id",
-                                    "give 0..232 or unset it"});
-        }
-        config.dds.domainId = static_cast<int>(id);
+    auto effective = withEnvironment(std::move(config));
+    if (!effective) {
+        return Unexpected(effective.error());
     }
+    config = std::move(*effective);
     std::unique_ptr<ipc::dds::Bus> bus;
     if (config.dds.enabled) {
         auto created = ipc::dds::Bus::create(busConfig(config));

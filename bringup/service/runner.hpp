@@ -58,6 +58,10 @@ std::string formatBusReport(const RunResult& result);
 /// @return the figures, or an error naming what failed at start (config, calibration, RouDi, recording).
 Result<RunResult, Error> runService(const RunOptions& options);
 
+/// The config with the environment overrides the service applies at start ($UGV_DDS_DOMAIN for dds.domain_id);
+/// an error names the variable. `ugvsense check-config` applies them too.
+Result<bringup::ServiceConfig, Error> withEnvironment(bringup::ServiceConfig config);
+
 /// "frame 120 +2.41 m: 3 obstacle (red 0, blue 3, nearest 2.41 m at 12.3 deg negative), 50 clear, 11 unknown,
 /// 31.2 ms" for a published frame.
 std::string summaryLine(const PublishedFrame& frame);

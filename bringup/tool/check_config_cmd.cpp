@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "dds_bridge.hpp"
 #include "frame_pipeline.hpp"
+#include "runner.hpp"
 #include "service.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/config.hpp"
@@ -39,12 +40,18 @@ int runCheckConfig(int argc, char** argv)
                                 Error{"ugvsense check-config", "more than one FILE given", "give one config file"});
     }
     const std::string path = bringup::configPath(args.positional().empty() ? nullptr : args.positional()[0].c_str());
-    const auto config = bringup::loadConfig(path);
-    if (!config) {
-        for (const auto& error : config.error()) {
+    const auto loaded = bringup::loadConfig(path);
+    if (!loaded) {
+        for (const auto& error : loaded.error()) {
             std::cerr << "error: " << error.message() << '\n';
         }
-        std::cerr << path << ": " << config.error().size() << " error(s); the service would refuse to start\n";
+        std::cerr << path << ": " << loaded.error().size() << " error(s); the service would refuse to start\n";
+        return 1;
+    }
+    const auto config = service::withEnvironment(*loaded);
+    if (!config) {
+        std::cerr << "error: " << config.error().message() << '\n'
+                  << path << ": the environment's override is refused; the service would refuse to start\n";
         return 1;
     }
     std::cout << bringup::formatConfig(config.value());
