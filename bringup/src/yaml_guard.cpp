@@ -80,7 +80,10 @@ public:
         for (std::size_t i = indent; i < text.size(); ++i) {
             const char c = text[i];
             const bool endsToken = i + 1 == text.size() || isBlank(text[i + 1]);
-            if (c == '"' || c == '\'') {
+            const bool startsToken =
+                i == indent || isBlank(text[i - 1]) || std::string_view("[{,").find(text[i - 1]) != npos;
+            // A quote opens a quoted scalar only at a token's start ("x'y" is plain text: what follows still counts).
+            if ((c == '"' || c == '\'') && startsToken) {
                 i = closingQuote(text, i);
                 indicatorsOnly = false;
                 continue;
@@ -98,7 +101,7 @@ public:
                 ++inlineLevels;
                 continue;
             } else if (limits_.refuseWideIntegers && (isDigit(c) || c == '-' || c == '+') &&
-                       (i == 0 || isBlank(text[i - 1]) || std::string_view("[{,:").find(text[i - 1]) != npos)) {
+                       (startsToken || text[i - 1] == ':')) {
                 std::size_t end = i + 1;
                 while (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) != 0 ||
                                              std::string_view("._+-").find(text[end]) != npos)) {

@@ -33,6 +33,9 @@ TEST(YamlGuard, EachKindOfNestingCounts)
     EXPECT_NE(errorOf("- - - - - 1\n").find("t.yaml:1: nested deeper"), std::string::npos);
     EXPECT_NE(errorOf("a:\n b:\n  c:\n   d: 1\n").find("t.yaml:4: nested deeper"), std::string::npos);
     EXPECT_EQ(errorOf("a: [[1]]\nb: [[2]]\nc:\n d: 1\n"), ""); // closed levels do not add up
+    // A quote inside a plain scalar opens nothing: the brackets after it still count.
+    EXPECT_NE(errorOf("a: [x'y, [[[[1]]]]]\n").find("t.yaml:1: nested deeper"), std::string::npos);
+    EXPECT_NE(errorOf("a: [x\"y, [[[[1]]]]]\n").find("t.yaml:1: nested deeper"), std::string::npos);
 }
 
 TEST(YamlGuard, IntegersBeyondInt32AreRefusedOthersPass)
