@@ -275,4 +275,27 @@ TEST(ToolHostile, ImageDeclaringAHugeSizeIsRefusedBeforeDecoding)
     EXPECT_NE(rectify.output.find("left1.png: the header declares 30000x30000"), std::string::npos) << rectify.output;
 }
 
+TEST(ToolHostile, JpegBmpAndPgmHeadersAreCheckedToo)
+{
+    const auto dir = tempDir("huge-headers");
+    writeText(dir / "calib.yaml", kRectifiedCalibration);
+    // 30000 = 0x7530: a JPEG start-of-frame after an APP0 segment, a BMP info header, a PGM header.
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"huge.jpg",
+         std::string("\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x0B\x08\x75\x30\x75\x30\x01\x01\x11\x00", 21)},
+        {"huge.bmp", std::string("BM") + std::string(16, '\0') + std::string("\x30\x75\x00\x00\x30\x75\x00\x00", 8)},
+        {"huge.pgm", "P5\n# a comment\n30000 30000\n255\n"},
+    };
+    for (const auto& [name, bytes] : files) {
+        std::ofstream((dir / name).string(), std::ios::binary) << bytes;
+
+        const ToolRun sut = run("detect --calib " + (dir / "calib.yaml").string() + " --left " + (dir / name).string() +
+                                " --right " + (dir / name).string());
+
+        EXPECT_EQ(sut.exitCode, 1) << name << "\n" << sut.output;
+        EXPECT_NE(sut.output.find(name + ": the header declares 30000x30000 pixels"), std::string::npos) << name << "\n"
+                                                                                                         << sut.output;
+    }
+}
+
 } // namespace
