@@ -152,9 +152,10 @@ ObstacleSectors sectorsFromTruth(const std::vector<SectorTruth>& truth, const Ob
     for (int s = 0; s < out.count; ++s) {
         Sector& sector = out.sectors[static_cast<std::size_t>(s)];
         const SectorTruth& t = truth[static_cast<std::size_t>(s)];
-        sector.state = t.hasObstacle() ? SectorState::Obstacle : SectorState::Clear;
-        sector.kind = t.hasObstacle() ? ObstacleKind::Positive : ObstacleKind::None;
-        sector.rangeM = t.hasObstacle() ? static_cast<float>(t.obstacleRangeM) : std::numeric_limits<float>::infinity();
+        sector.state = t.seesObstacle() ? SectorState::Obstacle : SectorState::Clear;
+        sector.kind = t.seesObstacle() ? ObstacleKind::Positive : ObstacleKind::None;
+        sector.rangeM =
+            t.seesObstacle() ? static_cast<float>(t.obstacleRangeM) : std::numeric_limits<float>::infinity();
     }
     return out;
 }
@@ -310,6 +311,7 @@ std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, con
     std::vector<std::vector<double>> kerb(n);
     std::vector<int> analysed(n, 0);
     std::vector<int> withGt(n, 0);
+    const double horizon = rules.maxRangeM + tolerance(rules.maxRangeM, rules);
     for (int v = std::max(0, firstRow); v < disparity.rows; ++v) {
         const float* row = disparity.ptr<float>(v);
         for (int u = 0; u < disparity.cols; ++u) {
@@ -325,7 +327,7 @@ std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, con
             const vision::VehiclePoint p = road.pixelToVehicle(u, v, row[u], projection);
             const double range = std::hypot(p.x, p.y);
             const int s = sectorOf(layout, std::atan2(p.y, p.x) * kRadToDeg);
-            if (s < 0 || range > rules.maxRangeM || !(p.x > 0.0)) {
+            if (s < 0 || range > horizon || !(p.x > 0.0)) {
                 continue;
             }
             const auto k = static_cast<std::size_t>(s);
@@ -334,7 +336,7 @@ std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, con
                 if (p.z >= rules.obstacleMinHeightM) {
                     obstacle[k].push_back(range);
                 }
-            } else if (p.z <= -rules.dropMinDepthM) {
+            } else if (p.z <= -rules.dropMinDepthM && range <= rules.maxRangeM) {
                 ++out[k].dropPoints;
             }
         }
@@ -346,6 +348,7 @@ std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, con
         t.obstaclePoints = static_cast<int>(obstacle[k].size());
         t.obstacleRangeM = nthNearest(obstacle[k], rules.minPoints);
         t.kerbRangeM = nthNearest(kerb[k], rules.minPoints);
+        t.horizonM = rules.maxRangeM;
     }
     return out;
 }
@@ -369,7 +372,10 @@ RealOutcome scoreRealSector(const SectorTruth& truth, const Sector& reported, co
         }
         return r < truth.obstacleRangeM ? RealOutcome::TooNear : RealOutcome::Missed;
     }
-    return report && !atKerb ? RealOutcome::False : RealOutcome::FreeOk;
+    // Nothing within the horizon: a report is false unless it is a kerb or an obstacle just beyond the horizon.
+    const bool beyond =
+        report && truth.seesObstacle() && std::abs(r - truth.obstacleRangeM) <= tolerance(truth.obstacleRangeM, rules);
+    return report && !atKerb && !beyond ? RealOutcome::False : RealOutcome::FreeOk;
 }
 
 void RealTally::add(RealOutcome outcome, const SectorTruth& truth, const Sector& reported)

@@ -45,13 +45,18 @@ struct RealScoringRules {
 
 /// What a sector holds by a point set (GT or the baseline's), relative to a road plane.
 struct SectorTruth {
-    double coverage = 0.0;            ///< GT pixels / analysed pixels of the sector's columns
-    bool scored = false;              ///< coverage >= minCoverage
-    int obstaclePoints = 0;           ///< points 0.25-2.5 m high within 25 m
-    double obstacleRangeM = kNoRange; ///< [m] robust nearest of those, kNoRange when < minPoints
-    double kerbRangeM = kNoRange;     ///< [m] the same for points >= 0.10 m high
-    int dropPoints = 0;               ///< points >= 0.25 m below the road within 25 m
-    [[nodiscard]] bool hasObstacle() const { return obstacleRangeM < kNoRange; }
+    double coverage = 0.0;  ///< GT pixels / analysed pixels of the sector's columns
+    bool scored = false;    ///< coverage >= minCoverage
+    int obstaclePoints = 0; ///< points 0.25-2.5 m high within 27.5 m (see obstacleRangeM)
+    /// [m] robust nearest of those, kNoRange when < minPoints; looked for out to the horizon plus its tolerance
+    /// (27.5 m), so that a report at 26 m of a wall at 26 m is not false, but only a range within the horizon
+    /// makes the sector an obstacle sector (hasObstacle)
+    double obstacleRangeM = kNoRange;
+    double kerbRangeM = kNoRange; ///< [m] the same for points >= 0.10 m high
+    double horizonM = 25.0;       ///< [m] RealScoringRules::maxRangeM
+    int dropPoints = 0;           ///< points >= 0.25 m below the road within 25 m
+    [[nodiscard]] bool hasObstacle() const { return obstacleRangeM <= horizonM; }
+    [[nodiscard]] bool seesObstacle() const { return obstacleRangeM < kNoRange; } ///< within the horizon's tolerance
     static constexpr double kNoRange = 1e9;
 };
 

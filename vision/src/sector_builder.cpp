@@ -15,6 +15,7 @@ constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr int kKinds = 2; // 0 positive, 1 negative
 constexpr float kDisparityScale = 16.0F;
 constexpr int kMaxProfileRows = 2048; ///< analysed rows the row profile's noise estimate looks at
+constexpr float kWallBinM = 0.10F;    ///< [m] range resolution of the wall test's sums
 
 /// Vehicle axes in camera coordinates, exactly as GroundPlane::toVehicle builds them: forward f and left l
 /// (both of norm 1 / invNorm) and up u (unit).
@@ -68,7 +69,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(config.dangerDistanceM <= config.cautionDistanceM) || !(config.dropProfileMinRangeM > 0.0F) ||
         !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1 || config.dropEdgeSectors < 0 ||
         !(config.closeGapM >= 0.0F) || !(config.faceSupportRangeM > 0.0F) || config.minFaceSupport < 1 ||
-        config.minFarTallVotes < 1) {
+        config.minFarTallVotes < 1 || !(config.referenceColumnsPerSector > 0.0F) || !(config.referenceFocalPx > 0.0F)) {
         return Unexpected(configError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
@@ -77,9 +78,10 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         !(lg.maxOffsetM >= 0.0F) || !(config.minDropShare >= 0.0F && config.minDropShare <= 1.0F) ||
         config.minRimVotes < 0 || !(config.rimWindowFraction >= 0.0F) || !(config.explainWindowM >= 0.0F) ||
         !(config.heightNoiseFactor >= 0.0F) || !(config.dropNoiseFactor >= 0.0F) ||
-        !(config.dropProfileNoiseFactor >= 0.0F) || config.dropProfileMinLabels < 0) {
+        !(config.dropProfileNoiseFactor >= 0.0F) || config.dropProfileMinLabels < 0 || !(config.maxWallSlope > 0.0F) ||
+        !(config.wallSlopeSigmas >= 0.0F) || !(config.floorLineTolerance >= 0.0F)) {
         return Unexpected(configError("a local-ground or drop-evidence setting is out of range (band, bin > 0, "
-                                      "minPoints >= 1, share in [0, 1], the others >= 0)"));
+                                      "minPoints >= 1, share in [0, 1], maxWallSlope > 0, the others >= 0)"));
     }
     if (!(projection.fx > 0.0) || !(projection.fy > 0.0) || !(projection.baselineM > 0.0)) {
         return Unexpected(Error{"SectorBuilder::create", "projection has no positive focal length and baseline", ""});
@@ -91,6 +93,22 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
 
     SectorBuilder sut;
     sut.config_ = config;
+    // Vote counts are pixels: a face of a given size at a given range covers (columns per sector) x (fy x its
+    // height / range) of them. The counts are set for the reference rig and scale with this rig's pixel density.
+    const double columnsPerSector = (2.0 * projection.cx + 1.0) / config.sectorCount;
+    sut.pixelScale_ = columnsPerSector / static_cast<double>(config.referenceColumnsPerSector) * projection.fy /
+                      static_cast<double>(config.referenceFocalPx);
+    const auto scaled = [&](int count) { return std::max(1, static_cast<int>(std::lround(count * sut.pixelScale_))); };
+    sut.config_.minSupport = scaled(config.minSupport);
+    sut.config_.minFaceSupport = scaled(config.minFaceSupport);
+    sut.config_.minTallVotes = scaled(config.minTallVotes);
+    sut.config_.minFarTallVotes = scaled(config.minFarTallVotes);
+    sut.config_.minDropSupport = scaled(config.minDropSupport);
+    sut.config_.maxStrayVotes = scaled(config.maxStrayVotes);
+    sut.config_.maxStrayDropVotes = scaled(config.maxStrayDropVotes);
+    sut.config_.minRimVotes = config.minRimVotes == 0 ? 0 : scaled(config.minRimVotes);
+    sut.config_.minClearFarVotes = config.minClearFarVotes == 0 ? 0 : scaled(config.minClearFarVotes);
+    sut.config_.dropProfileMinPixels = scaled(config.dropProfileMinPixels);
     if (config.maxRangeM == 0.0F) {
         sut.config_.maxRangeM =
             static_cast<float>(projection.fx * projection.baselineM / static_cast<double>(config.maxRangeDisparityPx));
@@ -114,12 +132,16 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     sut.tallVotes_.assign(n * static_cast<std::size_t>(sut.bins_), 0U);
     sut.groundByRange_.assign(sut.tallVotes_.size(), 0U);
     sut.dropDistance_.assign(sut.tallVotes_.size(), 0.0F);
+    sut.wallBinRatio_ = std::max(1, static_cast<int>(std::lround(kWallBinM / config.rangeBinM)));
+    sut.wallBins_ = sut.bins_ / sut.wallBinRatio_ + 1;
+    sut.wallSums_.assign(n * static_cast<std::size_t>(sut.wallBins_), WallSums{});
     sut.groundVotes_.assign(n, 0U);
     sut.farGroundVotes_.assign(n, 0U);
     sut.profileRows_ = roi.y + roi.height - firstRow;
     sut.rowCount_.assign(n * static_cast<std::size_t>(sut.profileRows_), 0U);
     sut.rowResidual_.assign(sut.rowCount_.size(), 0.0F);
     sut.rowCrossing_.assign(sut.rowCount_.size(), 0.0F);
+    sut.rowDisparity_.assign(sut.rowCount_.size(), 0.0F);
     sut.rowDropLabels_.assign(sut.rowCount_.size(), 0U);
     sut.noiseHistogram_.assign(256, 0U);
     sut.kindVotes_.assign(n * kKinds, 0U);
@@ -156,9 +178,45 @@ void SectorBuilder::setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) 
     sectors_.degraded = true;
 }
 
-SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram, const std::uint32_t* tall,
-                                                     float percentile, bool drop) const noexcept
+bool SectorBuilder::wallLike(int s, int firstBin, int endBin) const noexcept
 {
+    WallSums w;
+    const int first = std::max(0, firstBin) / wallBinRatio_;
+    const int end = std::min(wallBins_, (std::max(0, endBin) + wallBinRatio_ - 1) / wallBinRatio_);
+    for (int b = first; b < end; ++b) {
+        const WallSums& x =
+            wallSums_[static_cast<std::size_t>(s) * static_cast<std::size_t>(wallBins_) + static_cast<std::size_t>(b)];
+        w.n += x.n;
+        w.g += x.g;
+        w.o += x.o;
+        w.gg += x.gg;
+        w.go += x.go;
+        w.oo += x.oo;
+    }
+    if (w.n < 3.0) {
+        return false;
+    }
+    const double varG = w.gg / w.n - (w.g / w.n) * (w.g / w.n);
+    const double cov = w.go / w.n - (w.g / w.n) * (w.o / w.n);
+    const double varO = w.oo / w.n - (w.o / w.n) * (w.o / w.n);
+    if (!(varG > 1e-6)) {
+        return false; // all on one row: no slope to see
+    }
+    const double slope = cov / varG;
+    const double margin = config_.wallSlopeSigmas * std::sqrt(std::max(0.0, varO - slope * cov) / (w.n * varG));
+    // A wall: o stays put while g changes.
+    const bool wall = std::abs(slope) + margin < config_.maxWallSlope;
+    // A floor: o = g h / (h + D), a line through the origin whose slope gives a depth D of at least minDepthM.
+    const double h = groundHeight_;
+    const bool floor = std::abs(slope - w.o / w.g) <= margin + config_.floorLineTolerance &&
+                       slope + margin <= h / (h + static_cast<double>(config_.minDepthM));
+    return wall || floor;
+}
+
+SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histogram, const std::uint32_t* tall,
+                                                     float percentile, int dropSector) const noexcept
+{
+    const bool drop = dropSector >= 0;
     for (int start = 0; start < bins_; ++start) {
         if (histogram[start] == 0U) {
             continue;
@@ -215,6 +273,9 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
         if (votes < minSupport) {
             continue;
         }
+        if (drop && !wallLike(dropSector, start, end)) {
+            continue; // a surface below the ground, not a wall
+        }
         // Quantile of the votes inside the window; the range is the centre of that bin.
         const auto target = static_cast<std::uint32_t>(percentile * static_cast<float>(votes));
         std::uint32_t cumulative = 0;
@@ -242,6 +303,7 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
         std::uint32_t labels = 0; ///< negative labels
         float residual = 0.0F;    ///< mean [px]
         float crossing = 0.0F;    ///< mean [m]
+        float disparity = 0.0F;   ///< mean [px]
     };
     const auto rowOf = [&](int v) noexcept {
         Row r;
@@ -251,8 +313,10 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
             r.labels += rowDropLabels_[i];
             r.residual += rowResidual_[i];
             r.crossing += rowCrossing_[i];
+            r.disparity += rowDisparity_[i];
         }
         if (r.count > 0) {
+            r.disparity /= static_cast<float>(r.count);
             r.residual /= static_cast<float>(r.count);
             r.crossing /= static_cast<float>(r.count);
         }
@@ -331,6 +395,18 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
                 suspect = true;
                 continue;
             }
+            // ... and the two wall rows are a wall: their disparity stays put while the ground's changes from one to
+            // the other (the slope of the one on the other, by the frame's pixel noise; see maxWallSlope).
+            const float groundStep = (wall1.disparity - wall1.residual) - (wall2.disparity - wall2.residual);
+            const float slope = (wall1.disparity - wall2.disparity) / groundStep;
+            const float slopeError =
+                disparityNoisePx_ *
+                std::sqrt(1.0F / static_cast<float>(wall1.count) + 1.0F / static_cast<float>(wall2.count)) /
+                std::abs(groundStep);
+            if (!(std::abs(slope) + config_.wallSlopeSigmas * slopeError < config_.maxWallSlope)) {
+                suspect = true;
+                continue;
+            }
             return Cluster{static_cast<int>(wall1.count + wall2.count), 0.5F * (rim.crossing + wall1.crossing)};
         }
     }
@@ -371,12 +447,14 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     std::fill(tallVotes_.begin(), tallVotes_.end(), 0U);
     std::fill(groundByRange_.begin(), groundByRange_.end(), 0U);
     std::fill(dropDistance_.begin(), dropDistance_.end(), 0.0F);
+    std::fill(wallSums_.begin(), wallSums_.end(), WallSums{});
     std::fill(groundVotes_.begin(), groundVotes_.end(), 0U);
     std::fill(farGroundVotes_.begin(), farGroundVotes_.end(), 0U);
     std::fill(kindVotes_.begin(), kindVotes_.end(), 0U);
     std::fill(rowCount_.begin(), rowCount_.end(), 0U);
     std::fill(rowResidual_.begin(), rowResidual_.end(), 0.0F);
     std::fill(rowCrossing_.begin(), rowCrossing_.end(), 0.0F);
+    std::fill(rowDisparity_.begin(), rowDisparity_.end(), 0.0F);
     std::fill(rowDropLabels_.begin(), rowDropLabels_.end(), 0U);
 
     const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
@@ -402,6 +480,7 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
             rowDropLabels_[row] += labelValue == kLabelNegative ? 1U : 0U;
             rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * zPlane / groundHeight;
             rowCrossing_[row] += range * groundHeight / (groundHeight - zPlane);
+            rowDisparity_[row] += static_cast<float>(d16) / kDisparityScale;
         }
         const float z = zLocal;
         int kind = -1;
@@ -440,6 +519,16 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
         if (kind == 1) {
             dropDistance_[static_cast<std::size_t>(s) * bins + bin] += ownRange * static_cast<float>(weight);
+            const double own = static_cast<double>(d16) / kDisparityScale;
+            const double groundD = own - own * static_cast<double>(z / groundHeight); // d - residual d z / h
+            WallSums& w = wallSums_[static_cast<std::size_t>(s) * static_cast<std::size_t>(wallBins_) +
+                                    bin / static_cast<std::size_t>(wallBinRatio_)];
+            w.n += 1.0;
+            w.g += groundD;
+            w.o += own;
+            w.gg += groundD * groundD;
+            w.go += groundD * own;
+            w.oo += own * own;
         }
         histograms_[slot * bins + bin] += weight;
         float& extreme = extremes_[slot * bins + bin];
@@ -573,15 +662,14 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     const auto heightWindowBins = static_cast<int>(std::ceil(0.10F / config_.rangeBinM)); // as the GT: 0.10 m
     for (int s = 0; s < config_.sectorCount; ++s) {
         const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
-        positives_[static_cast<std::size_t>(s)] =
-            nearestCluster(&histograms_[slot0 * bins], &tallVotes_[static_cast<std::size_t>(s) * bins],
-                           config_.rangePercentile, false);
+        positives_[static_cast<std::size_t>(s)] = nearestCluster(
+            &histograms_[slot0 * bins], &tallVotes_[static_cast<std::size_t>(s) * bins], config_.rangePercentile, -1);
     }
     for (int s = 0; s < config_.sectorCount; ++s) {
         const std::size_t slot0 = static_cast<std::size_t>(s) * kKinds;
         Cluster negative =
             nearestCluster(&histograms_[(slot0 + 1) * bins], &groundByRange_[static_cast<std::size_t>(s) * bins],
-                           config_.dropRangePercentile, true);
+                           config_.dropRangePercentile, s);
         if (negative.votes > 0 && explainedByObstacle(s, negative, positives_)) {
             negative = Cluster{};
         }

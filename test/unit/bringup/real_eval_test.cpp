@@ -136,6 +136,14 @@ TEST(RealEval, EveryOutcome)
     SectorTruth both = obstacle;
     both.kerbRangeM = 5.0;
     EXPECT_EQ(scoreRealSector(both, report(SectorState::Obstacle, 5.2F), kRules), RealOutcome::Correct);
+    // A wall 26 m away, just beyond the 25 m horizon: no obstacle sector, but a report of it is not false (its
+    // tolerance reaches 27.5 m); a report at 26 m where the truth sees nothing out to 27.5 m is.
+    SectorTruth beyond = free;
+    beyond.obstacleRangeM = 26.0;
+    EXPECT_FALSE(beyond.hasObstacle());
+    EXPECT_EQ(scoreRealSector(beyond, report(SectorState::Obstacle, 26.5F), kRules), RealOutcome::FreeOk);
+    EXPECT_EQ(scoreRealSector(beyond, report(SectorState::Obstacle, 20.0F), kRules), RealOutcome::False);
+    EXPECT_EQ(scoreRealSector(free, report(SectorState::Obstacle, 26.0F), kRules), RealOutcome::False);
 }
 
 TEST(RealEval, TallyCountsAndRates)

@@ -153,6 +153,9 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minRimVotes = -1; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.dropNoiseFactor = NAN; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.maxRangeDisparityPx = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.maxWallSlope = 0.0F; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.wallSlopeSigmas = NAN; }));
+    EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.floorLineTolerance = -0.1F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.maxRangeM = 0.01F; })); // not above the range bin
 }
 
@@ -173,6 +176,33 @@ TEST(SectorBuilder, FlatGroundIsClearEverywhere)
         EXPECT_EQ(s.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << i;
         EXPECT_EQ(s.sectors[static_cast<std::size_t>(i)].danger, DangerClass::Green) << i;
     }
+}
+
+TEST(SectorBuilder, PixelCountsFollowThePixelsAFaceCoversOnTheRig)
+{
+    // The default rig (640 px, 64 sectors, fy 546 px) is the reference: its counts are the configured ones.
+    const SectorBuilderConfig config;
+    EXPECT_EQ(makeBuilder(config).config().minSupport, config.minSupport);
+    EXPECT_EQ(makeBuilder(config).config().maxStrayVotes, config.maxStrayVotes);
+
+    // KITTI's rig: 1242 px (19.4 columns per sector) and fy 721.5 px, so a face covers 2.56 times the pixels.
+    const RectifiedProjection kitti{721.5, 721.5, 620.5, 187.5, 0.54};
+    auto result = SectorBuilder::create(config, kitti, Rect{0, 188, 1242, 187}, 200);
+    ASSERT_TRUE(result.has_value()) << result.error().message();
+    const double scale = 1242.0 / 64.0 / 10.0 * 721.5 / 546.0;
+    const SectorBuilderConfig& scaled = result.value().config();
+    EXPECT_EQ(scaled.minSupport, std::lround(config.minSupport * scale));
+    EXPECT_EQ(scaled.minFaceSupport, std::lround(config.minFaceSupport * scale));
+    EXPECT_EQ(scaled.minTallVotes, std::lround(config.minTallVotes * scale));
+    EXPECT_EQ(scaled.minDropSupport, std::lround(config.minDropSupport * scale));
+    EXPECT_EQ(scaled.minClearFarVotes, std::lround(config.minClearFarVotes * scale));
+
+    // A coarse rig (320 px, fy 273 px) needs a quarter, never less than one.
+    const RectifiedProjection coarse{273.0, 273.0, 159.5, 119.5, 0.30};
+    auto small = SectorBuilder::create(config, coarse, Rect{0, 116, 320, 124}, 120);
+    ASSERT_TRUE(small.has_value()) << small.error().message();
+    EXPECT_EQ(small.value().config().minSupport, config.minSupport / 4);
+    EXPECT_GE(small.value().config().minFarTallVotes, 1);
 }
 
 TEST(SectorBuilder, PositiveFaceGivesExactRangeKindHeightAndDanger)
@@ -507,6 +537,72 @@ TEST(SectorBuilder, ARowProfileDropNeedsTheSecondCueAndIsNeverClearWithoutIt)
     const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
     EXPECT_NE(ahead.kind, ObstacleKind::Negative);
     EXPECT_NE(ahead.state, SectorState::Clear);
+}
+
+/// The ground seen offsetPx too far at depths [z0, z1] over camera X in [-halfWidth, halfWidth]: what a matcher's
+/// error spread over a patch of road gives (its disparity follows the ground's, d = d_g - offset).
+void paintOffsetPatch(cv::Mat& d16, double z0, double z1, double halfWidth, double offsetPx)
+{
+    const DisparityPlane plane = kGround.disparityPlane(kProjection);
+    for (int v = roiRow(0.0, z1); v <= roiRow(0.0, z0); ++v) {
+        const double z = kProjection.fy * kHeightM / (v + kRoi.y - kProjection.cy);
+        for (int u = column(-halfWidth, z); u <= column(halfWidth, z); ++u) {
+            const double d = plane.at(u + kRoi.x, v + kRoi.y) - offsetPx;
+            d16.at<std::int16_t>(v, u) = static_cast<std::int16_t>(std::lround(d * 16.0));
+        }
+    }
+}
+
+TEST(SectorBuilder, ABelowGroundPatchThatFollowsTheGroundIsNoDropAndNeverClear)
+{
+    // 6-8 m ahead seen 5 px too far: every pixel 12-16 cm below the ground votes a drop (deeper than the local
+    // ground follows), but the patch's disparity follows the ground's (slope 1, not through the origin): neither a
+    // wall nor a floor. Unknown, not Clear. A far wall at the same ranges is a drop.
+    auto sut = makeBuilder();
+    cv::Mat d16 = groundDisparity();
+    paintOffsetPatch(d16, 6.0, 8.0, 1.0, 5.0);
+
+    ASSERT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_NE(ahead.state, SectorState::Obstacle);
+    EXPECT_NE(ahead.state, SectorState::Clear);
+
+    // The wall test is what tells: accepting any slope, the patch is a drop.
+    SectorBuilderConfig anySlope;
+    anySlope.maxWallSlope = 100.0F;
+    auto lax = makeBuilder(anySlope);
+    ASSERT_EQ(lax.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+    EXPECT_EQ(lax.sectors().sectors[static_cast<std::size_t>(sectorOf(lax.sectors(), 0.0))].kind,
+              ObstacleKind::Negative);
+
+    cv::Mat wall = groundDisparity();
+    paintFarWall(wall, 6.0, 7.0);
+    ASSERT_EQ(sut.build(view16(wall), {}, kGround, 2U, 0), BuildStatus::Ok);
+    EXPECT_EQ(sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))].kind,
+              ObstacleKind::Negative);
+}
+
+TEST(SectorBuilder, ARowProfileDropMustBeAWallNotRowsThatFollowTheGround)
+{
+    // Rows at 9-10 m seen 1.5 px too far, with both cues (labels) and the ground back above them: the row profile's
+    // rim, wall rows and far rim are all there, but the wall rows' disparity follows the ground's. No drop,
+    // never Clear; the far wall of a trench at the same range is one.
+    auto sut = makeBuilder(profileOnly());
+    cv::Mat d16 = groundDisparity();
+    paintOffsetPatch(d16, 9.0, 10.0, 2.0, 1.5);
+    const cv::Mat labels = labelsBelowGround(d16);
+
+    ASSERT_EQ(sut.build(view16(d16), view(labels), kGround, 1U, 0), BuildStatus::Ok);
+    const Sector& ahead = sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    EXPECT_NE(ahead.state, SectorState::Obstacle);
+    EXPECT_NE(ahead.state, SectorState::Clear);
+
+    SectorBuilderConfig anySlope = profileOnly();
+    anySlope.maxWallSlope = 100.0F;
+    auto lax = makeBuilder(anySlope);
+    ASSERT_EQ(lax.build(view16(d16), view(labels), kGround, 1U, 0), BuildStatus::Ok);
+    EXPECT_EQ(lax.sectors().sectors[static_cast<std::size_t>(sectorOf(lax.sectors(), 0.0))].kind,
+              ObstacleKind::Negative);
 }
 
 TEST(SectorBuilder, AFarWallIsFoundAboveABlendedOrThinnedBottomRow)

@@ -45,7 +45,7 @@ struct GroundEstimatorConfig {
     std::uint64_t seed = 0x9E3779B97F4A7C15ULL; ///< RANSAC sampling seed (re-applied every update)
     int minInliers = 300;                       ///< absolute minimum of inliers
     double minInlierFraction = 0.15;            ///< minimum inliers / candidates (candidates include obstacles)
-    double heightBandFraction = 0.45;           ///< allowed |height - configured| / configured
+    double heightBandFraction = 0.60;           ///< allowed |height - configured| / configured (30 % low: +43 %)
     double pitchBandDeg = 14.0;                 ///< [deg] allowed |pitch - configured|
     double rollBandDeg = 8.0;                   ///< [deg] allowed |roll - configured|
     double smoothing = 0.5;                     ///< weight of the new measurement, (0, 1]; 1 = no smoothing

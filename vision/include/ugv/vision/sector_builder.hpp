@@ -49,9 +49,12 @@
 /// votes and the ground votes at its ranges (the ground ends), ground is seen within rimWindowFraction in front of
 /// it (the near rim), a neighbouring sector has one at a range that follows (keepContinuousDrops), and no positive
 /// cluster of the sector or its neighbours lies where its pixels are (explainedByObstacle: the matcher spreads an
-/// obstacle's disparity down over the ground in front of it). The row profile (plane residuals) needs a far rim
-/// above the wall and dropProfileMinLabels negative labels. A drop seen without this evidence makes its sector
-/// Unknown, never Clear (Cluster::suspect). maxRangeM follows from the rig when 0.
+/// obstacle's disparity down over the ground in front of it), and its pixels are a wall (wallLike: a drop shows
+/// its far wall, whose disparity stays put from row to row while the ground's it hides changes; a grade, a dip or
+/// a matcher's error spread over the road is a surface whose disparity follows the ground's). The row profile
+/// (plane residuals) needs a far rim above the wall, dropProfileMinLabels negative labels and a wall among the
+/// votes between the rim and the far rim. A drop seen without this evidence makes its sector Unknown, never Clear
+/// (Cluster::suspect). maxRangeM follows from the rig when 0.
 ///
 /// Thread-safety: thread-bound (build() writes the internal buffers). RT-safe: build() yes (no allocation, no
 /// exception); create() no.
@@ -88,14 +91,21 @@ struct SectorBuilderConfig {
     float faceSupportRangeM = 5.0F;     ///< [m] a positive cluster farther than r needs minSupport (this / r) votes ...
     int minFaceSupport = 20;            ///< ... but at least this many ...
     int minFarTallVotes = 3;            ///< ... and minTallVotes (this / r) tall votes, at least this many
-    int minSupport = 40;                ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
-                                        ///< mismatch blobs on empty ground through: 23..33 votes measured)
-    float dropSupportRangeM = 5.0F;     ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
-    int minDropSupport = 20;            ///< ... but at least this many votes
-    int maxStrayVotes = 8;      ///< positive votes outside any cluster at or above which a sector cannot be Clear
-                                ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
-    int maxStrayDropVotes = 20; ///< the same for negative votes (far ground is noisier below the plane: 10 would
-                                ///< turn 52 -> 38 sectors of empty ground Unknown)
+    /// Every count of pixels below (the supports, tall votes, stray votes, rim and far-ground votes, the row
+    /// profile's pixels) is for a rig with this many image columns per sector and this focal length [px] (the
+    /// default rig: 640 px, 64 sectors, fy 546 px); create() scales them by the pixels a face covers on the actual
+    /// rig, (columns per sector / referenceColumnsPerSector) (fy / referenceFocalPx), at least 1: 2.6 on KITTI's
+    /// 1242 px, fy 721 px (unscaled there, 20-vote far faces of the road's texture were 19 false obstacles)
+    float referenceColumnsPerSector = 10.0F;
+    float referenceFocalPx = 546.0F;
+    int minSupport = 40;            ///< votes a cluster needs to make a sector Obstacle (20 let SGBM
+                                    ///< mismatch blobs on empty ground through: 23..33 votes measured)
+    float dropSupportRangeM = 5.0F; ///< [m] a negative cluster farther than r needs minSupport (this / r)^2
+    int minDropSupport = 20;        ///< ... but at least this many votes
+    int maxStrayVotes = 8;          ///< positive votes outside any cluster at or above which a sector cannot be Clear
+                                    ///< (a mesh fence's wires: 42 -> 25..33 Clear sectors of 64; empty ground 52 -> 51)
+    int maxStrayDropVotes = 20;     ///< the same for negative votes (far ground is noisier below the plane: 10 would
+                                    ///< turn 52 -> 38 sectors of empty ground Unknown)
     /// Far drops by their row profile (see the file comment): a rim beyond dropProfileMinRangeM is a row whose
     /// mean residual disparity is above -dropProfileResidualPx / 2 with two rows above it (the far wall) below
     /// -dropProfileResidualPx (up to two blended or thinned rows between), over the sector and its two
@@ -135,7 +145,19 @@ struct SectorBuilderConfig {
     float minDropShare = 0.5F;         ///< a negative cluster's votes must be at least this share of its votes
                                        ///< and the ground votes at the same ranges: where a drop is, the ground
                                        ///< ends (on a real road a matcher's error below it leaves the road around)
-    bool useLocalGround = true;        ///< heights from the per-sector ground profile (LocalGround), not the plane
+    /// A drop's votes are a wall when the least-squares slope b of their disparity o on the ground's disparity g at
+    /// the same pixels is within +-maxWallSlope, by wallSlopeSigmas standard errors: 0 on a wall, 1 on the road;
+    /// halfway is the line (on KITTI roads the matcher's below-ground patches have slopes around 1 or undetermined,
+    /// the simulator's trench and hole walls -0.4..0.3 with 0.01..0.1 standard error) ...
+    float maxWallSlope = 0.5F;
+    float wallSlopeSigmas = 2.0F;
+    /// ... or a floor: a plane parallel to the ground, D below it, is o = g h / (h + D): a line through the origin
+    /// (|b - mean o / mean g| within floorLineTolerance and the standard errors) whose slope b is at most
+    /// h / (h + minDepthM) by wallSlopeSigmas standard errors (a step down, a ledge, a trench's floor). A patch of
+    /// the matcher's errors on a road is o = g - e: slope 1, not through the origin; KITTI's come within 0.05 of
+    /// the line only as floors 0.01-0.05 m deep.
+    float floorLineTolerance = 0.05F;
+    bool useLocalGround = true; ///< heights from the per-sector ground profile (LocalGround), not the plane
     LocalGroundConfig localGround;
     float confidenceSupport = 200.0F; ///< votes that give confidence 1
     float dangerDistanceM = 1.5F;     ///< [m]
@@ -199,8 +221,22 @@ private:
         bool suspect = false; ///< no cluster, but a drop seen without enough evidence: the sector cannot be Clear
     };
     /// @param[in] tall  votes above minHeightM per bin (positive clusters), or the ground votes per bin (drops)
+    /// @param[in] dropSector  the sector of a negative histogram, -1 for a positive one
     [[nodiscard]] Cluster nearestCluster(const std::uint32_t* histogram, const std::uint32_t* tall, float percentile,
-                                         bool drop) const noexcept;
+                                         int dropSector) const noexcept;
+    /// Sums over pixels of g, the ground's disparity there [px], and o, the pixel's own: enough for the slope of o
+    /// on g and its standard error (double: the variance of g is a small difference of large sums).
+    struct WallSums {
+        double n = 0.0;
+        double g = 0.0;
+        double o = 0.0;
+        double gg = 0.0;
+        double go = 0.0;
+        double oo = 0.0;
+    };
+    /// Whether the negative votes of sector s whose rays cross the ground in range bins [firstBin, endBin) are a
+    /// wall (see maxWallSlope).
+    [[nodiscard]] bool wallLike(int s, int firstBin, int endBin) const noexcept;
     BuildStatus buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
                           std::uint64_t sequence, std::int64_t stampNs, bool reference) noexcept;
 
@@ -211,10 +247,14 @@ private:
     int bins_ = 0;
     float hfovDeg_ = 0.0F;
     ObstacleSectors sectors_;
-    std::vector<std::uint32_t> histograms_;        ///< [sector][kind 0 positive, 1 negative][bin] votes
-    std::vector<std::uint32_t> tallVotes_;         ///< [sector][bin] positive votes above minHeightM
-    std::vector<std::uint32_t> groundByRange_;     ///< [sector][bin] ground votes
-    std::vector<float> dropDistance_;              ///< [sector][bin] sum of the negative votes' own ranges [m]
+    std::vector<std::uint32_t> histograms_;    ///< [sector][kind 0 positive, 1 negative][bin] votes
+    std::vector<std::uint32_t> tallVotes_;     ///< [sector][bin] positive votes above minHeightM
+    std::vector<std::uint32_t> groundByRange_; ///< [sector][bin] ground votes
+    std::vector<float> dropDistance_;          ///< [sector][bin] sum of the negative votes' own ranges [m]
+    double pixelScale_ = 1.0; ///< this rig's pixels per face over the reference rig's (referenceColumnsPerSector)
+    std::vector<WallSums> wallSums_; ///< [sector][wall bin: wallBinRatio_ range bins] negative votes
+    int wallBinRatio_ = 1;
+    int wallBins_ = 0;
     std::array<Cluster, kMaxSectors> positives_{}; ///< the last build's positive clusters
     std::array<Cluster, kMaxSectors> negatives_{}; ///< ... and negative ones
     /// Drops only where a neighbouring sector sees one at a range that follows (a rim is a line).
@@ -244,6 +284,7 @@ private:
     std::vector<std::uint32_t> rowCount_; ///< [sector][row] valid pixels
     std::vector<float> rowResidual_;      ///< [sector][row] sum of d - d_g [px]
     std::vector<float> rowCrossing_;      ///< [sector][row] sum of the ranges where the pixels' rays meet the ground
+    std::vector<float> rowDisparity_;     ///< [sector][row] sum of d [px]
     std::vector<std::uint32_t> rowDropLabels_; ///< [sector][row] pixels the mismatch stage labels negative
     std::vector<double> boundary0_;            ///< [sectorCount + 1] per-row boundary functions g_k(u) = b0 + b1 u
     std::vector<double> boundary1_;
