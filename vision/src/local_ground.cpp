@@ -29,23 +29,6 @@ void LocalGround::clear() noexcept
     std::fill(profile_.begin(), profile_.end(), 0.0F);
 }
 
-void LocalGround::add(int s, float rangeM, float z) noexcept
-{
-    if (!(std::abs(z) < config_.bandM) || s < 0 || s >= sectors_) {
-        return;
-    }
-    const int bin = static_cast<int>(rangeM / config_.binM);
-    if (bin < 0 || bin >= bins_) {
-        return;
-    }
-    const int h = static_cast<int>(std::lround(z / kHeightBinM)) + heightBins_ / 2;
-    std::uint16_t& count =
-        histogram_[(static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_) + static_cast<std::size_t>(bin)) *
-                       static_cast<std::size_t>(heightBins_) +
-                   static_cast<std::size_t>(std::clamp(h, 0, heightBins_ - 1))];
-    count = count == std::numeric_limits<std::uint16_t>::max() ? count : static_cast<std::uint16_t>(count + 1);
-}
-
 bool LocalGround::mode(int s, int bin, float& z) const noexcept
 {
     const std::uint16_t* h =

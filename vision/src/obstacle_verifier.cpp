@@ -48,13 +48,16 @@ public:
         int r16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
         int n = 0;
         int sum = 0;
+        // Every column of the window shares the sub-pixel fraction: column i reads right columns xi0 + i and
+        // xi0 + i + 1 with the same weights ((x + i) 16 - d16 differs from the first by 16 i).
+        const int xr16 = (x_ - hw_) * kSub - d16;
+        const int xi0 = xr16 >> 4;
+        const int f = xr16 & (kSub - 1);
+        const int width = 2 * hw_ + 1;
         for (int j = -hh_; j <= hh_; ++j) {
-            const std::uint8_t* r = right.row(v_ + j);
-            for (int i = -hw_; i <= hw_; ++i) {
-                const int xr16 = (x_ + i) * kSub - d16;
-                const int xi = xr16 >> 4;
-                const int f = xr16 & (kSub - 1);
-                r16[n] = (kSub - f) * r[xi] + f * r[xi + 1];
+            const std::uint8_t* r = right.row(v_ + j) + xi0;
+            for (int i = 0; i < width; ++i) {
+                r16[n] = (kSub - f) * r[i] + f * r[i + 1];
                 sum += r16[n++];
             }
         }

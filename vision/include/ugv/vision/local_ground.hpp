@@ -20,7 +20,10 @@
 ///
 /// Thread-safety: thread-bound. RT-safe: everything but configure() (which allocates).
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace ugv::vision {
@@ -40,8 +43,24 @@ public:
     void configure(const LocalGroundConfig& config, int sectors, float maxRangeM);
     /// Forgets the last frame.
     void clear() noexcept;
-    /// One pixel: sector s, horizontal range [m], height above the plane [m].
-    void add(int s, float rangeM, float z) noexcept;
+    /// One pixel: sector s, horizontal range [m], height above the plane [m]. Inline: called for every pixel.
+    void add(int s, float rangeM, float z) noexcept
+    {
+        if (!(std::abs(z) < config_.bandM) || s < 0 || s >= sectors_) {
+            return;
+        }
+        const int bin = static_cast<int>(rangeM / config_.binM);
+        if (bin < 0 || bin >= bins_) {
+            return;
+        }
+        // Nearest height bin: z / kHeightBinM + heightBins_ / 2 + 0.5 is positive here, so truncation rounds.
+        const int h = static_cast<int>(z / kHeightBinM + static_cast<float>(heightBins_ / 2) + 0.5F);
+        std::uint16_t& count =
+            histogram_[(static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_) + static_cast<std::size_t>(bin)) *
+                           static_cast<std::size_t>(heightBins_) +
+                       static_cast<std::size_t>(std::min(h, heightBins_ - 1))];
+        count = count == std::numeric_limits<std::uint16_t>::max() ? count : static_cast<std::uint16_t>(count + 1);
+    }
     /// Fits every sector's profile from the pixels added since clear().
     void fit() noexcept;
     /// The profile's height [m] above the plane in sector s at rangeM (0 before fit()).
