@@ -96,9 +96,9 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     // Vote counts are pixels: a face of a given size at a given range covers (columns per sector) x (fy x its
     // height / range) of them. The counts are set for the reference rig and scale with this rig's pixel density.
     const double columnsPerSector = (2.0 * projection.cx + 1.0) / config.sectorCount;
-    sut.pixelScale_ = columnsPerSector / static_cast<double>(config.referenceColumnsPerSector) * projection.fy /
-                      static_cast<double>(config.referenceFocalPx);
-    const auto scaled = [&](int count) { return std::max(1, static_cast<int>(std::lround(count * sut.pixelScale_))); };
+    const double pixelScale = columnsPerSector / static_cast<double>(config.referenceColumnsPerSector) * projection.fy /
+                              static_cast<double>(config.referenceFocalPx);
+    const auto scaled = [&](int count) { return std::max(1, static_cast<int>(std::lround(count * pixelScale))); };
     sut.config_.minSupport = scaled(config.minSupport);
     sut.config_.minFaceSupport = scaled(config.minFaceSupport);
     sut.config_.minTallVotes = scaled(config.minTallVotes);

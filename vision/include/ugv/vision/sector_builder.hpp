@@ -251,8 +251,7 @@ private:
     std::vector<std::uint32_t> tallVotes_;     ///< [sector][bin] positive votes above minHeightM
     std::vector<std::uint32_t> groundByRange_; ///< [sector][bin] ground votes
     std::vector<float> dropDistance_;          ///< [sector][bin] sum of the negative votes' own ranges [m]
-    double pixelScale_ = 1.0; ///< this rig's pixels per face over the reference rig's (referenceColumnsPerSector)
-    std::vector<WallSums> wallSums_; ///< [sector][wall bin: wallBinRatio_ range bins] negative votes
+    std::vector<WallSums> wallSums_;           ///< [sector][wall bin: wallBinRatio_ range bins] negative votes
     int wallBinRatio_ = 1;
     int wallBins_ = 0;
     std::array<Cluster, kMaxSectors> positives_{}; ///< the last build's positive clusters
