@@ -70,6 +70,7 @@ TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)
     auto publisher = FramePublisher::create(kWidth, kHeight).value();
     auto vision = FrameSubscriber::create(1).value();
     auto recorder = FrameSubscriber::create(4).value();
+    auto deep = FrameSubscriber::create(4).value(); // a deep queue read with take(): the newest, the rest dropped
     for (int k = 0; k < 3; ++k) {
         fill(k);
         ASSERT_TRUE(publisher->publish(static_cast<std::uint64_t>(100 + k), 1000 * k, 1000 * k + 7, left_.view(),
@@ -86,14 +87,20 @@ TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)
     vision->release(frame);
     EXPECT_EQ(vision->take(frame, milliseconds(10)), TakeStatus::Timeout);
 
-    std::uint64_t expected = 100;
-    while (recorder->take(frame, milliseconds(10)) == TakeStatus::Frame) {
-        // A recorder's queue holds every pair; take() returns the newest queued, so drain one by one.
-        EXPECT_GE(frame.header.sequence, expected);
-        expected = frame.header.sequence + 1;
+    // A recorder's queue holds every pair: takeOldest() gives each in order, none lost, none twice.
+    for (std::uint64_t expected = 100; expected <= 102; ++expected) {
+        ASSERT_EQ(recorder->takeOldest(frame, milliseconds(500)), TakeStatus::Frame);
+        EXPECT_EQ(frame.header.sequence, expected);
+        EXPECT_EQ(frame.views.left.at(5, 0), static_cast<std::uint8_t>(expected - 100 + 5));
         recorder->release(frame);
     }
-    EXPECT_EQ(expected, 103U);
+    EXPECT_EQ(recorder->takeOldest(frame, milliseconds(10)), TakeStatus::Timeout);
+
+    // take() on the same deep queue returns the newest pair and drops the older ones.
+    ASSERT_EQ(deep->take(frame, milliseconds(500)), TakeStatus::Frame);
+    EXPECT_EQ(frame.header.sequence, 102U);
+    deep->release(frame);
+    EXPECT_EQ(deep->take(frame, milliseconds(10)), TakeStatus::Timeout);
 }
 
 TEST_F(IceoryxRings, WrongSizeImagesAreRefusedAndCounted)
