@@ -1,9 +1,9 @@
 #pragma once
 
 /// @file
-/// The one stereo-camera interface of the service. Backends: replay (a recording, replay_camera.hpp) now;
-/// V4L2 and libcamera next. The capture task calls grab() in a loop; everything a backend needs is allocated
-/// in open().
+/// The one stereo-camera interface of the service. Backends: replay (a recording, replay_camera.hpp), V4L2
+/// (v4l2_camera.hpp) and libcamera (libcamera_camera.hpp). The capture task calls grab() in a loop; everything a
+/// backend needs is allocated in open().
 ///
 /// Frame life: grab() fills a CameraFrame whose views stay valid until the next grab() or close() (the backend
 /// owns the buffers: an mmap'ed driver buffer, a recording's frame buffer). Stamps are CLOCK_MONOTONIC exposure

@@ -8,7 +8,8 @@
 /// it with backoff while the service stays up).
 ///
 /// The OS calls go through V4l2Ops (open/close/ioctl/mmap/munmap/poll), so the backend is tested against a fake
-/// device speaking the V4L2 protocol (test/unit/hal/fake_v4l2.hpp): no camera or kernel module exists here.
+/// device speaking the V4L2 protocol (FakeV4l2 in test/unit/hal/v4l2_camera_test.cpp): no camera or kernel module
+/// exists here.
 ///
 /// Thread-safety: thread-bound (the capture thread). RT-safe: grab() allocates nothing (buffers mapped and grey
 /// images allocated at open); it blocks in poll() up to its timeout.
