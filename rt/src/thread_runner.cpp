@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <exception>
 
+#include "ugv/platform/clock.hpp"
 #include "ugv/platform/log.hpp"
 
 namespace ugv::rt {
@@ -181,10 +183,50 @@ void* ThreadRunner::threadMain(void* slotPtr) noexcept
     const Slot& slot = *static_cast<const Slot*>(slotPtr);
     ThreadRunner& owner = *slot.owner;
     owner.startGate_.wait(false, std::memory_order_acquire);
-    if (!owner.stopRequested_.load(std::memory_order_acquire)) {
-        slot.body(slot.context, owner.stopRequested_);
+    const auto index = static_cast<std::size_t>(&slot - owner.slots_.data());
+    std::chrono::milliseconds wait = owner.restartPolicy_.firstBackoff;
+    for (int restarts = 0; !owner.stopRequested_.load(std::memory_order_acquire); ++restarts) {
+        if (owner.runGuarded(slot)) {
+            break; // the body returned: it saw the stop flag (or had nothing more to do)
+        }
+        owner.failures_[index].fetch_add(1, std::memory_order_relaxed);
+        if (restarts >= owner.restartPolicy_.maxRestarts) {
+            UGV_LOG(Rt, Error) << "task '" << slot.spec.name << "' disabled after " << restarts + 1
+                               << " failures; the other tasks go on. Fix: see the errors above, then restart the "
+                                  "service";
+            owner.disabled_[index].store(true, std::memory_order_release);
+            break;
+        }
+        UGV_LOG(Rt, Warn) << "task '" << slot.spec.name << "' restarts in " << wait.count() << " ms (restart "
+                          << restarts + 1 << " of " << owner.restartPolicy_.maxRestarts << ")";
+        owner.backoff(wait);
+        wait = std::min(wait * 2, owner.restartPolicy_.maxBackoff);
     }
     return nullptr;
+}
+
+// No task is ever cancelled (stopAll() sets a flag), so catch (...) never swallows a pthread_cancel unwind.
+bool ThreadRunner::runGuarded(const Slot& slot) noexcept
+{
+    try {
+        slot.body(slot.context, stopRequested_);
+        return true;
+    } catch (const std::exception& e) {
+        UGV_LOG(Rt, Error) << "task '" << slot.spec.name << "' threw: " << e.what();
+    } catch (...) {
+        UGV_LOG(Rt, Error) << "task '" << slot.spec.name << "' threw an exception not derived from std::exception";
+    }
+    return false;
+}
+
+void ThreadRunner::backoff(std::chrono::milliseconds d) const noexcept
+{
+    constexpr std::chrono::milliseconds kSlice{10}; // how soon stopAll() ends a back-off
+    const std::chrono::nanoseconds end = MonotonicClock::now() + d;
+    while (!stopRequested_.load(std::memory_order_acquire) && MonotonicClock::now() < end) {
+        const timespec slice{0, std::chrono::nanoseconds(kSlice).count()};
+        static_cast<void>(::clock_nanosleep(CLOCK_MONOTONIC, 0, &slice, nullptr)); // EINTR: the loop re-checks
+    }
 }
 
 } // namespace ugv::rt

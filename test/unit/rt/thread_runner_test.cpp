@@ -6,10 +6,13 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <stdexcept>
 #include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
+
+#include "captured_log.hpp"
 
 namespace {
 
@@ -264,3 +267,114 @@ TEST(ThreadRunner, ThreadCreationFailureIsReportedAndEarlierThreadsStopped)
 }
 
 } // namespace
+
+namespace guard {
+
+/// Throws on its first `throwsLeft` runs, then loops until stopped.
+struct Thrower {
+    std::atomic<int> runs{0};
+    std::atomic<int> throwsLeft{0};
+};
+
+void throwerBody(void* context, const std::atomic<bool>& stopRequested)
+{
+    auto& thrower = *static_cast<Thrower*>(context);
+    ++thrower.runs;
+    if (thrower.throwsLeft.fetch_sub(1) > 0) {
+        throw std::runtime_error("injected failure");
+    }
+    while (!stopRequested.load(std::memory_order_acquire)) {
+        std::this_thread::sleep_for(1ms);
+    }
+}
+
+/// Counts loop iterations until stopped: proves a task runs on while its peer fails.
+void tickerBody(void* context, const std::atomic<bool>& stopRequested)
+{
+    auto& ticks = *static_cast<std::atomic<int>*>(context);
+    while (!stopRequested.load(std::memory_order_acquire)) {
+        ++ticks;
+        std::this_thread::sleep_for(1ms);
+    }
+}
+
+constexpr TaskSpec kFaulty{"faulty", SchedPolicy::Other, 0, -1, 0ns, kStack};
+constexpr TaskSpec kTicker{"ticker", SchedPolicy::Other, 0, -1, 0ns, kStack};
+constexpr ugv::rt::RestartPolicy kFastRestart{2, 1ms, 4ms};
+
+template <typename Predicate>
+bool eventually(Predicate predicate)
+{
+    for (int i = 0; i < 5000 && !predicate(); ++i) { // 5 s at most: a sanity bound, not a timing assertion
+        std::this_thread::sleep_for(1ms);
+    }
+    return predicate();
+}
+
+} // namespace guard
+
+TEST(ThreadRunnerGuard, ThrowingBodyIsLoggedAndRestartedWhileThePeerRunsOn)
+{
+    ugv::test::CapturedLog log;
+    guard::Thrower thrower;
+    thrower.throwsLeft = 1;
+    std::atomic<int> ticks{0};
+    ThreadRunner sut(fakeOps(true, true));
+    sut.setRestartPolicy(guard::kFastRestart);
+    ASSERT_TRUE(sut.addTask(guard::kFaulty, &guard::throwerBody, &thrower));
+    ASSERT_TRUE(sut.addTask(guard::kTicker, &guard::tickerBody, &ticks));
+    ASSERT_TRUE(sut.createAll());
+
+    sut.startAll();
+    ASSERT_TRUE(guard::eventually([&] { return thrower.runs.load() == 2; }));
+    const int ticksAfterRestart = ticks.load();
+    ASSERT_TRUE(guard::eventually([&] { return ticks.load() > ticksAfterRestart; }));
+    sut.stopAll();
+
+    EXPECT_EQ(sut.failureCount(0), 1U);
+    EXPECT_FALSE(sut.disabled(0));
+    EXPECT_EQ(sut.failureCount(1), 0U);
+    const std::string text = log.text();
+    EXPECT_NE(text.find("task 'faulty' threw: injected failure"), std::string::npos) << text;
+    EXPECT_NE(text.find("task 'faulty' restarts in 1 ms"), std::string::npos) << text;
+}
+
+TEST(ThreadRunnerGuard, BodyThatAlwaysThrowsIsDisabledAfterMaxRestartsAndThePeerRunsOn)
+{
+    ugv::test::CapturedLog log;
+    guard::Thrower thrower;
+    thrower.throwsLeft = 1000;
+    std::atomic<int> ticks{0};
+    ThreadRunner sut(fakeOps(true, true));
+    sut.setRestartPolicy(guard::kFastRestart);
+    ASSERT_TRUE(sut.addTask(guard::kFaulty, &guard::throwerBody, &thrower));
+    ASSERT_TRUE(sut.addTask(guard::kTicker, &guard::tickerBody, &ticks));
+    ASSERT_TRUE(sut.createAll());
+
+    sut.startAll();
+    ASSERT_TRUE(guard::eventually([&] { return sut.disabled(0); }));
+    const int ticksAfterDisable = ticks.load();
+    ASSERT_TRUE(guard::eventually([&] { return ticks.load() > ticksAfterDisable; }));
+    sut.stopAll();
+
+    constexpr int kExpectedRuns = 1 + guard::kFastRestart.maxRestarts;
+    EXPECT_EQ(thrower.runs.load(), kExpectedRuns);
+    EXPECT_EQ(sut.failureCount(0), static_cast<std::uint32_t>(kExpectedRuns));
+    EXPECT_NE(log.text().find("task 'faulty' disabled after 3 failures"), std::string::npos) << log.text();
+}
+
+TEST(ThreadRunnerGuard, StopEndsABackoffEarly)
+{
+    guard::Thrower thrower;
+    thrower.throwsLeft = 1;
+    ThreadRunner sut(fakeOps(true, true));
+    sut.setRestartPolicy(ugv::rt::RestartPolicy{1, std::chrono::hours(1), std::chrono::hours(1)});
+    ASSERT_TRUE(sut.addTask(guard::kFaulty, &guard::throwerBody, &thrower));
+    ASSERT_TRUE(sut.createAll());
+    sut.startAll();
+    ASSERT_TRUE(guard::eventually([&] { return sut.failureCount(0) == 1U; }));
+
+    sut.stopAll(); // would hang for an hour if the back-off ignored the stop flag (ctest timeout fails it)
+
+    EXPECT_EQ(thrower.runs.load(), 1);
+}

@@ -11,14 +11,26 @@
 /// with the default (SCHED_OTHER, any CPU) and adds ONE warning per refused setting to the report (and to the
 /// log), naming the tasks, the errno text and the fix. The report says what was applied to each task.
 ///
-/// Thread-safety: thread-compatible: one owner thread calls all member functions. RT-safe: no (init/stop only);
-/// the task bodies get a stop flag they may poll RT-safely.
+/// Exception guard: a body that throws (our code never throws, but Fast DDS, OpenCV and std::bad_alloc can) is
+/// caught in its thread instead of ending the process (std::terminate). The runner logs the task's name and the
+/// exception's what(), waits a back-off (doubling from RestartPolicy::firstBackoff) while polling the stop flag,
+/// and runs the body again; after RestartPolicy::maxRestarts restarts it disables the task (logged once). Why
+/// restart then disable: a transient failure (one bad_alloc, a DDS hiccup) recovers without the operator, while a
+/// task that fails every time stops spending CPU and log lines; the other tasks run on either way. The guard costs
+/// nothing on the path that does not throw (table-based unwinding: no allocation, no lock); the catch branch
+/// allocates and writes a log line, which is acceptable only because the task has already failed.
+///
+/// Thread-safety: thread-compatible: one owner thread calls all member functions, except failureCount() and
+/// disabled(), which any thread may call. RT-safe: no (init/stop only); the task bodies get a stop flag they may
+/// poll RT-safely.
 
 #include <pthread.h>
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -43,6 +55,13 @@ struct AppliedTask {
     bool affinityApplied = false; ///< pinned to spec.cpu (true when spec.cpu == -1: nothing to apply)
 };
 
+/// What the exception guard does when a task body throws (see the file comment).
+struct RestartPolicy {
+    int maxRestarts = 5;                          ///< restarts before the task is disabled
+    std::chrono::milliseconds firstBackoff{100};  ///< wait before the first restart, doubled each time
+    std::chrono::milliseconds maxBackoff{10'000}; ///< cap of the doubled wait
+};
+
 struct StartReport {
     FixedVector<AppliedTask, kMaxTasks> tasks;
     std::vector<std::string> warnings; ///< at most one per refused setting (SCHED_FIFO, affinity)
@@ -61,6 +80,9 @@ public:
     ThreadRunner& operator=(const ThreadRunner&) = delete;
     ThreadRunner(ThreadRunner&&) = delete;
     ThreadRunner& operator=(ThreadRunner&&) = delete;
+
+    /// @brief Set what the exception guard does; call before createAll().
+    void setRestartPolicy(const RestartPolicy& policy) noexcept { restartPolicy_ = policy; }
 
     /// @brief Register a task; `context` must outlive the runner.
     /// @return an error for an invalid spec (validateTask), a duplicate name, a null body, more than
@@ -82,6 +104,18 @@ public:
     [[nodiscard]] const StartReport& report() const noexcept { return report_; }
     [[nodiscard]] std::size_t taskCount() const noexcept { return count_; }
 
+    /// @brief How many times the body of task `index` (order of addTask) threw. Thread-safety: any thread.
+    [[nodiscard]] std::uint32_t failureCount(std::size_t index) const noexcept
+    {
+        return index < kMaxTasks ? failures_[index].load(std::memory_order_relaxed) : 0U;
+    }
+    /// @brief True once task `index` threw more than RestartPolicy::maxRestarts times and no longer runs.
+    /// Thread-safety: any thread.
+    [[nodiscard]] bool disabled(std::size_t index) const noexcept
+    {
+        return index < kMaxTasks && disabled_[index].load(std::memory_order_acquire);
+    }
+
 private:
     struct Slot {
         ThreadRunner* owner = nullptr;
@@ -91,6 +125,10 @@ private:
         pthread_t thread{};
     };
     static void* threadMain(void* slot) noexcept;
+    /// Runs the body once; false when it threw (logged). Defined in the .cpp next to threadMain.
+    bool runGuarded(const Slot& slot) noexcept;
+    /// Sleeps `d` in short slices; returns early when stop is requested.
+    void backoff(std::chrono::milliseconds d) const noexcept;
     void applySettings(Slot& slot, std::string& fifoRefused, int& fifoError, std::string& cpuRefused, int& cpuError);
 
     SysOps ops_;
@@ -101,6 +139,9 @@ private:
     std::atomic<bool> startGate_{false};
     std::atomic<bool> stopRequested_{false};
     StartReport report_;
+    RestartPolicy restartPolicy_{};
+    std::array<std::atomic<std::uint32_t>, kMaxTasks> failures_{};
+    std::array<std::atomic<bool>, kMaxTasks> disabled_{};
 };
 
 } // namespace ugv::rt
