@@ -313,68 +313,71 @@ bool eventually(Predicate predicate)
 
 } // namespace guard
 
-TEST(ThreadRunnerGuard, ThrowingBodyIsLoggedAndRestartedWhileThePeerRunsOn)
+/// A faulty task (throws its first `throws` runs) beside a ticker, with a restart policy of milliseconds.
+class ThreadRunnerGuard : public ::testing::Test {
+protected:
+    void startFaultyAndTicker(int throws)
+    {
+        thrower_.throwsLeft = throws;
+        sut_.setRestartPolicy(guard::kFastRestart);
+        ASSERT_TRUE(sut_.addTask(guard::kFaulty, &guard::throwerBody, &thrower_));
+        ASSERT_TRUE(sut_.addTask(guard::kTicker, &guard::tickerBody, &ticks_));
+        ASSERT_TRUE(sut_.createAll());
+        sut_.startAll();
+    }
+    /// True once the ticker has ticked again: the peer of the faulty task runs on.
+    bool tickerRunsOn()
+    {
+        const int before = ticks_.load();
+        return guard::eventually([&] { return ticks_.load() > before; });
+    }
+
+    ugv::test::CapturedLog log_;
+    guard::Thrower thrower_;
+    std::atomic<int> ticks_{0};
+    ThreadRunner sut_{fakeOps(true, true)};
+};
+
+TEST_F(ThreadRunnerGuard, ThrowingBodyIsLoggedAndRestartedWhileThePeerRunsOn)
 {
-    ugv::test::CapturedLog log;
-    guard::Thrower thrower;
-    thrower.throwsLeft = 1;
-    std::atomic<int> ticks{0};
-    ThreadRunner sut(fakeOps(true, true));
-    sut.setRestartPolicy(guard::kFastRestart);
-    ASSERT_TRUE(sut.addTask(guard::kFaulty, &guard::throwerBody, &thrower));
-    ASSERT_TRUE(sut.addTask(guard::kTicker, &guard::tickerBody, &ticks));
-    ASSERT_TRUE(sut.createAll());
+    startFaultyAndTicker(1);
 
-    sut.startAll();
-    ASSERT_TRUE(guard::eventually([&] { return thrower.runs.load() == 2; }));
-    const int ticksAfterRestart = ticks.load();
-    ASSERT_TRUE(guard::eventually([&] { return ticks.load() > ticksAfterRestart; }));
-    sut.stopAll();
+    ASSERT_TRUE(guard::eventually([&] { return thrower_.runs.load() == 2; }));
+    ASSERT_TRUE(tickerRunsOn());
+    sut_.stopAll();
 
-    EXPECT_EQ(sut.failureCount(0), 1U);
-    EXPECT_FALSE(sut.disabled(0));
-    EXPECT_EQ(sut.failureCount(1), 0U);
-    const std::string text = log.text();
+    EXPECT_EQ(sut_.failureCount(0), 1U);
+    EXPECT_FALSE(sut_.disabled(0));
+    EXPECT_EQ(sut_.failureCount(1), 0U);
+    const std::string text = log_.text();
     EXPECT_NE(text.find("task 'faulty' threw: injected failure"), std::string::npos) << text;
     EXPECT_NE(text.find("task 'faulty' restarts in 1 ms"), std::string::npos) << text;
 }
 
-TEST(ThreadRunnerGuard, BodyThatAlwaysThrowsIsDisabledAfterMaxRestartsAndThePeerRunsOn)
+TEST_F(ThreadRunnerGuard, BodyThatAlwaysThrowsIsDisabledAfterMaxRestartsAndThePeerRunsOn)
 {
-    ugv::test::CapturedLog log;
-    guard::Thrower thrower;
-    thrower.throwsLeft = 1000;
-    std::atomic<int> ticks{0};
-    ThreadRunner sut(fakeOps(true, true));
-    sut.setRestartPolicy(guard::kFastRestart);
-    ASSERT_TRUE(sut.addTask(guard::kFaulty, &guard::throwerBody, &thrower));
-    ASSERT_TRUE(sut.addTask(guard::kTicker, &guard::tickerBody, &ticks));
-    ASSERT_TRUE(sut.createAll());
+    startFaultyAndTicker(1000);
 
-    sut.startAll();
-    ASSERT_TRUE(guard::eventually([&] { return sut.disabled(0); }));
-    const int ticksAfterDisable = ticks.load();
-    ASSERT_TRUE(guard::eventually([&] { return ticks.load() > ticksAfterDisable; }));
-    sut.stopAll();
+    ASSERT_TRUE(guard::eventually([&] { return sut_.disabled(0); }));
+    ASSERT_TRUE(tickerRunsOn());
+    sut_.stopAll();
 
     constexpr int kExpectedRuns = 1 + guard::kFastRestart.maxRestarts;
-    EXPECT_EQ(thrower.runs.load(), kExpectedRuns);
-    EXPECT_EQ(sut.failureCount(0), static_cast<std::uint32_t>(kExpectedRuns));
-    EXPECT_NE(log.text().find("task 'faulty' disabled after 3 failures"), std::string::npos) << log.text();
+    EXPECT_EQ(thrower_.runs.load(), kExpectedRuns);
+    EXPECT_EQ(sut_.failureCount(0), static_cast<std::uint32_t>(kExpectedRuns));
+    EXPECT_NE(log_.text().find("task 'faulty' disabled after 3 failures"), std::string::npos) << log_.text();
 }
 
-TEST(ThreadRunnerGuard, StopEndsABackoffEarly)
+TEST_F(ThreadRunnerGuard, StopEndsABackoffEarly)
 {
-    guard::Thrower thrower;
-    thrower.throwsLeft = 1;
-    ThreadRunner sut(fakeOps(true, true));
-    sut.setRestartPolicy(ugv::rt::RestartPolicy{1, std::chrono::hours(1), std::chrono::hours(1)});
-    ASSERT_TRUE(sut.addTask(guard::kFaulty, &guard::throwerBody, &thrower));
-    ASSERT_TRUE(sut.createAll());
-    sut.startAll();
-    ASSERT_TRUE(guard::eventually([&] { return sut.failureCount(0) == 1U; }));
+    thrower_.throwsLeft = 1;
+    sut_.setRestartPolicy(ugv::rt::RestartPolicy{1, std::chrono::hours(1), std::chrono::hours(1)});
+    ASSERT_TRUE(sut_.addTask(guard::kFaulty, &guard::throwerBody, &thrower_));
+    ASSERT_TRUE(sut_.createAll());
+    sut_.startAll();
+    ASSERT_TRUE(guard::eventually([&] { return sut_.failureCount(0) == 1U; }));
 
-    sut.stopAll(); // would hang for an hour if the back-off ignored the stop flag (ctest timeout fails it)
+    sut_.stopAll(); // would hang for an hour if the back-off ignored the stop flag (ctest timeout fails it)
 
-    EXPECT_EQ(thrower.runs.load(), 1);
+    EXPECT_EQ(thrower_.runs.load(), 1);
 }
