@@ -314,6 +314,9 @@ void CorrelatorTask::start() noexcept
     runner_.startAll();
 }
 
+// A throw here (Fast DDS, std::bad_alloc) reaches rt::ThreadRunner's guard: logged, the body restarted after a
+// back-off (on the state the throw left: a half-applied batch may be lost), disabled after repeated failures. The
+// service's frame path runs in another runner and goes on either way.
 void CorrelatorTask::body(void* self, const std::atomic<bool>& stop)
 {
     auto* t = static_cast<CorrelatorTask*>(self);

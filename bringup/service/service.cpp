@@ -170,6 +170,7 @@ Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceCo
             return Unexpected(added.error());
         }
     }
+    s->runner_.setRestartPolicy(options.restart);
     if (auto created = s->runner_.createAll(); !created) {
         return Unexpected(created.error());
     }
@@ -567,7 +568,7 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
     cpuSeconds_[2].store(threadCpuSeconds(), std::memory_order_relaxed);
 }
 
-void Service::busLoop(const std::atomic<bool>& stop) noexcept
+void Service::busLoop(const std::atomic<bool>& stop)
 {
     BusFrame frame;
     while (!stop.load(std::memory_order_relaxed)) {
@@ -597,6 +598,9 @@ ServiceReport Service::report() const
     r.cameraReconnects = reconnects_.load();
     r.monitorDrops = monitorDrops_.load();
     r.busDrops = busDrops_.load();
+    for (std::size_t i = 0; i < runner_.taskCount(); ++i) {
+        r.taskFailures += runner_.failureCount(i);
+    }
     r.deadline = deadline_;
     const std::int64_t end = endNs_.load() != 0 ? endNs_.load() : MonotonicClock::nowNs();
     r.wallSeconds = static_cast<double>(end - startNs_) * 1e-9;

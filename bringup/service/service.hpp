@@ -78,13 +78,15 @@ struct BusFrame {
 };
 
 /// The service's side of the DDS bus (bringup/service/dds_bridge.hpp), called only from the low-priority "bus"
-/// task: a slow or absent network delays that task, never a frame (a test stalls it).
+/// task: a slow or absent network delays that task, never a frame (a test stalls it). Not noexcept: a throw
+/// (Fast DDS, std::bad_alloc) reaches the bus task's exception guard (rt::ThreadRunner), which logs it and
+/// restarts or disables the bus task while the frame path goes on (a test throws from it).
 class BusSink {
 public:
     virtual ~BusSink() = default;
-    virtual void onFrame(const BusFrame& frame) noexcept = 0;
+    virtual void onFrame(const BusFrame& frame) = 0;
     /// Between frames, at least every 20 ms: read inputs (poses), publish periodic records (health).
-    virtual void idle() noexcept = 0;
+    virtual void idle() = 0;
 };
 
 struct ServiceOptions {
@@ -102,7 +104,10 @@ struct ServiceOptions {
     /// takes 50-200 us to run; a polling one takes a few (measured: hand-over p99 170 -> 19..37 us across two
     /// cores with 2000 us). Costs up to twice this much CPU per frame; none while the camera is stalled.
     std::chrono::microseconds spinBeforeFrame{2000};
-    BusSink* bus = nullptr;    ///< the DDS side (not owned; outlives the service), or none
+    BusSink* bus = nullptr; ///< the DDS side (not owned; outlives the service), or none
+    /// What the tasks' exception guard does when a body throws: in practice only the bus task can (the frame-path
+    /// loops are noexcept: a throw there ends the process and systemd restarts it).
+    rt::RestartPolicy restart{};
     TaskProbe probe = nullptr; ///< SteadyState after a task's warmupFrames-th frame, Stopping at its end
     void* probeContext = nullptr;
 };
@@ -140,6 +145,7 @@ struct ServiceReport {
     std::uint64_t cameraReconnects = 0;
     std::uint64_t monitorDrops = 0; ///< published frames the monitor reader was too slow to see
     std::uint64_t busDrops = 0;     ///< published frames the bus task was too slow to take
+    std::uint64_t taskFailures = 0; ///< task bodies that threw, logged by rt::ThreadRunner's guard
     std::chrono::nanoseconds deadline{};
     double wallSeconds = 0.0;
     std::array<rt::LatencyHistogram, kStageCount> stages{};
@@ -183,7 +189,7 @@ private:
     static void visionBody(void* self, const std::atomic<bool>& stop);
     static void publishBody(void* self, const std::atomic<bool>& stop);
     static void busBody(void* self, const std::atomic<bool>& stop);
-    void busLoop(const std::atomic<bool>& stop) noexcept;
+    void busLoop(const std::atomic<bool>& stop); // may throw: see BusSink
     void captureLoop(const std::atomic<bool>& stop) noexcept;
     void visionLoop(const std::atomic<bool>& stop) noexcept;
     void publishLoop(const std::atomic<bool>& stop) noexcept;

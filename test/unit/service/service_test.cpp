@@ -15,6 +15,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -282,6 +283,61 @@ TEST_F(ServiceTest, AStalledBusNeverHoldsUpAFrame)
     EXPECT_EQ(report.framesPublished, during.framesPublished);
 }
 
+/// Starts the service, takes what it publishes until it has finished, stops it.
+void runToTheEnd(Service& service)
+{
+    service.start();
+    PublishedFrame seen;
+    while (!service.finished()) {
+        while (service.nextPublished(seen)) {
+        }
+        ::usleep(20000);
+    }
+    service.stop();
+}
+
+/// A bus whose every call throws, as Fast DDS does when it runs out of memory.
+struct ThrowingBus final : BusSink {
+    std::atomic<std::uint64_t> throws{0};
+    void onFrame(const BusFrame& /*frame*/) override
+    {
+        throws.fetch_add(1);
+        throw std::bad_alloc();
+    }
+    void idle() override {}
+};
+
+TEST_F(ServiceTest, ABusTaskThatThrowsIsLoggedAndDisabledWhileEveryFrameIsStillPublished)
+{
+    // Without the tasks' exception guard the first throw ends the process (std::terminate). With it: each throw is
+    // logged, the bus task restarts twice, then is disabled; every frame is still processed. Nothing here is timed.
+    constexpr std::size_t kFrames = 20;
+    constexpr int kMaxRestarts = 2;
+    const Course course = writeCourse(dir_, kFrames);
+    hal::ReplayOptions replay;
+    replay.pace = hal::ReplayPace::Forced;
+    replay.forcedFps = 10.0;
+    ThrowingBus bus;
+    ServiceOptions options;
+    options.bus = &bus;
+    options.overload = OverloadPolicy::Drop;
+    options.restart = rt::RestartPolicy{kMaxRestarts, std::chrono::milliseconds(1), std::chrono::milliseconds(1)};
+    const test::CapturedLog log;
+    auto service = makeService(course, replay, options);
+    ASSERT_NE(service, nullptr);
+
+    runToTheEnd(*service);
+
+    const ServiceReport report = service->report();
+    EXPECT_EQ(report.framesPublished + report.framesDropped, kFrames);
+    EXPECT_GT(report.framesPublished, 0U);
+    EXPECT_EQ(bus.throws.load(), static_cast<std::uint64_t>(kMaxRestarts + 1));
+    EXPECT_EQ(report.taskFailures, static_cast<std::uint64_t>(kMaxRestarts + 1));
+    const std::string text = log.text();
+    EXPECT_NE(text.find("task 'bus' threw: std::bad_alloc"), std::string::npos) << text;
+    EXPECT_NE(text.find("task 'bus' disabled after 3 failures"), std::string::npos) << text;
+}
+
 TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
 {
     // Under a sanitizer only operator new/delete are counted (the sanitizer owns malloc); the test still runs.
@@ -302,14 +358,7 @@ TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
     options.bus = &bus;
     auto service = makeService(course, replay, options);
     ASSERT_NE(service, nullptr);
-    service->start();
-    PublishedFrame seen;
-    while (!service->finished()) {
-        while (service->nextPublished(seen)) {
-        }
-        ::usleep(20000);
-    }
-    service->stop();
+    runToTheEnd(*service);
     const ServiceReport report = service->report();
     ASSERT_GE(report.framesPublished, 310U);
     // Every published frame went to the bus or was counted as dropped; the threads stop together, so the last one
