@@ -49,15 +49,11 @@ void sleepFor(std::chrono::nanoseconds d) noexcept
     }
 }
 
-/// A wait on the semaphore of at most `d`.
+/// A wait on the semaphore of at most `d`, on CLOCK_MONOTONIC (glibc >= 2.30): a wall-clock step cannot stretch it.
 void semWait(sem_t* sem, std::chrono::nanoseconds d) noexcept
 {
-    timespec t{};
-    ::clock_gettime(CLOCK_REALTIME, &t); // sem_timedwait's clock (glibc 2.36 has sem_clockwait too)
-    const std::int64_t ns = t.tv_nsec + d.count();
-    t.tv_sec += static_cast<time_t>(ns / 1'000'000'000);
-    t.tv_nsec = static_cast<long>(ns % 1'000'000'000);
-    while (::sem_clockwait(sem, CLOCK_REALTIME, &t) != 0 && errno == EINTR) {
+    const timespec t = MonotonicClock::deadlineAfter(d);
+    while (::sem_clockwait(sem, CLOCK_MONOTONIC, &t) != 0 && errno == EINTR) {
     }
 }
 

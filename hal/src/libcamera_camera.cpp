@@ -14,6 +14,7 @@
 #include <map>
 #include <vector>
 
+#include "ugv/platform/clock.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/spsc_ring.hpp"
 
@@ -22,13 +23,6 @@ namespace ugv::hal {
 namespace {
 
 constexpr unsigned kBuffers = 4;
-
-std::int64_t monotonicNs()
-{
-    timespec t{};
-    ::clock_gettime(CLOCK_MONOTONIC, &t);
-    return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
 
 } // namespace
 
@@ -304,7 +298,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     Impl& im = *impl_;
     requeue(im.left, im.left.delivered);
     requeue(im.right, im.right.delivered);
-    const std::int64_t deadline = monotonicNs() + timeout.count();
+    const std::int64_t deadline = MonotonicClock::nowNs() + timeout.count();
     const bool stereo = !options_.sideBySide;
     const auto skewNs = static_cast<std::int64_t>(options_.maxPairSkewMs * 1e6);
     for (;;) {
@@ -330,16 +324,13 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
         if (haveAll) {
             break;
         }
-        const std::int64_t left = deadline - monotonicNs();
+        const std::int64_t left = deadline - MonotonicClock::nowNs();
         if (left <= 0) {
             return GrabStatus::Timeout;
         }
-        timespec until{};
-        ::clock_gettime(CLOCK_REALTIME, &until);
-        const std::int64_t ns = until.tv_nsec + left;
-        until.tv_sec += static_cast<time_t>(ns / 1'000'000'000);
-        until.tv_nsec = static_cast<long>(ns % 1'000'000'000);
-        (void)::sem_timedwait(&im.ready, &until);
+        // On CLOCK_MONOTONIC, like `deadline`: a wall-clock step at boot (chrony, GPS) cannot stretch the wait.
+        const timespec until = MonotonicClock::toTimespec(deadline);
+        (void)::sem_clockwait(&im.ready, CLOCK_MONOTONIC, &until);
     }
     const libcamera::FrameBuffer* leftBuffer = im.left.pending->findBuffer(im.left.stream);
     const unsigned sequence = leftBuffer != nullptr ? leftBuffer->metadata().sequence : 0U;

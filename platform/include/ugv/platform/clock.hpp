@@ -29,6 +29,26 @@ public:
         static_cast<void>(::clock_gettime(CLOCK_MONOTONIC, &ts));
         return static_cast<std::int64_t>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;
     }
+
+    /// @brief A CLOCK_MONOTONIC time point (as from nowNs()) as a timespec, for sem_clockwait,
+    /// pthread_cond_clockwait and clock_nanosleep(TIMER_ABSTIME) with CLOCK_MONOTONIC. [ns]
+    /// Thread-safety: reentrant. RT-safe: yes.
+    [[nodiscard]] static constexpr timespec toTimespec(std::int64_t ns) noexcept
+    {
+        constexpr std::int64_t kNsPerSecond = 1'000'000'000;
+        timespec ts{};
+        ts.tv_sec = static_cast<time_t>(ns / kNsPerSecond);
+        ts.tv_nsec = static_cast<long>(ns % kNsPerSecond);
+        return ts;
+    }
+
+    /// @brief The absolute CLOCK_MONOTONIC deadline `d` from now, for the waits above. Every timed wait of ours
+    /// uses CLOCK_MONOTONIC: a step of the wall clock at boot (chrony, GPS) must not stretch or cut a wait.
+    /// Thread-safety: reentrant. RT-safe: yes.
+    [[nodiscard]] static timespec deadlineAfter(std::chrono::nanoseconds d) noexcept
+    {
+        return toTimespec(nowNs() + d.count());
+    }
 };
 
 } // namespace ugv
