@@ -81,7 +81,12 @@ Error CorrelatorFeed::tooLate(double t) const
 Snapshot CorrelatorFeed::take(double t, const OnSnapshot& onSnapshot, double emitFrom)
 {
     const auto t0 = std::chrono::steady_clock::now();
-    Snapshot s = std::visit([t](auto& c) { return c.snapshot(t); }, state_.correlator);
+    Snapshot s = std::visit(
+        [t](auto& c) {
+            c.advance(t);
+            return c.snapshot(t);
+        },
+        state_.correlator);
     snapshotBusy_ += std::chrono::steady_clock::now() - t0;
     ++state_.snapshots;
     if (onSnapshot && t >= emitFrom) {

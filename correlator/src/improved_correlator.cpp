@@ -1090,10 +1090,26 @@ void ImprovedCorrelator::dropTentative(double t)
     }
 }
 
-Snapshot ImprovedCorrelator::snapshot(double t)
+void ImprovedCorrelator::advance(double t)
 {
     flushUav();
     dropTentative(t);
+    timeOutMobiles(t);
+}
+
+void ImprovedCorrelator::timeOutMobiles(double t)
+{
+    for (Mobile& m : mobiles_) {
+        if (m.alive && t - m.t > config_.mobileTimeoutS) {
+            m.alive = false;
+            m.history.clear(); // memory stays bounded by the objects alive
+            m.history.shrink_to_fit();
+        }
+    }
+}
+
+Snapshot ImprovedCorrelator::snapshot(double t) const
+{
     Snapshot s;
     s.t = t;
     if (!frame_) {
@@ -1138,12 +1154,7 @@ Snapshot ImprovedCorrelator::snapshot(double t)
         s.objects.push_back(std::move(e));
     }
     rules::Placed civilians;
-    for (Mobile& live : mobiles_) {
-        if (live.alive && t - live.t > config_.mobileTimeoutS) {
-            live.alive = false;
-            live.history.clear(); // memory stays bounded by the objects alive
-            live.history.shrink_to_fit();
-        }
+    for (const Mobile& live : mobiles_) {
         if (!live.alive ||
             (live.observations < config_.minMobileObservations && live.state != Confirmation::ConfirmedPositive)) {
             continue;

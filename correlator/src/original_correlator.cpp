@@ -471,9 +471,13 @@ void OriginalCorrelator::expire(double t)
     }
 }
 
-Snapshot OriginalCorrelator::snapshot(double t)
+void OriginalCorrelator::advance(double t)
 {
     expire(t);
+}
+
+Snapshot OriginalCorrelator::snapshot(double t) const
+{
     Snapshot s;
     s.t = t;
     if (!frame_) {

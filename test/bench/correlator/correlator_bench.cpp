@@ -37,6 +37,7 @@ void BM_Correlator(benchmark::State& state)
             const double t = std::visit([](const auto& v) { return v.t; }, m);
             while (t >= next) {
                 state.PauseTiming(); // the throughput of add(); snapshots are output, timed by `correlate`
+                sut.advance(next);
                 benchmark::DoNotOptimize(sut.snapshot(next));
                 state.ResumeTiming();
                 next += 1.0;

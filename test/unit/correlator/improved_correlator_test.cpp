@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <type_traits>
 
 #include <gtest/gtest.h>
 
@@ -18,6 +19,7 @@ namespace ugv::correlator {
 namespace {
 
 using test::Scene;
+using test::snapshotAt;
 
 std::vector<ObjectEstimate> ofClass(const Snapshot& s, OoiClass cls)
 {
@@ -56,7 +58,7 @@ TEST(ImprovedCorrelator, EstimatesAUgvsHeadingBiasFromSharedObjectsAndKeepsOneOb
     const auto two = sut.poseError("ugv-2", 300).value();
     // Only the difference is observable (the fleet's mean error is not): it must be the -6 deg correction.
     EXPECT_NEAR(two.headingBiasDeg - one.headingBiasDeg, -6.0, 0.5);
-    const Snapshot s = sut.snapshot(300);
+    const Snapshot s = snapshotAt(sut, 300);
     EXPECT_EQ(ofClass(s, OoiClass::Static).size(), posts.size());
 }
 
@@ -69,13 +71,13 @@ TEST(ImprovedCorrelator, PoseCorrectionReprojectsStoredObservationsExactly)
     for (int i = 0; i < 5; ++i) {
         ASSERT_TRUE(sut.add(scene.see(i, "ugv-1", "a", OoiClass::Static, {0, 0}, post, 0.0, {3, 0})).has_value());
     }
-    const Snapshot before = sut.snapshot(5);
+    const Snapshot before = snapshotAt(sut, 5);
     ASSERT_EQ(before.objects.size(), 1U);
     EXPECT_NEAR(scene.local(before.objects[0]).x(), post.x() + 3.0, 1e-3);
 
     ASSERT_TRUE(sut.add(PoseCorrection{5, "ugv-1", 0, 5, -3.0, 0.0, 0.0}).has_value());
 
-    const Snapshot s = sut.snapshot(6);
+    const Snapshot s = snapshotAt(sut, 6);
     ASSERT_EQ(s.objects.size(), 1U);
     EXPECT_LT((scene.local(s.objects[0]) - post).norm(), 1e-3);
 }
@@ -96,8 +98,8 @@ TEST(ImprovedCorrelator, ObjectsTwoMetresApartStayApartWhereTheOriginalMergesThe
             ASSERT_TRUE(original.add(o).has_value());
         }
     }
-    EXPECT_EQ(improved.snapshot(10).objects.size(), 2U);
-    EXPECT_EQ(original.snapshot(10).objects.size(), 1U); // its fixed 2.5 m gate
+    EXPECT_EQ(snapshotAt(improved, 10).objects.size(), 2U);
+    EXPECT_EQ(snapshotAt(original, 10).objects.size(), 1U); // its fixed 2.5 m gate
 }
 
 TEST(ImprovedCorrelator, MobileObjectIsPredictedThroughAGap)
@@ -109,14 +111,14 @@ TEST(ImprovedCorrelator, MobileObjectIsPredictedThroughAGap)
         const double t = i * 0.5;
         ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {-5.0 + t, 15})).has_value());
     }
-    const Snapshot s = sut.snapshot(12);
+    const Snapshot s = snapshotAt(sut, 12);
 
     const auto mobiles = ofClass(s, OoiClass::Mobile);
     ASSERT_EQ(mobiles.size(), 1U);
     EXPECT_LT((scene.local(mobiles[0]) - Eigen::Vector2d(-5.0 + 12.0, 15)).norm(), 0.3);
     EXPECT_GT(mobiles[0].sigmaMajorM, 0.0);
     // Four more seconds unseen: too uncertain to show (kept for when it is seen again).
-    EXPECT_TRUE(ofClass(sut.snapshot(16), OoiClass::Mobile).empty());
+    EXPECT_TRUE(ofClass(snapshotAt(sut, 16), OoiClass::Mobile).empty());
     EXPECT_DOUBLE_EQ(mobiles[0].zoneDiameterM, kMobileZoneDiameterM);
 }
 
@@ -134,7 +136,7 @@ TEST(ImprovedCorrelator, AMobileWalkingALineIsPredictedAlongItThroughALongGap)
         ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "m", OoiClass::Mobile, {0, 0}, truth(t))).has_value());
     }
     // 25 s unseen: far too long for the Kalman prediction, it turned at the end of the line meanwhile.
-    const Snapshot s = sut.snapshot(145);
+    const Snapshot s = snapshotAt(sut, 145);
 
     const auto mobiles = ofClass(s, OoiClass::Mobile);
     ASSERT_EQ(mobiles.size(), 1U);
@@ -156,17 +158,36 @@ TEST(ImprovedCorrelator, AMobileOnlyTheUavFixesIsPredictedAlongItsLineBetweenFix
         fix.t = i * 10.0;
         scene.latLon(truth(fix.t), fix.lat, fix.lon);
         ASSERT_TRUE(sut.add(fix).has_value());
-        const auto mobiles = ofClass(sut.snapshot(fix.t + 1.0), OoiClass::Mobile);
+        const auto mobiles = ofClass(snapshotAt(sut, fix.t + 1.0), OoiClass::Mobile);
         ASSERT_EQ(mobiles.size(), 1U) << "t " << fix.t + 1.0;
         id = id.empty() ? mobiles[0].id : id;
         EXPECT_EQ(mobiles[0].id, id) << "t " << fix.t + 1.0;
     }
     // 7 s after the last fix, which found it at the east end: it turned there and walks back west.
     constexpr double kT = 207.0;
-    const auto mobiles = ofClass(sut.snapshot(kT), OoiClass::Mobile);
+    const auto mobiles = ofClass(snapshotAt(sut, kT), OoiClass::Mobile);
     ASSERT_EQ(mobiles.size(), 1U);
     EXPECT_LT((scene.local(mobiles[0]) - truth(kT)).norm(), 1.5);
     EXPECT_EQ(mobiles[0].state, Confirmation::ConfirmedPositive);
+}
+
+TEST(ImprovedCorrelator, SnapshotChangesNothingAndAdvanceAssignsThePendingUavFixes)
+{
+    static_assert(
+        std::is_same_v<decltype(&ImprovedCorrelator::snapshot), Snapshot (ImprovedCorrelator::*)(double) const>);
+    const Scene scene;
+    ImprovedCorrelator sut;
+    UavFix fix;
+    fix.t = 5.0;
+    scene.latLon(Eigen::Vector2d(8, 20), fix.lat, fix.lon);
+    ASSERT_TRUE(sut.add(fix).has_value());
+    const ImprovedCorrelator& view = sut;
+
+    EXPECT_TRUE(view.snapshot(5.0).objects.empty()); // the fixes of an instant wait for the next one or advance()
+    EXPECT_TRUE(view.snapshot(5.0).objects.empty());
+    sut.advance(5.0);
+
+    EXPECT_EQ(view.snapshot(5.0).objects.size(), 1U);
 }
 
 TEST(ImprovedCorrelator, UavFixesOfOneInstantAreAssignedTogether)
@@ -186,14 +207,14 @@ TEST(ImprovedCorrelator, UavFixesOfOneInstantAreAssignedTogether)
     };
     ASSERT_TRUE(sut.add(fixAt(0, a0)).has_value());
     ASSERT_TRUE(sut.add(fixAt(0, b0)).has_value());
-    const auto before = ofClass(sut.snapshot(0.5), OoiClass::Mobile);
+    const auto before = ofClass(snapshotAt(sut, 0.5), OoiClass::Mobile);
     ASSERT_EQ(before.size(), 2U);
     const bool firstIsA = (scene.local(before[0]) - a0).norm() < 0.5;
     const std::string idA = before[firstIsA ? 0 : 1].id;
     ASSERT_TRUE(sut.add(fixAt(10, a1)).has_value());
     ASSERT_TRUE(sut.add(fixAt(10, b1)).has_value());
 
-    const auto after = ofClass(sut.snapshot(10.5), OoiClass::Mobile);
+    const auto after = ofClass(snapshotAt(sut, 10.5), OoiClass::Mobile);
     ASSERT_EQ(after.size(), 2U);
     for (const ObjectEstimate& o : after) {
         const bool isA = (scene.local(o) - a1).norm() < 1.0;
@@ -206,7 +227,7 @@ TEST(ImprovedCorrelator, ASingleMobileSightingIsNotPublishedAndTimesOut)
     const Scene scene;
     ImprovedCorrelator sut;
     ASSERT_TRUE(sut.add(scene.see(0, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {5, 15})).has_value());
-    EXPECT_TRUE(sut.snapshot(1).objects.empty());
+    EXPECT_TRUE(snapshotAt(sut, 1).objects.empty());
 }
 
 TEST(ImprovedCorrelator, ClutterNeverBecomesAnObject)
@@ -221,7 +242,7 @@ TEST(ImprovedCorrelator, ClutterNeverBecomesAnObject)
         ASSERT_TRUE(
             sut.add(scene.see(i * 5.0, "ugv-1", "c" + std::to_string(i), OoiClass::Static, {0, 0}, at)).has_value());
         if (i % 12 == 0) {
-            EXPECT_TRUE(sut.snapshot(i * 5.0).objects.empty()) << "t " << i * 5.0;
+            EXPECT_TRUE(snapshotAt(sut, i * 5.0).objects.empty()) << "t " << i * 5.0;
         }
     }
     EXPECT_LT(sut.storedPoints(), 200U);
@@ -235,7 +256,7 @@ TEST(ImprovedCorrelator, ConfirmationsAndUavFixes)
         ASSERT_TRUE(sut.add(scene.see(i, "ugv-1", "s", OoiClass::Static, {0, 0}, {5, 15})).has_value());
         ASSERT_TRUE(sut.add(scene.see(i, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {-5, 15})).has_value());
     }
-    Snapshot s = sut.snapshot(4);
+    Snapshot s = snapshotAt(sut, 4);
     ASSERT_EQ(s.objects.size(), 2U);
     const std::string staticId = ofClass(s, OoiClass::Static).at(0).id;
     const std::string mobileId = ofClass(s, OoiClass::Mobile).at(0).id;
@@ -246,7 +267,7 @@ TEST(ImprovedCorrelator, ConfirmationsAndUavFixes)
     scene.latLon({-4.5, 15.5}, fix.lat, fix.lon);
     ASSERT_TRUE(sut.add(fix).has_value());
 
-    s = sut.snapshot(5);
+    s = snapshotAt(sut, 5);
     EXPECT_EQ(ofClass(s, OoiClass::Static).at(0).state, Confirmation::ConfirmedNegative);
     const auto mobiles = ofClass(s, OoiClass::Mobile);
     ASSERT_EQ(mobiles.size(), 1U); // the fix joined the tracked object, no new one
@@ -274,10 +295,10 @@ TEST(ImprovedCorrelator, DuplicatesFromABiasedUgvMergeIntoTheEarliestId)
             }
         }
         if (step == 4) {
-            firstId = sut.snapshot(t).objects.at(0).id;
+            firstId = snapshotAt(sut, t).objects.at(0).id;
         }
     }
-    const Snapshot s = sut.snapshot(300);
+    const Snapshot s = snapshotAt(sut, 300);
     ASSERT_EQ(s.objects.size(), posts.size());
     bool kept = false;
     for (const ObjectEstimate& o : s.objects) {
@@ -354,7 +375,7 @@ SplitTrace runClosePair(bool bFirst)
         if (step % 10 != 9) {
             continue;
         }
-        const Snapshot s = sut.snapshot(t);
+        const Snapshot s = snapshotAt(sut, t);
         const auto pair = near(s, middle, 6.0);
         if (t < 120.0) { // before the first solve: one object for both posts
             if (pair.size() != 1) {
@@ -503,7 +524,7 @@ TEST(ImprovedCorrelator, ADuplicateUnderAChurnedTrackIsNotShownBeforeItMergesAnd
             o.rangeM += 4.0;
         }
         ASSERT_TRUE(sut.add(o).has_value());
-        const Snapshot s = sut.snapshot(t);
+        const Snapshot s = snapshotAt(sut, t);
         mostShown = std::max(mostShown, s.objects.size());
         for (const ObjectEstimate& e : s.objects) {
             if ((scene.local(e) - post).norm() < 1.5) {
@@ -516,7 +537,7 @@ TEST(ImprovedCorrelator, ADuplicateUnderAChurnedTrackIsNotShownBeforeItMergesAnd
     }
     EXPECT_FALSE(firstId.empty());
     EXPECT_EQ(mostShown, 2U);
-    EXPECT_EQ(sut.snapshot(110).objects.size(), 2U);
+    EXPECT_EQ(snapshotAt(sut, 110).objects.size(), 2U);
 }
 
 } // namespace

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <type_traits>
 
 #include <gtest/gtest.h>
 
@@ -16,6 +17,7 @@ namespace ugv::correlator {
 namespace {
 
 using test::Scene;
+using test::snapshotAt;
 
 const ObjectEstimate* findId(const Snapshot& s, const std::string& id)
 {
@@ -33,6 +35,22 @@ void feed(OriginalCorrelator& sut, const Observation& o)
     ASSERT_TRUE(sut.add(o).has_value());
 }
 
+TEST(OriginalCorrelator, SnapshotChangesNothingAndAdvanceTimesOutMobileObjects)
+{
+    static_assert(
+        std::is_same_v<decltype(&OriginalCorrelator::snapshot), Snapshot (OriginalCorrelator::*)(double) const>);
+    const Scene scene;
+    OriginalCorrelator sut;
+    feed(sut, scene.see(0.0, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {8, 12}));
+    const OriginalCorrelator& view = sut;
+    const double late = OriginalConfig{}.mobileTimeoutS + 1.0;
+
+    EXPECT_EQ(view.snapshot(late).objects.size(), 1U); // still there: only advance() times it out
+    sut.advance(late);
+
+    EXPECT_TRUE(view.snapshot(late).objects.empty());
+}
+
 TEST(OriginalCorrelator, StaticTrackBecomesAnObjectAtItsThirdObservation)
 {
     const Scene scene;
@@ -41,10 +59,10 @@ TEST(OriginalCorrelator, StaticTrackBecomesAnObjectAtItsThirdObservation)
     const Eigen::Vector2d post(8, 12);
     feed(sut, scene.see(0.0, "ugv-1", "a", OoiClass::Static, ugv, post));
     feed(sut, scene.see(0.5, "ugv-1", "a", OoiClass::Static, ugv, post));
-    EXPECT_TRUE(sut.snapshot(1.0).objects.empty());
+    EXPECT_TRUE(snapshotAt(sut, 1.0).objects.empty());
 
     feed(sut, scene.see(1.0, "ugv-1", "a", OoiClass::Static, ugv, post));
-    const Snapshot s = sut.snapshot(1.5);
+    const Snapshot s = snapshotAt(sut, 1.5);
 
     ASSERT_EQ(s.objects.size(), 1U);
     EXPECT_LT((scene.local(s.objects[0]) - post).norm(), 0.05);
@@ -62,12 +80,12 @@ TEST(OriginalCorrelator, TracksWithin2_5mMergeKeepingTheEarliestId)
     for (int i = 0; i < 3; ++i) {
         feed(sut, scene.see(i, "ugv-1", "a", OoiClass::Static, {0, 0}, {10, 10}));
     }
-    const std::string first = sut.snapshot(3).objects.at(0).id;
+    const std::string first = snapshotAt(sut, 3).objects.at(0).id;
     // ugv-2's heading error puts the same object 2 m away.
     for (int i = 0; i < 3; ++i) {
         feed(sut, scene.see(3 + i, "ugv-2", "b", OoiClass::Static, {20, 0}, {12, 10}));
     }
-    const Snapshot s = sut.snapshot(7);
+    const Snapshot s = snapshotAt(sut, 7);
 
     ASSERT_EQ(s.objects.size(), 1U);
     EXPECT_EQ(s.objects[0].id, first);
@@ -84,7 +102,7 @@ TEST(OriginalCorrelator, DistantTracksStaySeparate)
         feed(sut, scene.see(i, "ugv-1", "a", OoiClass::Static, {0, 0}, {10, 10}));
         feed(sut, scene.see(i, "ugv-1", "b", OoiClass::Static, {0, 0}, {10, 14}));
     }
-    EXPECT_EQ(sut.snapshot(3).objects.size(), 2U);
+    EXPECT_EQ(snapshotAt(sut, 3).objects.size(), 2U);
 }
 
 TEST(OriginalCorrelator, OverlappingErrorBoundsMergeBeyondTheRadius)
@@ -100,7 +118,7 @@ TEST(OriginalCorrelator, OverlappingErrorBoundsMergeBeyondTheRadius)
             feed(sut, scene.see(i, "ugv-2", "b", OoiClass::Static, {0, 0}, {13.5 + noise(rng), 10 + noise(rng)}));
         }
         // 3.5 m apart: beyond the 2.5 m radius; with 1.2 m spread their 2-sigma bounds overlap, with 5 cm not.
-        EXPECT_EQ(sut.snapshot(31).objects.size(), spread > 1.0 ? 1U : 2U) << "spread " << spread;
+        EXPECT_EQ(snapshotAt(sut, 31).objects.size(), spread > 1.0 ? 1U : 2U) << "spread " << spread;
     }
 }
 
@@ -115,7 +133,7 @@ TEST(OriginalCorrelator, OneTrackOverTwoObjectsSplitsIntoTwo)
         feed(sut, scene.see(i * 0.5, "ugv-1", "a", OoiClass::Static, {0, 0},
                             object + Eigen::Vector2d(noise(rng), noise(rng))));
     }
-    const Snapshot s = sut.snapshot(21);
+    const Snapshot s = snapshotAt(sut, 21);
 
     ASSERT_EQ(s.objects.size(), 2U);
     const double x0 = scene.local(s.objects[0]).x();
@@ -132,7 +150,7 @@ TEST(OriginalCorrelator, ConfirmationStartsFromTheClassAndFollowsConfirms)
         feed(sut, scene.see(i, "ugv-1", "a", OoiClass::Static, {0, 0}, {10, 10}));
         feed(sut, scene.see(i, "ugv-1", "p", OoiClass::NonCombatant, {0, 0}, {-10, 10}));
     }
-    Snapshot s = sut.snapshot(3);
+    Snapshot s = snapshotAt(sut, 3);
     ASSERT_EQ(s.objects.size(), 2U);
     const ObjectEstimate civilian = s.objects[0].cls == OoiClass::NonCombatant ? s.objects[0] : s.objects[1];
     const ObjectEstimate post = s.objects[0].cls == OoiClass::Static ? s.objects[0] : s.objects[1];
@@ -141,7 +159,7 @@ TEST(OriginalCorrelator, ConfirmationStartsFromTheClassAndFollowsConfirms)
 
     ASSERT_TRUE(sut.add(Confirm{4, post.id, Confirmation::ConfirmedPositive}).has_value());
 
-    s = sut.snapshot(5);
+    s = snapshotAt(sut, 5);
     ASSERT_NE(findId(s, post.id), nullptr);
     EXPECT_EQ(findId(s, post.id)->state, Confirmation::ConfirmedPositive);
     const auto unknown = sut.add(Confirm{5, "ooi-999", Confirmation::ConfirmedPositive});
@@ -157,7 +175,7 @@ TEST(OriginalCorrelator, MergedObjectsInheritTheConfirmationAndMergedIdsStillCon
         feed(sut, scene.see(i, "ugv-1", "a", OoiClass::Static, {0, 0}, {10, 10}));
         feed(sut, scene.see(i, "ugv-2", "b", OoiClass::Static, {0, 0}, {10, 16}));
     }
-    Snapshot s = sut.snapshot(3);
+    Snapshot s = snapshotAt(sut, 3);
     ASSERT_EQ(s.objects.size(), 2U);
     const std::string earlier = s.objects[0].id;
     const std::string later = s.objects[1].id;
@@ -167,13 +185,13 @@ TEST(OriginalCorrelator, MergedObjectsInheritTheConfirmationAndMergedIdsStillCon
     for (int i = 0; i < 60; ++i) {
         feed(sut, scene.see(4 + i, "ugv-2", "b", OoiClass::Static, {0, 0}, {10, 10.5}));
     }
-    s = sut.snapshot(70);
+    s = snapshotAt(sut, 70);
 
     ASSERT_EQ(s.objects.size(), 1U);
     EXPECT_EQ(s.objects[0].id, earlier);
     EXPECT_EQ(s.objects[0].state, Confirmation::ConfirmedPositive); // inherited from the absorbed object
     ASSERT_TRUE(sut.add(Confirm{71, later, Confirmation::ConfirmedNegative}).has_value()); // the merged id
-    EXPECT_EQ(sut.snapshot(72).objects[0].state, Confirmation::ConfirmedNegative);
+    EXPECT_EQ(snapshotAt(sut, 72).objects[0].state, Confirmation::ConfirmedNegative);
 }
 
 TEST(OriginalCorrelator, MobilePositionIsTheWeightedAverageOfTheLastThree)
@@ -184,7 +202,7 @@ TEST(OriginalCorrelator, MobilePositionIsTheWeightedAverageOfTheLastThree)
     feed(sut, scene.see(1, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {11, 10}));
     feed(sut, scene.see(2, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {12, 10}));
     feed(sut, scene.see(3, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {13, 10}));
-    const Snapshot s = sut.snapshot(3.5);
+    const Snapshot s = snapshotAt(sut, 3.5);
 
     ASSERT_EQ(s.objects.size(), 1U);
     EXPECT_NEAR(scene.local(s.objects[0]).x(), 0.5 * 13 + 0.3 * 12 + 0.2 * 11, 1e-3);
@@ -197,8 +215,8 @@ TEST(OriginalCorrelator, MobileObjectsTimeOutAfter60s)
     const Scene scene;
     OriginalCorrelator sut;
     feed(sut, scene.see(0, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {10, 10}));
-    EXPECT_EQ(sut.snapshot(59.0).objects.size(), 1U);
-    EXPECT_TRUE(sut.snapshot(61.0).objects.empty());
+    EXPECT_EQ(snapshotAt(sut, 59.0).objects.size(), 1U);
+    EXPECT_TRUE(snapshotAt(sut, 61.0).objects.empty());
 }
 
 TEST(OriginalCorrelator, MobileTracksMergeWithin2_5mAndClassesStayApart)
@@ -208,7 +226,7 @@ TEST(OriginalCorrelator, MobileTracksMergeWithin2_5mAndClassesStayApart)
     feed(sut, scene.see(0, "ugv-1", "m1", OoiClass::Mobile, {0, 0}, {10, 10}));
     feed(sut, scene.see(0, "ugv-2", "m2", OoiClass::Mobile, {0, 0}, {11.5, 10}));
     feed(sut, scene.see(0, "ugv-2", "c1", OoiClass::NonCombatant, {0, 0}, {10.5, 10}));
-    const Snapshot s = sut.snapshot(0.5);
+    const Snapshot s = snapshotAt(sut, 0.5);
 
     ASSERT_EQ(s.objects.size(), 2U);
     int mobiles = 0;
@@ -234,7 +252,7 @@ TEST(OriginalCorrelator, UavFixMovesTheNearestMobileObjectAndConfirmsIt)
     UavFix far = fix;
     scene.latLon({60, 60}, far.lat, far.lon);
     ASSERT_TRUE(sut.add(far).has_value());
-    const Snapshot s = sut.snapshot(2);
+    const Snapshot s = snapshotAt(sut, 2);
 
     ASSERT_EQ(s.objects.size(), 2U);
     const ObjectEstimate* merged = findId(s, "ooi-1");
@@ -257,7 +275,7 @@ TEST(OriginalCorrelator, NonCombatantsNearThreatsRaiseAlerts)
     feed(sut, scene.see(3, "ugv-1", "c1", OoiClass::NonCombatant, {0, 0}, {13, 10}));  // 3 m from the static
     feed(sut, scene.see(3, "ugv-1", "c2", OoiClass::NonCombatant, {0, 0}, {25, 10}));  // 15 m from the mobile
     feed(sut, scene.see(3, "ugv-1", "c3", OoiClass::NonCombatant, {0, 0}, {-30, 10})); // far from both
-    const Snapshot s = sut.snapshot(4);
+    const Snapshot s = snapshotAt(sut, 4);
 
     ASSERT_EQ(s.alerts.size(), 2U);
     for (const Alert& a : s.alerts) {
@@ -280,18 +298,18 @@ TEST(OriginalCorrelator, StoredPointsStayBoundedOverALongMission)
         feed(sut, scene.see(t, "ugv-1", "clutter-" + std::to_string(i), OoiClass::Static, {0, 0},
                             {anywhere(rng), anywhere(rng)}));
         if (i % 100 == 0) {
-            (void)sut.snapshot(t);
+            (void)snapshotAt(sut, t);
         }
     }
     EXPECT_LE(sut.storedPoints(), config.maxPointsPerTrack + 2 * 700); // reservoir + clutter of the last 300 s
-    const Snapshot s = sut.snapshot(10000);
+    const Snapshot s = snapshotAt(sut, 10000);
     ASSERT_EQ(s.objects.size(), 1U);
     EXPECT_EQ(s.objects[0].observations, 20000); // every observation counts in the fit, not only the stored ones
     EXPECT_LT((scene.local(s.objects[0]) - Eigen::Vector2d(10, 10)).norm(), 0.05);
 
-    (void)sut.snapshot(10000 + config.retireAfterS + 1); // idle: the track drops its points, keeps its fit
+    (void)snapshotAt(sut, 10000 + config.retireAfterS + 1); // idle: the track drops its points, keeps its fit
     EXPECT_EQ(sut.storedPoints(), 0U);
-    EXPECT_EQ(sut.snapshot(10400).objects.size(), 1U);
+    EXPECT_EQ(snapshotAt(sut, 10400).objects.size(), 1U);
 }
 
 TEST(OriginalCorrelator, PoseCorrectionsAreCountedAndIgnored)

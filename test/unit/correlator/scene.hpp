@@ -12,6 +12,14 @@
 
 namespace ugv::correlator::test {
 
+/// The snapshot at t once the correlator has advanced to t (what CorrelatorFeed does at every period boundary).
+template <class Correlator>
+Snapshot snapshotAt(Correlator& sut, double t)
+{
+    sut.advance(t);
+    return sut.snapshot(t);
+}
+
 class Scene {
 public:
     static constexpr double kLat0 = -34.9;

@@ -76,7 +76,12 @@ public:
 
     /// Applies one message (time-ordered). Errors (the message is skipped): a confirm of an unknown id.
     Result<void, Error> add(const Message& message);
-    [[nodiscard]] Snapshot snapshot(double t);
+    /// What the passing of time alone changes, up to `t`: the UAV fixes still pending are assigned, static objects
+    /// still tentative tentativeTimeoutS after their first observation are dropped, mobile objects unseen for
+    /// mobileTimeoutS are dropped. Call it before snapshot(t) (CorrelatorFeed does at every period boundary).
+    void advance(double t);
+    /// The objects and alerts at time `t`, as advance(t) left them; changes nothing.
+    [[nodiscard]] Snapshot snapshot(double t) const;
     [[nodiscard]] std::size_t storedPoints() const noexcept;
 
     /// The current estimate of a UGV's heading bias [deg] and offset at time t [m] (tests, diagnostics).
@@ -200,6 +205,7 @@ private:
     [[nodiscard]] bool sameObject(const StaticObject& x, const StaticObject& y) const;
     void mergeStatics();
     void dropTentative(double t);
+    void timeOutMobiles(double t);
     void splitStatics();
     [[nodiscard]] Eigen::Vector2d trackMean(int trackIndex, double& weight) const;
     void predict(Mobile& m, double t) const;

@@ -56,8 +56,12 @@ public:
     /// Applies one message (time-ordered). Errors (the message is skipped): a confirm of an unknown id.
     Result<void, Error> add(const Message& message);
 
-    /// The objects and alerts at time `t` (mobile objects past their timeout are removed first).
-    [[nodiscard]] Snapshot snapshot(double t);
+    /// What the passing of time alone changes, up to `t`: mobile objects and tracks past their timeout are removed,
+    /// idle static tracks retired or forgotten. Call it before snapshot(t) (CorrelatorFeed does at every period
+    /// boundary).
+    void advance(double t);
+    /// The objects and alerts at time `t`, as advance(t) left them; changes nothing.
+    [[nodiscard]] Snapshot snapshot(double t) const;
 
     /// Observation points held in memory (bounded; tests watch it over long missions).
     [[nodiscard]] std::size_t storedPoints() const noexcept;
