@@ -227,7 +227,7 @@ void LiveCorrelator::apply(std::span<const correlator::Message> batch)
     if (feed_.skippedSnapshots() > skippedBefore) {
         warn("correlator: an input jumped ahead in mission time: " +
              std::to_string(feed_.skippedSnapshots() - skippedBefore) + " snapshots of the gap skipped (at most " +
-             std::to_string(bringup::CorrelatorFeed::kMaxSnapshotsPerGap) + " are given out for one gap)");
+             std::to_string(correlator::CorrelatorFeed::kMaxSnapshotsPerGap) + " are given out for one gap)");
     }
 }
 

@@ -44,7 +44,7 @@
 #include <tuple>
 #include <unordered_map>
 
-#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
@@ -95,7 +95,7 @@ public:
     std::optional<correlator::Snapshot> finish();
 
     [[nodiscard]] LiveCorrelatorStats stats() const;
-    [[nodiscard]] const bringup::CorrelatorFeed& feed() const noexcept { return feed_; }
+    [[nodiscard]] const correlator::CorrelatorFeed& feed() const noexcept { return feed_; }
     /// The latest snapshot taken (empty before the first).
     [[nodiscard]] const correlator::Snapshot& latest() const noexcept { return latest_; }
     /// Problems seen (the first ones of each kind, for the log), drained by the caller.
@@ -122,7 +122,7 @@ private:
     void warnOnce(const std::string& text);
 
     LiveCorrelatorOptions options_;
-    bringup::CorrelatorFeed feed_;
+    correlator::CorrelatorFeed feed_;
     ipc::dds::Reader<ipc::dds::msg::OoiObservation> observations_;
     ipc::dds::Reader<ipc::dds::msg::UavObservation> uav_;
     ipc::dds::Reader<ipc::dds::msg::ConfirmationState> confirmations_;

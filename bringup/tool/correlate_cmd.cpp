@@ -26,7 +26,7 @@
 #include "commands.hpp"
 #include "correlator_task.hpp"
 #include "ugv/bringup/correlate_io.hpp"
-#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/correlator/geodesy.hpp"
 
 namespace ugv::tool {
@@ -67,7 +67,7 @@ double drawable(double px, double min)
 
 /// Objects (2-sigma ellipses, ids, confirmation colours, activation zones) and UGVs (triangles) on a metric grid.
 Result<void, Error> drawMap(const std::string& path, const Snapshot& s,
-                            const std::map<std::string, bringup::UgvPose>& ugvs)
+                            const std::map<std::string, correlator::UgvPose>& ugvs)
 {
     if (s.objects.empty() && ugvs.empty()) {
         return Unexpected(Error{path, "nothing to draw: no objects and no UGVs", "check the input"});
@@ -295,7 +295,8 @@ int runCorrelate(int argc, char** argv)
         return correlateFromDds(args, mode == "improved", *period, *lateWindow, out);
     }
 
-    bringup::CorrelatorFeed feed(mode == "improved", *period, *lateWindow);
+    correlator::CorrelatorFeed feed(mode == "improved", *period, *lateWindow,
+                                    [] { return std::chrono::steady_clock::now().time_since_epoch(); });
     std::string line;
     std::size_t lineNumber = 0;
     std::size_t bad = 0;
@@ -328,7 +329,7 @@ int runCorrelate(int argc, char** argv)
         }
         if (feed.skippedSnapshots() > skippedBefore) {
             std::cerr << args.get("input") << ':' << lineNumber << ": field 't' jumps from " << lastT << " to " << t
-                      << " s: wrote " << bringup::CorrelatorFeed::kMaxSnapshotsPerGap
+                      << " s: wrote " << correlator::CorrelatorFeed::kMaxSnapshotsPerGap
                       << " snapshots of the gap and skipped " << feed.skippedSnapshots() - skippedBefore << '\n';
         }
         lastT = std::isnan(lastT) ? t : std::max(lastT, t);
@@ -347,7 +348,7 @@ int runCorrelate(int argc, char** argv)
     const std::size_t snapshots = feed.snapshots();
     if (feed.skippedSnapshots() > 0) {
         std::printf("%zu snapshot(s) skipped over jumps in time (at most %zu are written for one gap)\n",
-                    feed.skippedSnapshots(), bringup::CorrelatorFeed::kMaxSnapshotsPerGap);
+                    feed.skippedSnapshots(), correlator::CorrelatorFeed::kMaxSnapshotsPerGap);
     }
     std::printf("correlated %zu message(s) (%zu late, put in place by replaying %zu), %zu bad line(s) skipped, %zu "
                 "snapshot(s) to %s; %zu object(s) at t %.1f\n"

@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "correlate_score.hpp"
-#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/correlator/scenario.hpp"
 
 namespace ugv::tool {
@@ -181,7 +181,7 @@ struct Run {
 
 Run runMode(bool improved, const correlator::Scenario& scenario, const Truth& truth)
 {
-    bringup::CorrelatorFeed feed(improved, kSnapshotPeriodS);
+    correlator::CorrelatorFeed feed(improved, kSnapshotPeriodS);
     SnapshotScorer scorer(truth);
     const auto onSnapshot = [&scorer](const correlator::Snapshot& s) { scorer.add(s); };
     const auto t0 = std::chrono::steady_clock::now();

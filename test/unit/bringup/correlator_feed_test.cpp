@@ -2,18 +2,20 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "ugv/bringup/correlate_io.hpp"
-#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/correlator/scenario.hpp"
 
 namespace ugv::bringup {
 namespace {
 
+using correlator::CorrelatorFeed;
 using correlator::Message;
 
 std::vector<Message> scenario()
@@ -181,6 +183,25 @@ TEST(CorrelatorFeed, OlderThanTheWindowIsRefusedAndChangesNothing)
     EXPECT_EQ(a, b);
 }
 
+TEST(CorrelatorFeed, BusyTimesComeFromTheCallersStopwatchOnly)
+{
+    constexpr std::chrono::nanoseconds kTick{10};
+    const std::vector<Message> messages = scenario();
+    ASSERT_GE(messages.size(), 2U);
+    std::chrono::nanoseconds fakeNow{0};
+    CorrelatorFeed timed(true, 1.0, 0.0, [&fakeNow, kTick] { return fakeNow += kTick; });
+    CorrelatorFeed untimed(true, 1.0);
+
+    for (std::size_t i = 0; i < 2; ++i) {
+        ASSERT_TRUE(timed.add(messages[i], nullptr).has_value());
+        ASSERT_TRUE(untimed.add(messages[i], nullptr).has_value());
+    }
+
+    EXPECT_EQ(timed.addTime(), 2 * kTick); // one tick between the two reads around each add()
+    EXPECT_EQ(untimed.addTime(), std::chrono::nanoseconds{0});
+    EXPECT_EQ(untimed.snapshotTime(), std::chrono::nanoseconds{0});
+}
+
 TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
 {
     CorrelatorFeed feed(true, 1.0);
@@ -205,6 +226,8 @@ TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
 
 namespace ugv::bringup {
 namespace {
+
+using correlator::CorrelatorFeed;
 
 correlator::Observation observationAt(double t)
 {

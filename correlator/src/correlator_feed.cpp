@@ -1,22 +1,21 @@
-#include "ugv/bringup/correlator_feed.hpp"
+#include "ugv/correlator/correlator_feed.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
-namespace ugv::bringup {
-
-using namespace correlator;
+namespace ugv::correlator {
 
 namespace {
 constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
 constexpr double kPlusInf = std::numeric_limits<double>::infinity();
 } // namespace
 
-CorrelatorFeed::CorrelatorFeed(bool improved, double periodS, double lateWindowS)
+CorrelatorFeed::CorrelatorFeed(bool improved, double periodS, double lateWindowS, Stopwatch stopwatch)
     : periodS_(periodS), lateWindowS_(std::max(0.0, lateWindowS)),
-      checkpointS_(std::min(lateWindowS_ / 4.0, kCheckpointSpacingS))
+      checkpointS_(std::min(lateWindowS_ / 4.0, kCheckpointSpacingS)), stopwatch_(std::move(stopwatch))
 {
     if (improved) {
         state_.correlator.emplace<ImprovedCorrelator>();
@@ -31,6 +30,11 @@ const char* CorrelatorFeed::mode() const noexcept
 std::size_t CorrelatorFeed::storedPoints() const
 {
     return std::visit([](const auto& c) { return c.storedPoints(); }, state_.correlator);
+}
+
+std::chrono::nanoseconds CorrelatorFeed::now() const
+{
+    return stopwatch_ ? stopwatch_() : std::chrono::nanoseconds{0};
 }
 
 double CorrelatorFeed::timeOf(const Message& m) noexcept
@@ -80,14 +84,14 @@ Error CorrelatorFeed::tooLate(double t) const
 
 Snapshot CorrelatorFeed::take(double t, const OnSnapshot& onSnapshot, double emitFrom)
 {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = now();
     Snapshot s = std::visit(
         [t](auto& c) {
             c.advance(t);
             return c.snapshot(t);
         },
         state_.correlator);
-    snapshotBusy_ += std::chrono::steady_clock::now() - t0;
+    snapshotBusy_ += now() - t0;
     ++state_.snapshots;
     if (onSnapshot && t >= emitFrom) {
         onSnapshot(s);
@@ -127,9 +131,9 @@ Result<void, Error> CorrelatorFeed::applyInOrder(const Message& message, double 
         take(state_.nextSnapshotT, onSnapshot, emitFrom);
         state_.nextSnapshotT += periodS_;
     }
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = now();
     auto done = std::visit([&message](auto& c) { return c.add(message); }, state_.correlator);
-    addBusy_ += std::chrono::steady_clock::now() - t0;
+    addBusy_ += now() - t0;
     if (done) {
         ++state_.applied;
         if (const auto* o = std::get_if<Observation>(&message)) {
@@ -265,4 +269,4 @@ std::optional<Snapshot> CorrelatorFeed::finish(const OnSnapshot& onSnapshot)
     return take(lastT(), onSnapshot, kMinusInf);
 }
 
-} // namespace ugv::bringup
+} // namespace ugv::correlator

@@ -11,13 +11,14 @@
 /// beyond +-kMaxTimeS are refused.
 ///
 /// Late messages (re-sequencing): a message that comes before the latest applied one in the correlator's order
-/// (correlator::appliedBefore: by time, equal times by a fixed rule) is put in its place when it is at most
+/// (appliedBefore: by time, equal times by a fixed rule) is put in its place when it is at most
 /// `lateWindowS` older. The feed keeps checkpoints of the correlator (copies, taken every min(lateWindowS / 4,
 /// kCheckpointSpacingS) of mission time, at multiples of it) and the messages applied since the oldest; a late
 /// message rolls the state back to the newest checkpoint before it, and the messages from there are applied again,
 /// merged with it in the correlator's order (on equal keys the one applied first stays first). The state is then
 /// exactly that of the same messages given in that order (a test checks it). Snapshots of boundaries already given
-/// out are taken again during the replay (snapshot() is part of the correlator's state) but not given out again;
+/// out are taken again during the replay (the advance() before each is part of the correlator's state) but not
+/// given out again;
 /// the next boundary gives the corrected picture. An older message is refused ("sort the input by time"); with
 /// lateWindowS = 0 so is any earlier one, and equal times are taken as they come.
 /// Memory: one checkpoint per spacing over the window, and the messages of the window plus a spacing, capped at
@@ -38,11 +39,12 @@
 #include <variant>
 
 #include "ugv/correlator/improved_correlator.hpp"
+#include "ugv/correlator/messages.hpp"
 #include "ugv/correlator/original_correlator.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 
-namespace ugv::bringup {
+namespace ugv::correlator {
 
 /// The last reported pose of a UGV (the map draws it).
 struct UgvPose {
@@ -53,8 +55,11 @@ struct UgvPose {
 
 class CorrelatorFeed {
 public:
-    using OnSnapshot = std::function<void(const correlator::Snapshot&)>;
-    using OnRefused = std::function<void(const correlator::Message&, const Error&)>;
+    using OnSnapshot = std::function<void(const Snapshot&)>;
+    using OnRefused = std::function<void(const Message&, const Error&)>;
+    /// The time of the caller's monotonic clock, read around add() and snapshot() for addTime()/snapshotTime():
+    /// the feed reads no clock of its own (mission time comes with the messages).
+    using Stopwatch = std::function<std::chrono::nanoseconds()>;
 
     /// Messages held for replays, at most (about 300 bytes each).
     static constexpr std::size_t kMaxHeldMessages = 500'000;
@@ -69,18 +74,18 @@ public:
     /// @param periodS      snapshot period in mission time [s], > 0
     /// @param lateWindowS  how much older than the latest applied message a message may be and still be put in its
     ///                     place [s], >= 0 (0: refused)
-    CorrelatorFeed(bool improved, double periodS, double lateWindowS = 0.0);
+    /// @param stopwatch    the caller's monotonic clock for addTime()/snapshotTime(); empty: both stay 0
+    CorrelatorFeed(bool improved, double periodS, double lateWindowS = 0.0, Stopwatch stopwatch = {});
 
     /// Applies one message; every new period boundary it passes first gives a snapshot to `onSnapshot`.
     /// Errors: too late (see the file comment), or the correlator refused it (unknown id, ...): nothing changed.
-    Result<void, Error> add(const correlator::Message& message, const OnSnapshot& onSnapshot);
+    Result<void, Error> add(const Message& message, const OnSnapshot& onSnapshot);
     /// Applies several messages (any order; sorted by time here, stably): one replay at most. Each refused message
     /// goes to `onRefused` (also one applied before that a replay now refuses: its place in time changed).
     /// @return the number of messages of `batch` applied
-    std::size_t add(std::span<const correlator::Message> batch, const OnSnapshot& onSnapshot,
-                    const OnRefused& onRefused);
+    std::size_t add(std::span<const Message> batch, const OnSnapshot& onSnapshot, const OnRefused& onRefused);
     /// The snapshot at the last message's time (nullopt when none was applied); given to `onSnapshot` too.
-    std::optional<correlator::Snapshot> finish(const OnSnapshot& onSnapshot);
+    std::optional<Snapshot> finish(const OnSnapshot& onSnapshot);
 
     [[nodiscard]] std::size_t applied() const noexcept { return state_.applied; }
     [[nodiscard]] std::size_t snapshots() const noexcept { return state_.snapshots; }
@@ -93,6 +98,7 @@ public:
     [[nodiscard]] double earliestAccepted() const noexcept;
     [[nodiscard]] std::size_t storedPoints() const;
     [[nodiscard]] const std::map<std::string, UgvPose>& ugvs() const noexcept { return state_.ugvs; }
+    /// Time spent in the correlator's add() and snapshot(), by the stopwatch given (0 without one).
     [[nodiscard]] std::chrono::nanoseconds addTime() const noexcept { return addBusy_; }
     [[nodiscard]] std::chrono::nanoseconds snapshotTime() const noexcept { return snapshotBusy_; }
     [[nodiscard]] const char* mode() const noexcept;
@@ -100,14 +106,14 @@ public:
 private:
     /// Everything a replay restores.
     struct State {
-        std::variant<correlator::OriginalCorrelator, correlator::ImprovedCorrelator> correlator;
+        std::variant<OriginalCorrelator, ImprovedCorrelator> correlator;
         double nextSnapshotT = NAN;
         double nextCheckpointT = NAN;
         std::size_t applied = 0;
         std::size_t snapshots = 0;
         std::size_t skippedSnapshots = 0;
         std::map<std::string, UgvPose> ugvs;
-        std::optional<correlator::Message> last; ///< the last message applied (or refused by the correlator)
+        std::optional<Message> last; ///< the last message applied (or refused by the correlator)
     };
     struct Checkpoint {
         double t = 0.0;            ///< every message before t is in `state`, none at or after it
@@ -117,24 +123,25 @@ private:
     struct Held {
         static constexpr std::size_t kReplayed = static_cast<std::size_t>(-1);
         double t = 0.0;
-        correlator::Message message;
+        Message message;
         bool applied = false;           ///< the correlator took it (when last applied)
         std::size_t origin = kReplayed; ///< index in the batch being added, or kReplayed
     };
 
-    static double timeOf(const correlator::Message& m) noexcept;
+    static double timeOf(const Message& m) noexcept;
     /// The time of the last message applied (call only when there is one).
     [[nodiscard]] double lastT() const noexcept { return timeOf(*state_.last); }
     /// Applies a message not older than the last one. Snapshots of boundaries at or after `emitFrom` are given out.
-    Result<void, Error> applyInOrder(const correlator::Message& message, double t, const OnSnapshot& onSnapshot,
-                                     double emitFrom);
-    correlator::Snapshot take(double t, const OnSnapshot& onSnapshot, double emitFrom);
+    Result<void, Error> applyInOrder(const Message& message, double t, const OnSnapshot& onSnapshot, double emitFrom);
+    Snapshot take(double t, const OnSnapshot& onSnapshot, double emitFrom);
     void checkpoint(double t);
     /// Drops checkpoints older than the window (or beyond kMaxHeldMessages) and the messages before the oldest.
     void prune();
     Error tooLate(double t) const;
-    /// Before the last message in the correlator's order (correlator::appliedBefore; without a window: earlier).
-    bool isLate(const correlator::Message& message) const;
+    /// The stopwatch's time (0 without one).
+    [[nodiscard]] std::chrono::nanoseconds now() const;
+    /// Before the last message in the correlator's order (appliedBefore; without a window: earlier).
+    bool isLate(const Message& message) const;
 
     State state_;
     double periodS_;
@@ -145,8 +152,9 @@ private:
     std::size_t heldBase_ = 0; ///< absolute index of held_.front()
     std::size_t resequenced_ = 0;
     std::size_t replayed_ = 0;
+    Stopwatch stopwatch_;
     std::chrono::nanoseconds addBusy_{0};
     std::chrono::nanoseconds snapshotBusy_{0};
 };
 
-} // namespace ugv::bringup
+} // namespace ugv::correlator
