@@ -553,8 +553,10 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
              << ", \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
              << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
              << ", \"gt_height_m\": " << jsonNumber(road->heightM)
-             << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg()) << "}, \"ours\": " << tallyJson(o)
-             << ", \"opencv\": " << tallyJson(b) << "}";
+             << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg())
+             << "}, \"image_noise_grey\": " << jsonNumber(run->detector->verifier().noiseSigma())
+             << ", \"verifier_contrast_grey\": " << jsonNumber(run->detector->verifier().requiredContrast())
+             << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b) << "}";
         first = false;
         if (!options.overlayDir.empty()) {
             cv::Mat colour = cv::imread(pair.left.string(), cv::IMREAD_COLOR);

@@ -106,11 +106,16 @@ Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierC
                                       std::to_string(config.belowHalfHeight) + " must be in 1..7 x 0..4"));
     }
     if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
-        !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F) || !(config.refineMaxGroundPx >= 0.0F)) {
-        return Unexpected(
-            configError("minResidualPx, minContrast and minContrastBelow must be >= 0 and acceptRatio in (0, 1]"));
+        !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F) || !(config.refineMaxGroundPx >= 0.0F) ||
+        !(config.contrastNoiseFactor >= 0.0F)) {
+        return Unexpected(configError("minResidualPx, contrastNoiseFactor, minContrast and minContrastBelow must be "
+                                      ">= 0 and acceptRatio in (0, 1]"));
     }
-    return ObstacleVerifier(config);
+    auto noise = ImageNoise::create(config.width, config.height);
+    if (!noise) {
+        return Unexpected(noise.error());
+    }
+    return ObstacleVerifier(config, std::move(*noise));
 }
 
 VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right,
@@ -132,7 +137,11 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
     const int hh = config_.windowHalfHeight;
     const int n = (2 * hw + 1) * (2 * hh + 1);
     const auto minResidual16 = static_cast<int>(std::lround(config_.minResidualPx * kSub));
-    const auto minContrast16 = static_cast<int>(std::lround(config_.minContrast * kSub * static_cast<float>(n)));
+    // The contrast a window needs: that of texture against this camera's noise, learnt from this frame.
+    noiseSigma_ = noise_.estimate(left);
+    requiredContrast_ = std::clamp(config_.contrastNoiseFactor * noiseSigma_,
+                                   std::min(config_.minContrastBelow, config_.minContrast), config_.minContrast);
+    const auto minContrast16 = static_cast<int>(std::lround(requiredContrast_ * kSub * static_cast<float>(n)));
     const auto minContrastBelow16 =
         static_cast<int>(std::lround(config_.minContrastBelow * kSub * static_cast<float>(n)));
     // cost(d) < ratio * cost(d_g), in integers: cost(d) * 1024 < ratio1024 * cost(d_g).

@@ -209,7 +209,8 @@ TEST(ObstacleVerifier, FaintSurfaceBelowTheGroundIsKeptAboveItIsUndecided)
 {
     // Contrast about 2 grey levels: below minContrast (3) but above minContrastBelow (1). A drop's far wall with
     // that texture keeps its disparity (the ratio test decides); the same texture on a near surface (above the
-    // ground, where semi-global fill-in happens) is undecided and invalidated.
+    // ground, where semi-global fill-in happens) is undecided and invalidated. The images have no flat region: the
+    // faint surface's own texture is the flattest, so ImageNoise reads it as the noise (2.5 x that > 3: 3 applies).
     auto sut = ObstacleVerifier::create(config()).value();
     const DisparityPlane ground{0.0, 0.0, 30.0};
 
@@ -220,6 +221,47 @@ TEST(ObstacleVerifier, FaintSurfaceBelowTheGroundIsKeptAboveItIsUndecided)
     const Pair near = makeFaintSurface(30, 50, 4);
     ASSERT_EQ(sut.run(near.left.view(), near.right.view(), near.disparity.view(), ground, kY0), VerifyStatus::Ok);
     // Inside the box, where the window holds only the faint surface (the edges see the textured ground too).
+    for (int y = 2; y < kHeight - 2; ++y) {
+        for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
+            ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
+        }
+    }
+}
+
+/// The faint near surface of makeFaintSurface with the camera's noise made visible: the ground right of the box,
+/// left columns [110, 160) (right columns [80, 130) at the ground's 30 px, clear of the box's [20, 50)), flat grey
+/// 128 with Gaussian noise of `sigma`: the region ImageNoise reads.
+Pair withFlatBand(Pair p, double sigma)
+{
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, sigma);
+    const auto grey = [&] { return static_cast<std::uint8_t>(std::clamp(std::lround(128.0 + noise(rng)), 0L, 255L)); };
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = 110; x < kWidth; ++x) {
+            p.left.view().row(y)[x] = grey();
+            p.right.view().row(y)[x - 30] = grey();
+        }
+    }
+    return p;
+}
+
+TEST(ObstacleVerifier, TheContrastAWindowNeedsFollowsTheCamerasNoise)
+{
+    // The same faint near surface (contrast about 2 grey levels) is decided by the ratio test, and kept at its true
+    // disparity, when the camera's noise is 0.4 grey (KITTI's reads 0.40..0.64), and is undecided (invalidated)
+    // when the noise is 2 grey: then a 2-grey pattern may be the noise itself.
+    auto sut = ObstacleVerifier::create(config()).value();
+    const DisparityPlane ground{0.0, 0.0, 30.0};
+
+    const Pair quiet = withFlatBand(makeFaintSurface(30, 50, 4), 0.4);
+    ASSERT_EQ(sut.run(quiet.left.view(), quiet.right.view(), quiet.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    EXPECT_NEAR(sut.noiseSigma(), 0.4F, 0.15F);
+    EXPECT_NEAR(sut.requiredContrast(), 2.5F * sut.noiseSigma(), 1e-4F); // about 1 grey
+    EXPECT_LT(countInvalidInBox(sut.disparity()), (kBoxX1 - kBoxX0) * kHeight / 10);
+
+    const Pair noisy = withFlatBand(makeFaintSurface(30, 50, 4), 2.0);
+    ASSERT_EQ(sut.run(noisy.left.view(), noisy.right.view(), noisy.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    EXPECT_FLOAT_EQ(sut.requiredContrast(), config().minContrast); // 2.5 x 2 = 5: at most minContrast (3)
     for (int y = 2; y < kHeight - 2; ++y) {
         for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
