@@ -61,7 +61,7 @@ std::string senderOf(const msg::PoseCorrection& s)
 } // namespace
 
 LiveCorrelator::LiveCorrelator(const LiveCorrelatorOptions& options)
-    : options_(options), feed_(options.improved, options.periodS, options.lateWindowS)
+    : options_(options), feed_(options.mode, options.periodS, options.lateWindowS)
 {
 }
 

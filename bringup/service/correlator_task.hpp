@@ -53,7 +53,7 @@
 namespace ugv::service {
 
 struct LiveCorrelatorOptions {
-    bool improved = true;
+    correlator::Mode mode = correlator::Mode::PoseCorrected;
     double periodS = 1.0;
     double reorderMs = 2000.0;
     double lateWindowS = 300.0; ///< [s] CorrelatorFeed's late window

@@ -121,7 +121,7 @@ namespace {
 LiveCorrelatorOptions correlatorOptions(const bringup::ServiceConfig& config)
 {
     LiveCorrelatorOptions o;
-    o.improved = config.correlator.improved;
+    o.mode = config.correlator.mode;
     o.periodS = config.correlator.periodS;
     o.reorderMs = config.correlator.reorderMs;
     o.lateWindowS = config.correlator.lateWindowS;

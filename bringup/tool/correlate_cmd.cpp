@@ -28,6 +28,7 @@
 #include "ugv/bringup/correlate_io.hpp"
 #include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/correlator/geodesy.hpp"
+#include "ugv/correlator/mode.hpp"
 
 namespace ugv::tool {
 using bringup::parseMessageLine;
@@ -150,7 +151,7 @@ void onSignal(int /*signal*/)
 }
 
 /// --from-dds: the live correlator on the bus as a viewer (it publishes nothing), until --duration or SIGINT.
-int correlateFromDds(const Args& args, bool improved, double period, double lateWindow, std::ofstream& out)
+int correlateFromDds(const Args& args, correlator::Mode mode, double period, double lateWindow, std::ofstream& out)
 {
     const auto duration = args.number("duration", 0.0, 0.0, 1e7);
     const auto domain = args.number(
@@ -172,7 +173,7 @@ int correlateFromDds(const Args& args, bool improved, double period, double late
         return fail(bus.error());
     }
     service::LiveCorrelatorOptions o;
-    o.improved = improved;
+    o.mode = mode;
     o.periodS = period;
     o.reorderMs = *reorder;
     o.lateWindowS = lateWindow;
@@ -236,7 +237,7 @@ int correlateFromDds(const Args& args, bool improved, double period, double late
 int runCorrelate(int argc, char** argv)
 {
     Args args(kCommand,
-              "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode improved|original] "
+              "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode pose-corrected|original] "
               "[--map MAP.png]",
               {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", false},
                {"from-dds", "", "take the inputs live from the DDS bus (ugvsense/ooi/*) instead of a file", false},
@@ -244,8 +245,8 @@ int runCorrelate(int argc, char** argv)
                 true},
                {"period", "S", "snapshot period, default 1 s", false},
                {"mode", "MODE",
-                "improved (default: pose errors estimated, statistical gates, Kalman mobiles) or original (the "
-                "published algorithm)",
+                "pose-corrected (default: pose errors estimated, statistical gates, Kalman mobiles) or original "
+                "(the published algorithm); improved: an alias of pose-corrected",
                 false},
                {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false},
                {"duration", "S", "--from-dds: stop after S seconds (default: at Ctrl-C)", false},
@@ -267,9 +268,10 @@ int runCorrelate(int argc, char** argv)
     if (!period || !lateWindow) {
         return reportUsageError(kCommand, !period ? period.error() : lateWindow.error());
     }
-    const std::string mode = args.get("mode", "improved");
-    if (mode != "original" && mode != "improved") {
-        return reportUsageError(kCommand, Error{"--mode " + mode, "unknown mode", "use original or improved"});
+    const auto mode = correlator::parseMode(args.get("mode", "pose-corrected"));
+    if (!mode) {
+        return reportUsageError(kCommand, Error{"--mode " + args.get("mode"), "unknown mode",
+                                                "use " + std::string(correlator::kModeNames)});
     }
     // Before the run, not after it: cv::imwrite throws on an extension it has no writer for.
     if (args.has("map") && !cv::haveImageWriter(args.get("map"))) {
@@ -292,10 +294,10 @@ int runCorrelate(int argc, char** argv)
         return fail(Error{args.get("output"), "cannot create the output", "check the folder"});
     }
     if (args.has("from-dds")) {
-        return correlateFromDds(args, mode == "improved", *period, *lateWindow, out);
+        return correlateFromDds(args, *mode, *period, *lateWindow, out);
     }
 
-    correlator::CorrelatorFeed feed(mode == "improved", *period, *lateWindow,
+    correlator::CorrelatorFeed feed(*mode, *period, *lateWindow,
                                     [] { return std::chrono::steady_clock::now().time_since_epoch(); });
     std::string line;
     std::size_t lineNumber = 0;

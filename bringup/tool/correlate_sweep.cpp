@@ -17,6 +17,7 @@
 
 #include "correlate_score.hpp"
 #include "ugv/correlator/correlator_feed.hpp"
+#include "ugv/correlator/mode.hpp"
 #include "ugv/correlator/scenario.hpp"
 
 namespace ugv::tool {
@@ -30,9 +31,9 @@ constexpr double kQuickDurationS = 600.0;
 constexpr double kSecondsPerHour = 3600.0;
 constexpr double kSnapshotPeriodS = 1.0;
 // Issue 21's targets.
-constexpr double kStaticRatio = 0.5;      ///< improved's median static GOSPA at most this x original's (pose errors)
-constexpr double kMobileRatio = 0.7;      ///< improved's median mobile GOSPA at most this x original's (pose errors)
-constexpr double kCleanSlackM = 0.2;      ///< [m] without pose errors: at most original's + this
+constexpr double kStaticRatio = 0.5; ///< pose-corrected's median static GOSPA at most this x original's (pose errors)
+constexpr double kMobileRatio = 0.7; ///< pose-corrected's median mobile GOSPA at most this x original's (pose errors)
+constexpr double kCleanSlackM = 0.2; ///< [m] without pose errors: at most original's + this
 constexpr double kIdChangesPerHour = 1.0; ///< median static ID changes per hour over the grid, at most
 constexpr double kMinPoseBiasDeg = 2.0;   ///< a point has pose errors with a heading bias of at least this, ...
 constexpr double kTolerance = 1e-9;       ///< comparisons of equal figures
@@ -179,9 +180,9 @@ struct Run {
     double messages = 0.0;
 };
 
-Run runMode(bool improved, const correlator::Scenario& scenario, const Truth& truth)
+Run runMode(correlator::Mode mode, const correlator::Scenario& scenario, const Truth& truth)
 {
-    correlator::CorrelatorFeed feed(improved, kSnapshotPeriodS);
+    correlator::CorrelatorFeed feed(mode, kSnapshotPeriodS);
     SnapshotScorer scorer(truth);
     const auto onSnapshot = [&scorer](const correlator::Snapshot& s) { scorer.add(s); };
     const auto t0 = std::chrono::steady_clock::now();
@@ -265,7 +266,7 @@ Targets check(const ScenarioConfig& config, const ModeSeries& o, const ModeSerie
 struct PointResult {
     SweepPoint point;
     ModeSeries original;
-    ModeSeries improved;
+    ModeSeries poseCorrected;
     Targets targets;
 };
 
@@ -322,7 +323,7 @@ std::string machineName()
 void printHeader()
 {
     std::printf("%-26s %4s | %-13s %-13s | %-13s %-13s | %-9s %-9s | %s\n", "point", "pose", "static orig",
-                "static impr", "mobile orig", "mobile impr", "idch orig", "idch impr", "targets");
+                "static p-corr", "mobile orig", "mobile p-corr", "idch orig", "idch pcor", "targets");
     std::printf("%-26s %4s | %-13s %-13s | %-13s %-13s | %-9s %-9s |\n", "", "err", "med / worst", "med / worst",
                 "med / worst", "med / worst", "med/worst", "med/worst");
 }
@@ -348,9 +349,10 @@ void printRow(const PointResult& r)
         std::snprintf(flags, sizeof(flags), "%c", t.staticMedian ? 'C' : 'c');
     }
     std::printf("%-26s %4s | %-13s %-13s | %-13s %-13s | %-9s %-9s | %s\n", r.point.name.c_str(),
-                t.poseErrors ? "yes" : "no", pair(r.original.staticGospa).c_str(), pair(r.improved.staticGospa).c_str(),
-                pair(r.original.mobileGospa).c_str(), pair(r.improved.mobileGospa).c_str(),
-                counts(r.original.idChanges).c_str(), counts(r.improved.idChanges).c_str(), flags);
+                t.poseErrors ? "yes" : "no", pair(r.original.staticGospa).c_str(),
+                pair(r.poseCorrected.staticGospa).c_str(), pair(r.original.mobileGospa).c_str(),
+                pair(r.poseCorrected.mobileGospa).c_str(), counts(r.original.idChanges).c_str(),
+                counts(r.poseCorrected.idChanges).c_str(), flags);
     std::fflush(stdout);
 }
 
@@ -359,15 +361,16 @@ void printRow(const PointResult& r)
 int runCorrelateSweep(const SweepOptions& options)
 {
     const std::vector<SweepPoint> points = grid(options);
-    std::printf("correlate-eval --sweep: %zu points x %d seeds (from %llu), %.0f s each, modes original and improved\n",
-                points.size(), options.seeds, static_cast<unsigned long long>(options.firstSeed), options.durationS);
+    std::printf(
+        "correlate-eval --sweep: %zu points x %d seeds (from %llu), %.0f s each, modes original and pose-corrected\n",
+        points.size(), options.seeds, static_cast<unsigned long long>(options.firstSeed), options.durationS);
     std::printf("GOSPA c 5 m, p 2: static at the last snapshot, mobile mean over snapshots; idch: static ID changes\n");
     std::printf("targets: with pose errors S static median <= 0.5x, M mobile median <= 0.7x, I ID changes median <= "
                 "original's, W worst seed (static, mobile) <= original's; without: C static median <= original's + "
                 "0.2 m; lower case: missed\n");
     printHeader();
     std::vector<PointResult> results;
-    std::vector<double> idPerHour; // improved, every run of the grid
+    std::vector<double> idPerHour; // pose-corrected, every run of the grid
     std::vector<double> idPerHourOriginal;
     double messages[2] = {0.0, 0.0};
     double seconds[2] = {0.0, 0.0};
@@ -383,10 +386,10 @@ int runCorrelateSweep(const SweepOptions& options)
                 return 1;
             }
             const Truth truth = truthOf(scenario->truth);
-            const Run o = runMode(false, *scenario, truth);
-            const Run i = runMode(true, *scenario, truth);
+            const Run o = runMode(correlator::Mode::Original, *scenario, truth);
+            const Run i = runMode(correlator::Mode::PoseCorrected, *scenario, truth);
             result.original.add(o);
-            result.improved.add(i);
+            result.poseCorrected.add(i);
             const double hours = config.durationS / kSecondsPerHour;
             idPerHour.push_back(i.staticIdChanges / hours);
             idPerHourOriginal.push_back(o.staticIdChanges / hours);
@@ -395,7 +398,7 @@ int runCorrelateSweep(const SweepOptions& options)
             seconds[0] += o.seconds;
             seconds[1] += i.seconds;
         }
-        result.targets = check(point.config, result.original, result.improved);
+        result.targets = check(point.config, result.original, result.poseCorrected);
         printRow(result);
         results.push_back(std::move(result));
     }
@@ -406,10 +409,10 @@ int runCorrelateSweep(const SweepOptions& options)
     const double idMedian = median(idPerHour);
     const bool idTarget = idMedian <= kIdChangesPerHour + kTolerance;
     std::printf("points meeting every target: %zu of %zu\n", met, results.size());
-    std::printf("static ID changes per hour over the grid (median of every run): original %.2f, improved %.2f "
+    std::printf("static ID changes per hour over the grid (median of every run): original %.2f, pose-corrected %.2f "
                 "(target <= %.0f: %s)\n",
                 median(idPerHourOriginal), idMedian, kIdChangesPerHour, idTarget ? "met" : "missed");
-    std::printf("throughput over the sweep: original %.0f, improved %.0f messages/s (add and snapshot)\n",
+    std::printf("throughput over the sweep: original %.0f, pose-corrected %.0f messages/s (add and snapshot)\n",
                 seconds[0] > 0 ? messages[0] / seconds[0] : 0.0, seconds[1] > 0 ? messages[1] / seconds[1] : 0.0);
     if (!options.jsonPath.empty()) {
         ordered_json j{{"machine", machineName()},        {"seeds", options.seeds}, {"first_seed", options.firstSeed},
@@ -419,7 +422,7 @@ int runCorrelateSweep(const SweepOptions& options)
                                                {"pose_errors", r.targets.poseErrors},
                                                {"config", configJson(r.point.config)},
                                                {"original", modeJson(r.original)},
-                                               {"improved", modeJson(r.improved)},
+                                               {"pose-corrected", modeJson(r.poseCorrected)},
                                                {"targets",
                                                 {{"static_median", r.targets.staticMedian},
                                                  {"mobile_median", r.targets.mobileMedian},
@@ -430,11 +433,11 @@ int runCorrelateSweep(const SweepOptions& options)
         j["summary"] = ordered_json{
             {"points", results.size()},
             {"points_meeting_every_target", met},
-            {"id_changes_per_hour_median", {{"original", median(idPerHourOriginal)}, {"improved", idMedian}}},
+            {"id_changes_per_hour_median", {{"original", median(idPerHourOriginal)}, {"pose-corrected", idMedian}}},
             {"id_changes_per_hour_target_met", idTarget},
             {"messages_per_s",
              {{"original", seconds[0] > 0 ? messages[0] / seconds[0] : 0.0},
-              {"improved", seconds[1] > 0 ? messages[1] / seconds[1] : 0.0}}}};
+              {"pose-corrected", seconds[1] > 0 ? messages[1] / seconds[1] : 0.0}}}};
         std::ofstream out(options.jsonPath);
         out << j.dump(2) << '\n';
         out.flush();

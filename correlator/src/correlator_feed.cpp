@@ -13,18 +13,19 @@ constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
 constexpr double kPlusInf = std::numeric_limits<double>::infinity();
 } // namespace
 
-CorrelatorFeed::CorrelatorFeed(bool improved, double periodS, double lateWindowS, Stopwatch stopwatch)
+CorrelatorFeed::CorrelatorFeed(Mode mode, double periodS, double lateWindowS, Stopwatch stopwatch)
     : periodS_(periodS), lateWindowS_(std::max(0.0, lateWindowS)),
       checkpointS_(std::min(lateWindowS_ / 4.0, kCheckpointSpacingS)), stopwatch_(std::move(stopwatch))
 {
-    if (improved) {
-        state_.correlator.emplace<ImprovedCorrelator>();
+    if (mode == Mode::PoseCorrected) {
+        state_.correlator.emplace<PoseCorrectedCorrelator>();
     }
 }
 
 const char* CorrelatorFeed::mode() const noexcept
 {
-    return std::holds_alternative<ImprovedCorrelator>(state_.correlator) ? "improved" : "original";
+    return modeName(std::holds_alternative<PoseCorrectedCorrelator>(state_.correlator) ? Mode::PoseCorrected
+                                                                                       : Mode::Original);
 }
 
 std::size_t CorrelatorFeed::storedPoints() const

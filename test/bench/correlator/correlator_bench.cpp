@@ -1,11 +1,11 @@
-// bench-correlator: messages per second through modes original and improved on a generated 5-UGV mission with
+// bench-correlator: messages per second through modes original and pose-corrected on a generated 5-UGV mission with
 // heading biases and offsets (the target: at least 100,000 observations per second on one core), and the
 // stored observation points after it (bounded). state.range(0): mission length [s]. Snapshots (1 per second) are
 // excluded from the timing: they are output, timed by `ugvsense correlate`.
 #include <benchmark/benchmark.h>
 
-#include "ugv/correlator/improved_correlator.hpp"
 #include "ugv/correlator/original_correlator.hpp"
+#include "ugv/correlator/pose_corrected_correlator.hpp"
 #include "ugv/correlator/scenario.hpp"
 
 namespace {
@@ -57,8 +57,8 @@ BENCHMARK(BM_Correlator<OriginalCorrelator>)
     ->Arg(12600)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
-BENCHMARK(BM_Correlator<ImprovedCorrelator>)
-    ->Name("BM_ImprovedCorrelator")
+BENCHMARK(BM_Correlator<PoseCorrectedCorrelator>)
+    ->Name("BM_PoseCorrectedCorrelator")
     ->Arg(600)
     ->Arg(12600)
     ->Unit(benchmark::kMillisecond)

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -117,6 +118,22 @@ TEST(Config, CorrelatorClockSkewIsReadAndBounded)
     const auto errors = parseErrors(std::string(kValidMinimal) + "correlator:\n  max_clock_skew_ms: -1\n");
     ASSERT_EQ(errors.size(), 1u) << joined(errors);
     EXPECT_EQ(errors[0].where, "test.yaml:5 (correlator.max_clock_skew_ms)");
+}
+
+TEST(Config, CorrelatorModeTakesItsNameAndTheAliasImproved)
+{
+    for (const auto& [name, want] :
+         {std::pair{"pose-corrected", correlator::Mode::PoseCorrected},
+          std::pair{"improved", correlator::Mode::PoseCorrected}, std::pair{"original", correlator::Mode::Original}}) {
+        const auto sut =
+            parseConfig(std::string(kValidMinimal) + "correlator:\n  mode: " + name + "\n", "test.yaml", "/");
+        ASSERT_TRUE(sut.has_value()) << name << ": " << joined(sut.error());
+        EXPECT_EQ(sut->correlator.mode, want) << name;
+    }
+
+    const auto errors = parseErrors(std::string(kValidMinimal) + "correlator:\n  mode: fancy\n");
+    ASSERT_EQ(errors.size(), 1u) << joined(errors);
+    EXPECT_EQ(errors[0].where, "test.yaml:5 (correlator.mode)");
 }
 
 TEST(Config, NonNumbersNanAndFractionalIntegersAreRejected)

@@ -19,7 +19,7 @@ points = {p["name"]: p for p in j["points"]}
 assert set(points) == {"sim", "sim/bias-setting", "harsh", "harsh/drift=0.05"}, points.keys()
 assert j["seeds"] == 10 and j["duration_s"] == 600 and j["machine"], j
 for p in j["points"]:
-    for mode in ("original", "improved"):
+    for mode in ("original", "pose-corrected"):
         for figure in ("static_gospa_m", "mobile_gospa_m", "static_id_changes", "static_false"):
             s = p[mode][figure]
             assert len(s["seeds"]) == 10, (p["name"], mode, figure)

@@ -44,15 +44,20 @@ grep -q '"id":"ooi-1"' <<<"$last" && grep -q '"state":"confirmed_positive"' <<<"
     grep -q '"class":"mobile"' <<<"$last" || { echo "last snapshot lacks the confirmed static or the mobile object"; exit 1; }
 [ "$(wc -l <"$work/snap.jsonl")" -ge 3 ] || { echo "expected a snapshot per second"; exit 1; }
 [ -s "$work/map.png" ] || { echo "no map written"; exit 1; }
-# The default mode (improved) reads the same lines the same way.
-out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap-improved.jsonl" 2>&1) || { echo "$out"; exit 1; }
+# The default mode (pose-corrected) reads the same lines the same way.
+out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap-pose-corrected.jsonl" 2>&1) || { echo "$out"; exit 1; }
 echo "$out"
 grep -qF "correlated 6 message(s) (1 late, put in place by replaying 5), 8 bad line(s) skipped" <<<"$out" &&
-    grep -q "mode improved" <<<"$out" || { echo "improved mode: unexpected summary"; exit 1; }
+    grep -q "mode pose-corrected" <<<"$out" || { echo "pose-corrected mode: unexpected summary"; exit 1; }
 # Without a late window the line out of time order is refused.
 out=$("$tool" correlate --input "$work/obs.jsonl" --output "$work/snap-strict.jsonl" --late-window-s 0 2>&1)
 echo "$out"
 grep -qF "obs.jsonl:12: skipped: time 0.100000 is before the previous message's 1.900000 (fix: sort the input by time)" \
     <<<"$out" && grep -qF "correlated 5 message(s) (0 late" <<<"$out" || { echo "--late-window-s 0: unexpected"; exit 1; }
-grep -q '"id":"ooi-1"' "$work/snap-improved.jsonl" || { echo "improved mode: no static object"; exit 1; }
+grep -q '"id":"ooi-1"' "$work/snap-pose-corrected.jsonl" || { echo "pose-corrected mode: no static object"; exit 1; }
+# improved is an alias of pose-corrected (its former name): the same snapshots, byte for byte.
+out=$("$tool" correlate --mode improved --input "$work/obs.jsonl" --output "$work/snap-improved.jsonl" 2>&1) ||
+    { echo "$out"; exit 1; }
+grep -q "mode pose-corrected" <<<"$out" || { echo "--mode improved: not mode pose-corrected"; exit 1; }
+cmp "$work/snap-improved.jsonl" "$work/snap-pose-corrected.jsonl" || { echo "--mode improved: other snapshots"; exit 1; }
 echo "OK"

@@ -104,9 +104,9 @@ TEST(CorrelatorFeed, LateMessagesInTheWindowGiveTheStateOfTheTimeOrder)
     }
     ASSERT_GT(lateCount, 50U);
 
-    CorrelatorFeed reference(true, 1.0, 0.0);
+    CorrelatorFeed reference(correlator::Mode::PoseCorrected, 1.0, 0.0);
     const FeedRun want = feedAll(reference, timeOrder(late));
-    CorrelatorFeed feed(true, 1.0, 120.0);
+    CorrelatorFeed feed(correlator::Mode::PoseCorrected, 1.0, 120.0);
     const FeedRun got = feedAll(feed, late);
 
     EXPECT_EQ(got.refused, want.refused);
@@ -141,8 +141,8 @@ TEST(CorrelatorFeed, OneByOneEqualsOneBatch)
             single.push_back({m});
         }
     }
-    CorrelatorFeed a(true, 1.0, 120.0);
-    CorrelatorFeed b(true, 1.0, 120.0);
+    CorrelatorFeed a(correlator::Mode::PoseCorrected, 1.0, 120.0);
+    CorrelatorFeed b(correlator::Mode::PoseCorrected, 1.0, 120.0);
     const FeedRun batched = feedAll(a, batches);
     const FeedRun oneByOne = feedAll(b, single);
     EXPECT_EQ(batched.snapshots, oneByOne.snapshots);
@@ -159,8 +159,8 @@ TEST(CorrelatorFeed, OlderThanTheWindowIsRefusedAndChangesNothing)
     }
     ASSERT_EQ(lateOne.size(), 1U);
     const auto give = [](const correlator::Snapshot&) {};
-    CorrelatorFeed without(true, 1.0, 30.0);
-    CorrelatorFeed with(true, 1.0, 30.0);
+    CorrelatorFeed without(correlator::Mode::PoseCorrected, 1.0, 30.0);
+    CorrelatorFeed with(correlator::Mode::PoseCorrected, 1.0, 30.0);
     for (const Message& m : rest) {
         ASSERT_TRUE(without.add(m, give));
         ASSERT_TRUE(with.add(m, give));
@@ -189,8 +189,8 @@ TEST(CorrelatorFeed, BusyTimesComeFromTheCallersStopwatchOnly)
     const std::vector<Message> messages = scenario();
     ASSERT_GE(messages.size(), 2U);
     std::chrono::nanoseconds fakeNow{0};
-    CorrelatorFeed timed(true, 1.0, 0.0, [&fakeNow, kTick] { return fakeNow += kTick; });
-    CorrelatorFeed untimed(true, 1.0);
+    CorrelatorFeed timed(correlator::Mode::PoseCorrected, 1.0, 0.0, [&fakeNow, kTick] { return fakeNow += kTick; });
+    CorrelatorFeed untimed(correlator::Mode::PoseCorrected, 1.0);
 
     for (std::size_t i = 0; i < 2; ++i) {
         ASSERT_TRUE(timed.add(messages[i], nullptr).has_value());
@@ -204,7 +204,7 @@ TEST(CorrelatorFeed, BusyTimesComeFromTheCallersStopwatchOnly)
 
 TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
 {
-    CorrelatorFeed feed(true, 1.0);
+    CorrelatorFeed feed(correlator::Mode::PoseCorrected, 1.0);
     correlator::UavFix fix;
     fix.t = 10.0;
     fix.lat = -34.9;
@@ -245,7 +245,7 @@ correlator::Observation observationAt(double t)
 TEST(CorrelatorFeedHostile, AJumpInTimeWritesABoundedNumberOfSnapshots)
 {
     constexpr double kJumpS = 1e9;
-    CorrelatorFeed sut(true, 1.0, 300.0);
+    CorrelatorFeed sut(correlator::Mode::PoseCorrected, 1.0, 300.0);
     std::size_t written = 0;
     const auto count = [&written](const correlator::Snapshot&) { ++written; };
     ASSERT_TRUE(sut.add(Message{observationAt(0.0)}, count).has_value());
@@ -260,7 +260,7 @@ TEST(CorrelatorFeedHostile, AJumpInTimeWritesABoundedNumberOfSnapshots)
 
 TEST(CorrelatorFeedHostile, TimesBeyondTheLimitAreRefused)
 {
-    CorrelatorFeed sut(false, 1.0);
+    CorrelatorFeed sut(correlator::Mode::Original, 1.0);
     std::size_t written = 0;
     const auto count = [&written](const correlator::Snapshot&) { ++written; };
     ASSERT_TRUE(sut.add(Message{observationAt(0.0)}, count).has_value());

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ugv/correlator/mode.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/rt/task.hpp"
@@ -91,8 +92,8 @@ struct DdsConfig {
 /// The OOI correlator task (issue 5's algorithm, live on the bus).
 struct CorrelatorTaskConfig {
     bool enabled = false;
-    bool improved = true;           ///< mode improved (default) or original
-    double periodS = 1.0;           ///< [s] mission-time period of the correlated list
+    correlator::Mode mode = correlator::Mode::PoseCorrected; ///< pose-corrected (default; alias improved) or original
+    double periodS = 1.0;                                    ///< [s] mission-time period of the correlated list
     double reorderMs = 2000.0;      ///< [ms] how long a received input waits to be put in time order with the others
     double lateWindowS = 300.0;     ///< [s] older inputs than the latest applied one are re-sequenced within this
     double startupHoldMs = 10000.0; ///< [ms] after the first input nothing is applied this long (the team's histories)

@@ -38,9 +38,10 @@
 #include <string>
 #include <variant>
 
-#include "ugv/correlator/improved_correlator.hpp"
 #include "ugv/correlator/messages.hpp"
+#include "ugv/correlator/mode.hpp"
 #include "ugv/correlator/original_correlator.hpp"
+#include "ugv/correlator/pose_corrected_correlator.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 
@@ -70,12 +71,12 @@ public:
     /// Message times beyond +-this are refused [s] (as the JSON reader, bringup/correlate_io.hpp).
     static constexpr double kMaxTimeS = 1e10;
 
-    /// @param improved     mode improved (else original)
+    /// @param mode         which correlator
     /// @param periodS      snapshot period in mission time [s], > 0
     /// @param lateWindowS  how much older than the latest applied message a message may be and still be put in its
     ///                     place [s], >= 0 (0: refused)
     /// @param stopwatch    the caller's monotonic clock for addTime()/snapshotTime(); empty: both stay 0
-    CorrelatorFeed(bool improved, double periodS, double lateWindowS = 0.0, Stopwatch stopwatch = {});
+    CorrelatorFeed(Mode mode, double periodS, double lateWindowS = 0.0, Stopwatch stopwatch = {});
 
     /// Applies one message; every new period boundary it passes first gives a snapshot to `onSnapshot`.
     /// Errors: too late (see the file comment), or the correlator refused it (unknown id, ...): nothing changed.
@@ -106,7 +107,7 @@ public:
 private:
     /// Everything a replay restores.
     struct State {
-        std::variant<OriginalCorrelator, ImprovedCorrelator> correlator;
+        std::variant<OriginalCorrelator, PoseCorrectedCorrelator> correlator;
         double nextSnapshotT = NAN;
         double nextCheckpointT = NAN;
         std::size_t applied = 0;

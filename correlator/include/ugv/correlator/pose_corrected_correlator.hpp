@@ -1,9 +1,9 @@
 #pragma once
 
 /// @file
-/// Mode `improved`: the original's weakness is disagreement between the UGVs' poses (a few degrees of heading
-/// error puts one object in two places; a drifting UGV doubles every shared object) and a fixed 2.5 m gate that
-/// merges distinct objects standing close together. This mode:
+/// Mode `pose-corrected` (alias `improved`, its former name): the original's weakness is disagreement between the UGVs'
+/// poses (a few degrees of heading error puts one object in two places; a drifting UGV doubles every shared object) and
+/// a fixed 2.5 m gate that merges distinct objects standing close together. This mode:
 /// - keeps every static observation in the UGV's frame (reported pose, range, bearing; a bounded reservoir per
 ///   track and offset window) so that pose corrections and estimated pose errors re-project it exactly;
 /// - models each observation's error: range sigma a + b r, bearing sigma, plus the UGV's remaining pose
@@ -42,7 +42,7 @@
 
 namespace ugv::correlator {
 
-struct ImprovedConfig {
+struct PoseCorrectedConfig {
     // Observation error model.
     double rangeSigmaM = 0.1;
     double rangeSigmaFraction = 0.01;
@@ -70,9 +70,9 @@ struct ImprovedConfig {
     double uavSigmaM = 0.5;
 };
 
-class ImprovedCorrelator {
+class PoseCorrectedCorrelator {
 public:
-    explicit ImprovedCorrelator(const ImprovedConfig& config = {});
+    explicit PoseCorrectedCorrelator(const PoseCorrectedConfig& config = {});
 
     /// Applies one message (time-ordered). Errors (the message is skipped): a confirm of an unknown id.
     Result<void, Error> add(const Message& message);
@@ -219,7 +219,7 @@ private:
     void updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const;
     std::string newId();
 
-    ImprovedConfig config_;
+    PoseCorrectedConfig config_;
     std::optional<LocalFrame> frame_;
     std::vector<Ugv> ugvs_;
     std::unordered_map<std::string, int> ugvIndex_;

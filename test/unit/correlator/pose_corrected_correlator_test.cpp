@@ -1,9 +1,9 @@
-// Mode `improved` rule by rule: joint estimation of a UGV's heading bias, pose corrections re-projecting stored
+// Mode `pose-corrected` rule by rule: joint estimation of a UGV's heading bias, pose corrections re-projecting stored
 // observations, statistical association keeping close objects apart, Kalman prediction of mobile objects through
 // gaps, clutter that never becomes an object, ids kept on merges and splits, confirmation, UAV fixes.
 
-#include "ugv/correlator/improved_correlator.hpp"
 #include "ugv/correlator/original_correlator.hpp"
+#include "ugv/correlator/pose_corrected_correlator.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -32,10 +32,10 @@ std::vector<ObjectEstimate> ofClass(const Snapshot& s, OoiClass cls)
     return out;
 }
 
-TEST(ImprovedCorrelator, EstimatesAUgvsHeadingBiasFromSharedObjectsAndKeepsOneObjectEach)
+TEST(PoseCorrectedCorrelator, EstimatesAUgvsHeadingBiasFromSharedObjectsAndKeepsOneObjectEach)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     std::mt19937_64 rng(1);
     std::normal_distribution<double> bearingNoise(0.0, 0.3);
     std::vector<Eigen::Vector2d> posts;
@@ -62,10 +62,10 @@ TEST(ImprovedCorrelator, EstimatesAUgvsHeadingBiasFromSharedObjectsAndKeepsOneOb
     EXPECT_EQ(ofClass(s, OoiClass::Static).size(), posts.size());
 }
 
-TEST(ImprovedCorrelator, PoseCorrectionReprojectsStoredObservationsExactly)
+TEST(PoseCorrectedCorrelator, PoseCorrectionReprojectsStoredObservationsExactly)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     const Eigen::Vector2d post(5, 20);
     // The UGV's reported position is 3 m east of the truth.
     for (int i = 0; i < 5; ++i) {
@@ -82,10 +82,10 @@ TEST(ImprovedCorrelator, PoseCorrectionReprojectsStoredObservationsExactly)
     EXPECT_LT((scene.local(s.objects[0]) - post).norm(), 1e-3);
 }
 
-TEST(ImprovedCorrelator, ObjectsTwoMetresApartStayApartWhereTheOriginalMergesThem)
+TEST(PoseCorrectedCorrelator, ObjectsTwoMetresApartStayApartWhereTheOriginalMergesThem)
 {
     const Scene scene;
-    ImprovedCorrelator improved;
+    PoseCorrectedCorrelator poseCorrected;
     OriginalCorrelator original;
     std::mt19937_64 rng(2);
     std::normal_distribution<double> noise(0.0, 0.05);
@@ -94,18 +94,18 @@ TEST(ImprovedCorrelator, ObjectsTwoMetresApartStayApartWhereTheOriginalMergesThe
              {std::pair{"a", Eigen::Vector2d(0, 12)}, std::pair{"b", Eigen::Vector2d(2.2, 12)}}) {
             Observation o = scene.see(i * 0.5, "ugv-1", track, OoiClass::Static, {1, 0}, at);
             o.rangeM += noise(rng);
-            ASSERT_TRUE(improved.add(o).has_value());
+            ASSERT_TRUE(poseCorrected.add(o).has_value());
             ASSERT_TRUE(original.add(o).has_value());
         }
     }
-    EXPECT_EQ(snapshotAt(improved, 10).objects.size(), 2U);
+    EXPECT_EQ(snapshotAt(poseCorrected, 10).objects.size(), 2U);
     EXPECT_EQ(snapshotAt(original, 10).objects.size(), 1U); // its fixed 2.5 m gate
 }
 
-TEST(ImprovedCorrelator, MobileObjectIsPredictedThroughAGap)
+TEST(PoseCorrectedCorrelator, MobileObjectIsPredictedThroughAGap)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     // Walks east at 1 m/s; seen for 10 s, then not for 2 s.
     for (int i = 0; i <= 20; ++i) {
         const double t = i * 0.5;
@@ -122,10 +122,10 @@ TEST(ImprovedCorrelator, MobileObjectIsPredictedThroughAGap)
     EXPECT_DOUBLE_EQ(mobiles[0].zoneDiameterM, kMobileZoneDiameterM);
 }
 
-TEST(ImprovedCorrelator, AMobileWalkingALineIsPredictedAlongItThroughALongGap)
+TEST(PoseCorrectedCorrelator, AMobileWalkingALineIsPredictedAlongItThroughALongGap)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     // Back and forth along 20 m of the east axis at 1 m/s (a 40 s round trip), seen for 120 s.
     const auto truth = [](double t) {
         const double phase = std::fmod(t, 40.0);
@@ -143,10 +143,10 @@ TEST(ImprovedCorrelator, AMobileWalkingALineIsPredictedAlongItThroughALongGap)
     EXPECT_LT((scene.local(mobiles[0]) - truth(145)).norm(), 2.0);
 }
 
-TEST(ImprovedCorrelator, AMobileOnlyTheUavFixesIsPredictedAlongItsLineBetweenFixesAndKeepsItsId)
+TEST(PoseCorrectedCorrelator, AMobileOnlyTheUavFixesIsPredictedAlongItsLineBetweenFixesAndKeepsItsId)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     // Back and forth along 40 m of the east axis at 1 m/s (an 80 s round trip); a UAV fix every 10 s, no UGV.
     const auto truth = [](double t) {
         const double phase = std::fmod(t, 80.0);
@@ -171,17 +171,17 @@ TEST(ImprovedCorrelator, AMobileOnlyTheUavFixesIsPredictedAlongItsLineBetweenFix
     EXPECT_EQ(mobiles[0].state, Confirmation::ConfirmedPositive);
 }
 
-TEST(ImprovedCorrelator, SnapshotChangesNothingAndAdvanceAssignsThePendingUavFixes)
+TEST(PoseCorrectedCorrelator, SnapshotChangesNothingAndAdvanceAssignsThePendingUavFixes)
 {
-    static_assert(
-        std::is_same_v<decltype(&ImprovedCorrelator::snapshot), Snapshot (ImprovedCorrelator::*)(double) const>);
+    static_assert(std::is_same_v<decltype(&PoseCorrectedCorrelator::snapshot),
+                                 Snapshot (PoseCorrectedCorrelator::*)(double) const>);
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     UavFix fix;
     fix.t = 5.0;
     scene.latLon(Eigen::Vector2d(8, 20), fix.lat, fix.lon);
     ASSERT_TRUE(sut.add(fix).has_value());
-    const ImprovedCorrelator& view = sut;
+    const PoseCorrectedCorrelator& view = sut;
 
     EXPECT_TRUE(view.snapshot(5.0).objects.empty()); // the fixes of an instant wait for the next one or advance()
     EXPECT_TRUE(view.snapshot(5.0).objects.empty());
@@ -190,10 +190,10 @@ TEST(ImprovedCorrelator, SnapshotChangesNothingAndAdvanceAssignsThePendingUavFix
     EXPECT_EQ(view.snapshot(5.0).objects.size(), 1U);
 }
 
-TEST(ImprovedCorrelator, UavFixesOfOneInstantAreAssignedTogether)
+TEST(PoseCorrectedCorrelator, UavFixesOfOneInstantAreAssignedTogether)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     // Two objects only the UAV fixes; after 10 s, the first object's fix is nearer the second's last position.
     const Eigen::Vector2d a0(0, 20);
     const Eigen::Vector2d b0(12, 20);
@@ -222,18 +222,18 @@ TEST(ImprovedCorrelator, UavFixesOfOneInstantAreAssignedTogether)
     }
 }
 
-TEST(ImprovedCorrelator, ASingleMobileSightingIsNotPublishedAndTimesOut)
+TEST(PoseCorrectedCorrelator, ASingleMobileSightingIsNotPublishedAndTimesOut)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     ASSERT_TRUE(sut.add(scene.see(0, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {5, 15})).has_value());
     EXPECT_TRUE(snapshotAt(sut, 1).objects.empty());
 }
 
-TEST(ImprovedCorrelator, ClutterNeverBecomesAnObject)
+TEST(PoseCorrectedCorrelator, ClutterNeverBecomesAnObject)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     std::mt19937_64 rng(3);
     std::uniform_real_distribution<double> anywhere(-40, 40);
     // One false observation every 5 s in an 80 m square for an hour: each alone dies before it gathers 3.
@@ -248,10 +248,10 @@ TEST(ImprovedCorrelator, ClutterNeverBecomesAnObject)
     EXPECT_LT(sut.storedPoints(), 200U);
 }
 
-TEST(ImprovedCorrelator, ConfirmationsAndUavFixes)
+TEST(PoseCorrectedCorrelator, ConfirmationsAndUavFixes)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     for (int i = 0; i < 4; ++i) {
         ASSERT_TRUE(sut.add(scene.see(i, "ugv-1", "s", OoiClass::Static, {0, 0}, {5, 15})).has_value());
         ASSERT_TRUE(sut.add(scene.see(i, "ugv-1", "m", OoiClass::Mobile, {0, 0}, {-5, 15})).has_value());
@@ -276,10 +276,10 @@ TEST(ImprovedCorrelator, ConfirmationsAndUavFixes)
     EXPECT_LT((scene.local(mobiles[0]) - Eigen::Vector2d(-4.5, 15.5)).norm(), 0.5);
 }
 
-TEST(ImprovedCorrelator, DuplicatesFromABiasedUgvMergeIntoTheEarliestId)
+TEST(PoseCorrectedCorrelator, DuplicatesFromABiasedUgvMergeIntoTheEarliestId)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     // Before any estimate, ugv-2's 10 deg error puts the far post 4.4 m away from ugv-1's: two objects.
     const std::vector<Eigen::Vector2d> posts{{-20, 25}, {0, 25}, {20, 25}};
     std::string firstId;
@@ -330,7 +330,7 @@ struct SplitTrace {
 SplitTrace runClosePair(bool bFirst)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     std::mt19937_64 rng(4);
     std::normal_distribution<double> bearingNoise(0.0, 0.3);
     const Eigen::Vector2d& a = kPostA;
@@ -440,12 +440,12 @@ void expectSplitKeepingTheIdAtA(const SplitTrace& trace)
     EXPECT_EQ(atB.ugvs, (std::vector<std::string>{"ugv-2"}));
 }
 
-TEST(ImprovedCorrelator, AClosePairAssociatedWhileTheHeadingErrorsWereUnknownSplitsAndTheLargerPartKeepsTheId)
+TEST(PoseCorrectedCorrelator, AClosePairAssociatedWhileTheHeadingErrorsWereUnknownSplitsAndTheLargerPartKeepsTheId)
 {
     expectSplitKeepingTheIdAtA(runClosePair(false));
 }
 
-TEST(ImprovedCorrelator, ASplitKeepsTheIdForTheLargerPartEvenWhenTheSmallerFoundedTheObject)
+TEST(PoseCorrectedCorrelator, ASplitKeepsTheIdForTheLargerPartEvenWhenTheSmallerFoundedTheObject)
 {
     expectSplitKeepingTheIdAtA(runClosePair(true));
 }
@@ -458,19 +458,19 @@ TEST(ImprovedCorrelator, ASplitKeepsTheIdForTheLargerPartEvenWhenTheSmallerFound
 namespace ugv::correlator {
 namespace {
 
-/// Mode improved over a generated clean scenario of `config`'s sensor (600 s, seed 1).
-ImprovedCorrelator runOn(const ScenarioConfig& config)
+/// Mode pose-corrected over a generated clean scenario of `config`'s sensor (600 s, seed 1).
+PoseCorrectedCorrelator runOn(const ScenarioConfig& config)
 {
     auto scenario = generateScenario(config);
     EXPECT_TRUE(scenario.has_value());
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     for (const Message& m : scenario.value().messages) {
         (void)sut.add(m);
     }
     return sut;
 }
 
-TEST(ImprovedCorrelator, LearnsEachUgvsNoiseFromItsResidualsAndWidensOnlyWithWhatIsMeasured)
+TEST(PoseCorrectedCorrelator, LearnsEachUgvsNoiseFromItsResidualsAndWidensOnlyWithWhatIsMeasured)
 {
     ScenarioConfig noisy = scenarioPreset(ScenarioSetting::Clean);
     noisy.bearingSigmaDeg = 3.0; // 3x the configured 1 deg
@@ -478,8 +478,8 @@ TEST(ImprovedCorrelator, LearnsEachUgvsNoiseFromItsResidualsAndWidensOnlyWithWha
     noisy.rangeSigmaFraction = 0.03;
     const ScenarioConfig asConfigured = scenarioPreset(ScenarioSetting::Clean);
 
-    const ImprovedCorrelator wide = runOn(noisy);
-    const ImprovedCorrelator tight = runOn(asConfigured);
+    const PoseCorrectedCorrelator wide = runOn(noisy);
+    const PoseCorrectedCorrelator tight = runOn(asConfigured);
 
     for (const char* ugv : {"ugv-1", "ugv-3", "ugv-5"}) {
         const auto measured = wide.noiseScale(ugv);
@@ -508,10 +508,10 @@ namespace {
 /// an outlier (range 4 m long), outside the gate of the post's object, so a second object is made; its later
 /// (exact) readings pull it onto the post. Until the next merge (the solve at 120 s) it is a duplicate: not shown,
 /// the post keeps its first id. A second post 4 m away, seen apart, is shown as its own object all along.
-TEST(ImprovedCorrelator, ADuplicateUnderAChurnedTrackIsNotShownBeforeItMergesAndTheOlderIdStays)
+TEST(PoseCorrectedCorrelator, ADuplicateUnderAChurnedTrackIsNotShownBeforeItMergesAndTheOlderIdStays)
 {
     const Scene scene;
-    ImprovedCorrelator sut;
+    PoseCorrectedCorrelator sut;
     const Eigen::Vector2d post(0, 20);
     const Eigen::Vector2d neighbour(4, 20);
     std::string firstId;

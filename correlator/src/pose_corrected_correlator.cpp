@@ -1,4 +1,4 @@
-#include "ugv/correlator/improved_correlator.hpp"
+#include "ugv/correlator/pose_corrected_correlator.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -59,14 +59,14 @@ double mahalanobis2(const Eigen::Vector2d& d, const Eigen::Matrix2d& cov)
 
 } // namespace
 
-ImprovedCorrelator::ImprovedCorrelator(const ImprovedConfig& config) : config_(config) {}
+PoseCorrectedCorrelator::PoseCorrectedCorrelator(const PoseCorrectedConfig& config) : config_(config) {}
 
-std::string ImprovedCorrelator::newId()
+std::string PoseCorrectedCorrelator::newId()
 {
     return "ooi-" + std::to_string(nextId_++);
 }
 
-int ImprovedCorrelator::ugvIndex(const std::string& name)
+int PoseCorrectedCorrelator::ugvIndex(const std::string& name)
 {
     auto [it, inserted] = ugvIndex_.try_emplace(name, static_cast<int>(ugvs_.size()));
     if (inserted) {
@@ -76,12 +76,12 @@ int ImprovedCorrelator::ugvIndex(const std::string& name)
     return it->second;
 }
 
-int ImprovedCorrelator::window(double t) const
+int PoseCorrectedCorrelator::window(double t) const
 {
     return static_cast<int>(std::floor(t / config_.offsetWindowS));
 }
 
-Eigen::Vector2d ImprovedCorrelator::offsetAt(int ugv, double t) const
+Eigen::Vector2d PoseCorrectedCorrelator::offsetAt(int ugv, double t) const
 {
     const auto& offsets = ugvs_[static_cast<std::size_t>(ugv)].offsets;
     if (offsets.empty()) {
@@ -91,7 +91,7 @@ Eigen::Vector2d ImprovedCorrelator::offsetAt(int ugv, double t) const
     return offsets[static_cast<std::size_t>(w)];
 }
 
-bool ImprovedCorrelator::explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos, double& dHeading) const
+bool PoseCorrectedCorrelator::explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos, double& dHeading) const
 {
     dPos.setZero();
     dHeading = 0.0;
@@ -106,8 +106,8 @@ bool ImprovedCorrelator::explicitCorrection(int ugv, double t, Eigen::Vector2d& 
     return covered;
 }
 
-void ImprovedCorrelator::projectSample(int ugv, const Sample& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
-                                       bool withPose) const
+void PoseCorrectedCorrelator::projectSample(int ugv, const Sample& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
+                                            bool withPose) const
 {
     const Ugv& u = ugvs_[static_cast<std::size_t>(ugv)];
     Eigen::Vector2d dPos;
@@ -132,7 +132,7 @@ void ImprovedCorrelator::projectSample(int ugv, const Sample& s, Eigen::Vector2d
            offset * offset * Eigen::Matrix2d::Identity();
 }
 
-Result<void, Error> ImprovedCorrelator::add(const Message& message)
+Result<void, Error> PoseCorrectedCorrelator::add(const Message& message)
 {
     // UAV fixes of one instant are assigned together (flushUav): the first message of a later instant ends them.
     if (!pendingUav_.empty() && std::visit([](const auto& m) { return m.t; }, message) > pendingUav_.front().t) {
@@ -177,8 +177,8 @@ Result<void, Error> ImprovedCorrelator::add(const Message& message)
 
 // ------------------------------------------------------------------------------------------------------ static
 
-void ImprovedCorrelator::fuse(StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
-                              const Eigen::Matrix2d& measurementCov, double weight) const
+void PoseCorrectedCorrelator::fuse(StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+                                   const Eigen::Matrix2d& measurementCov, double weight) const
 {
     const Eigen::Matrix2d info = weight * cov.inverse();
     object.info += info;
@@ -188,7 +188,7 @@ void ImprovedCorrelator::fuse(StaticObject& object, const Eigen::Vector2d& p, co
 }
 
 /// Recomputes an object's estimate from its tracks' stored samples under the current pose model.
-void ImprovedCorrelator::refit(StaticObject& object) const
+void PoseCorrectedCorrelator::refit(StaticObject& object) const
 {
     object.info = object.priorInfo;
     object.infoMean = object.priorInfo * object.priorMean;
@@ -213,7 +213,7 @@ void ImprovedCorrelator::refit(StaticObject& object) const
     }
 }
 
-void ImprovedCorrelator::addStatic(const Observation& o, int ugv)
+void PoseCorrectedCorrelator::addStatic(const Observation& o, int ugv)
 {
     auto [it, inserted] = trackIndex_.try_emplace(rules::trackKey(o.ugv, o.track), static_cast<int>(tracks_.size()));
     if (inserted) {
@@ -291,7 +291,7 @@ void ImprovedCorrelator::addStatic(const Observation& o, int ugv)
     ++object.observations;
 }
 
-void ImprovedCorrelator::rebuildObjects()
+void PoseCorrectedCorrelator::rebuildObjects()
 {
     for (StaticObject& so : statics_) {
         if (so.alive) {
@@ -302,7 +302,7 @@ void ImprovedCorrelator::rebuildObjects()
     mergeStatics();
 }
 
-Eigen::Vector2d ImprovedCorrelator::trackMean(int trackIndex, double& weight) const
+Eigen::Vector2d PoseCorrectedCorrelator::trackMean(int trackIndex, double& weight) const
 {
     const Track& track = tracks_[static_cast<std::size_t>(trackIndex)];
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
@@ -322,7 +322,7 @@ Eigen::Vector2d ImprovedCorrelator::trackMean(int trackIndex, double& weight) co
 
 /// An object whose tracks form two groups far apart (two objects associated while the UGVs' pose errors were
 /// still unknown) splits: the group with more observations keeps the id, the other becomes a new object.
-void ImprovedCorrelator::splitStatics()
+void PoseCorrectedCorrelator::splitStatics()
 {
     const std::size_t count = statics_.size();
     for (std::size_t j = 0; j < count; ++j) {
@@ -410,14 +410,14 @@ void ImprovedCorrelator::splitStatics()
     }
 }
 
-bool ImprovedCorrelator::sameObject(const StaticObject& x, const StaticObject& y) const
+bool PoseCorrectedCorrelator::sameObject(const StaticObject& x, const StaticObject& y) const
 {
     const Eigen::Matrix2d cov =
         x.info.inverse() + y.info.inverse() + 2.0 * kFloorSigmaM * kFloorSigmaM * Eigen::Matrix2d::Identity();
     return mahalanobis2(x.mean - y.mean, cov) < config_.gateChi2;
 }
 
-void ImprovedCorrelator::mergeStatics()
+void PoseCorrectedCorrelator::mergeStatics()
 {
     for (std::size_t a = 0; a < statics_.size(); ++a) {
         for (std::size_t b = a + 1; b < statics_.size(); ++b) {
@@ -452,7 +452,7 @@ void ImprovedCorrelator::mergeStatics()
 }
 
 /// Gauss-Newton over the UGVs' heading biases, their offsets per window (a random walk) and the static objects.
-void ImprovedCorrelator::solve()
+void PoseCorrectedCorrelator::solve()
 {
     // Drop samples beyond the horizon, folding them into their object's prior.
     const int oldest = window(now_ - config_.horizonS);
@@ -672,7 +672,7 @@ void ImprovedCorrelator::solve()
     rebuildObjects();
 }
 
-void ImprovedCorrelator::learnNoise()
+void PoseCorrectedCorrelator::learnNoise()
 {
     std::vector<std::vector<double>> rangeResiduals(ugvs_.size());
     std::vector<std::vector<double>> crossResiduals(ugvs_.size());
@@ -714,7 +714,7 @@ void ImprovedCorrelator::learnNoise()
 
 // ------------------------------------------------------------------------------------------------------ mobile
 
-void ImprovedCorrelator::predict(Mobile& m, double t) const
+void PoseCorrectedCorrelator::predict(Mobile& m, double t) const
 {
     predictState(m.x, m.p, t - m.t);
     m.t = std::max(m.t, t);
@@ -724,7 +724,7 @@ void ImprovedCorrelator::predict(Mobile& m, double t) const
 /// of a prediction over dt is the same whether it is made in one step or many (the discrete "one acceleration per
 /// step" model grows the velocity variance with dt^2 per step, which made a 10 s gap between UAV fixes look like
 /// 25 m of uncertainty and hid every object that only the UAV fixes).
-void ImprovedCorrelator::predictState(Eigen::Vector4d& x, Eigen::Matrix4d& pm, double dt) const
+void PoseCorrectedCorrelator::predictState(Eigen::Vector4d& x, Eigen::Matrix4d& pm, double dt) const
 {
     if (dt <= 0.0) {
         return;
@@ -747,7 +747,8 @@ void ImprovedCorrelator::predictState(Eigen::Vector4d& x, Eigen::Matrix4d& pm, d
 /// the ends instead of overshooting them), else the constant-velocity one. A measurement far outside the prior
 /// is a manoeuvre (a turn before any line is known, a change of course, a UAV fix after a turn between fixes):
 /// the velocity is forgotten and re-learnt from the next measurements, instead of dragging the old one along.
-void ImprovedCorrelator::updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const
+void PoseCorrectedCorrelator::updateMobile(Mobile& m, const Eigen::Vector2d& z, const Eigen::Matrix2d& r,
+                                           double t) const
 {
     LinePrediction onLine;
     const bool lined = predictOnLine(m, t, onLine);
@@ -781,7 +782,7 @@ void ImprovedCorrelator::updateMobile(Mobile& m, const Eigen::Vector2d& z, const
 /// Fits the line an object walks back and forth (the original's observation of the mobile OOIs) to its history
 /// of filtered positions: the principal axis, the speed along it and the two ends. Invalid (the object is
 /// predicted by its Kalman filter alone) until the history is long, narrow and shows a turn.
-void ImprovedCorrelator::fitLine(Mobile& m)
+void PoseCorrectedCorrelator::fitLine(Mobile& m)
 {
     Line& line = m.line;
     line.valid = false;
@@ -858,7 +859,7 @@ void ImprovedCorrelator::fitLine(Mobile& m)
     line = Line{true, centre, u, lo, hi, speed, speedSigma, width};
 }
 
-bool ImprovedCorrelator::predictOnLine(const Mobile& m, double t, LinePrediction& out) const
+bool PoseCorrectedCorrelator::predictOnLine(const Mobile& m, double t, LinePrediction& out) const
 {
     const Line& line = m.line;
     if (!line.valid) {
@@ -888,7 +889,7 @@ bool ImprovedCorrelator::predictOnLine(const Mobile& m, double t, LinePrediction
     return true;
 }
 
-void ImprovedCorrelator::predictPosition(const Mobile& m, double t, Eigen::Vector2d& p, Eigen::Matrix2d& cov) const
+void PoseCorrectedCorrelator::predictPosition(const Mobile& m, double t, Eigen::Vector2d& p, Eigen::Matrix2d& cov) const
 {
     LinePrediction onLine;
     if (predictOnLine(m, t, onLine)) {
@@ -903,7 +904,8 @@ void ImprovedCorrelator::predictPosition(const Mobile& m, double t, Eigen::Vecto
     cov = pm.topLeftCorner<2, 2>();
 }
 
-int ImprovedCorrelator::nearestMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t) const
+int PoseCorrectedCorrelator::nearestMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r,
+                                           double t) const
 {
     int index = -1;
     double bestD2 = config_.gateChi2;
@@ -924,7 +926,7 @@ int ImprovedCorrelator::nearestMobile(OoiClass cls, const Eigen::Vector2d& z, co
     return index;
 }
 
-int ImprovedCorrelator::createMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t)
+int PoseCorrectedCorrelator::createMobile(OoiClass cls, const Eigen::Vector2d& z, const Eigen::Matrix2d& r, double t)
 {
     Mobile created;
     created.id = newId();
@@ -944,7 +946,7 @@ int ImprovedCorrelator::createMobile(OoiClass cls, const Eigen::Vector2d& z, con
     return index;
 }
 
-void ImprovedCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov)
+void PoseCorrectedCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov)
 {
     const std::string key = rules::trackKey(o.ugv, o.track);
     int index = -1;
@@ -966,7 +968,7 @@ void ImprovedCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& 
     }
 }
 
-void ImprovedCorrelator::addUav(const UavFix& u)
+void PoseCorrectedCorrelator::addUav(const UavFix& u)
 {
     if (!pendingUav_.empty() && pendingUav_.front().t != u.t) {
         flushUav();
@@ -979,7 +981,7 @@ void ImprovedCorrelator::addUav(const UavFix& u)
 /// whichever track was nearest and left the other fix the wrong one). A fix outside every gate may still go to an
 /// object it could have walked to since its last estimate (a turn between two fixes of an object that only the
 /// UAV sees), at a cost above every gated pair; a fix cheapest alone is a new object.
-void ImprovedCorrelator::flushUav()
+void PoseCorrectedCorrelator::flushUav()
 {
     if (pendingUav_.empty()) {
         return;
@@ -1048,7 +1050,7 @@ void ImprovedCorrelator::flushUav()
     pendingUav_.clear();
 }
 
-Result<void, Error> ImprovedCorrelator::confirm(const Confirm& c)
+Result<void, Error> PoseCorrectedCorrelator::confirm(const Confirm& c)
 {
     std::string id = c.id;
     for (auto it = mergedInto_.find(id); it != mergedInto_.end(); it = mergedInto_.find(id)) {
@@ -1070,7 +1072,7 @@ Result<void, Error> ImprovedCorrelator::confirm(const Confirm& c)
 // ------------------------------------------------------------------------------------------------------ output
 
 /// Clutter gathers into objects over a long mission unless objects that stay below minStaticObservations die.
-void ImprovedCorrelator::dropTentative(double t)
+void PoseCorrectedCorrelator::dropTentative(double t)
 {
     for (StaticObject& so : statics_) {
         if (!so.alive || so.observations >= static_cast<std::uint64_t>(config_.minStaticObservations) ||
@@ -1090,14 +1092,14 @@ void ImprovedCorrelator::dropTentative(double t)
     }
 }
 
-void ImprovedCorrelator::advance(double t)
+void PoseCorrectedCorrelator::advance(double t)
 {
     flushUav();
     dropTentative(t);
     timeOutMobiles(t);
 }
 
-void ImprovedCorrelator::timeOutMobiles(double t)
+void PoseCorrectedCorrelator::timeOutMobiles(double t)
 {
     for (Mobile& m : mobiles_) {
         if (m.alive && t - m.t > config_.mobileTimeoutS) {
@@ -1108,7 +1110,7 @@ void ImprovedCorrelator::timeOutMobiles(double t)
     }
 }
 
-Snapshot ImprovedCorrelator::snapshot(double t) const
+Snapshot PoseCorrectedCorrelator::snapshot(double t) const
 {
     Snapshot s;
     s.t = t;
@@ -1186,7 +1188,7 @@ Snapshot ImprovedCorrelator::snapshot(double t) const
     return s;
 }
 
-std::size_t ImprovedCorrelator::storedPoints() const noexcept
+std::size_t PoseCorrectedCorrelator::storedPoints() const noexcept
 {
     std::size_t n = 0;
     for (const Track& t : tracks_) {
@@ -1197,7 +1199,8 @@ std::size_t ImprovedCorrelator::storedPoints() const noexcept
     return n;
 }
 
-std::optional<ImprovedCorrelator::PoseError> ImprovedCorrelator::poseError(const std::string& ugv, double t) const
+std::optional<PoseCorrectedCorrelator::PoseError> PoseCorrectedCorrelator::poseError(const std::string& ugv,
+                                                                                     double t) const
 {
     const auto it = ugvIndex_.find(ugv);
     if (it == ugvIndex_.end()) {
@@ -1206,7 +1209,7 @@ std::optional<ImprovedCorrelator::PoseError> ImprovedCorrelator::poseError(const
     return PoseError{ugvs_[static_cast<std::size_t>(it->second)].headingBias / kDegToRad, offsetAt(it->second, t)};
 }
 
-std::optional<ImprovedCorrelator::NoiseScale> ImprovedCorrelator::noiseScale(const std::string& ugv) const
+std::optional<PoseCorrectedCorrelator::NoiseScale> PoseCorrectedCorrelator::noiseScale(const std::string& ugv) const
 {
     const auto it = ugvIndex_.find(ugv);
     if (it == ugvIndex_.end()) {
