@@ -72,7 +72,7 @@ RecordingWriter::RecordingWriter(int fd, std::string path, std::uint32_t width, 
 
 RecordingWriter::RecordingWriter(RecordingWriter&& other) noexcept
     : fd_(std::exchange(other.fd_, -1)), path_(std::move(other.path_)), width_(other.width_), height_(other.height_),
-      sync_(other.sync_), frames_(other.frames_), record_(std::move(other.record_))
+      sync_(other.sync_), frames_(other.frames_), endBytes_(other.endBytes_), record_(std::move(other.record_))
 {
 }
 
@@ -86,6 +86,7 @@ RecordingWriter& RecordingWriter::operator=(RecordingWriter&& other) noexcept
         height_ = other.height_;
         sync_ = other.sync_;
         frames_ = other.frames_;
+        endBytes_ = other.endBytes_;
         record_ = std::move(other.record_);
     }
     return *this;
@@ -140,6 +141,7 @@ Result<RecordingWriter, Error> RecordingWriter::create(const std::string& path, 
         return Unexpected(fileError(path, "cannot write the recording header", written.error(),
                                     "check the free space and the device"));
     }
+    writer.endBytes_ = sizeof(header) + calibrationText.size();
     return writer;
 }
 
@@ -170,8 +172,14 @@ Result<void, SysError> RecordingWriter::append(std::uint64_t sequence, std::int6
     prefix.crc = crc32(0, out, prefix.frameBytes);
     std::memcpy(record_.data(), &prefix, sizeof(prefix));
     if (auto written = writeAll(fd_, record_.data(), record_.size()); !written) {
+        // Part of the record may be on disk (a full disk takes what fits): cut the file back to the last complete
+        // record, so that it stays readable to its end and a later append starts on a record boundary.
+        const auto end = static_cast<off_t>(endBytes_);
+        (void)sysCall(::ftruncate, fd_, end);
+        (void)::lseek(fd_, end, SEEK_SET);
         return written;
     }
+    endBytes_ += record_.size(); // complete in the file (a failed sync below does not tear it)
     if (sync_) {
         if (auto synced = sysCall(::fdatasync, fd_); !synced) {
             return Unexpected(synced.error());

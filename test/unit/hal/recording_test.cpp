@@ -1,8 +1,11 @@
 #include "ugv/hal/recording.hpp"
 
+#include <sys/mount.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -234,6 +237,70 @@ TEST_F(RecordingTest, MissingFileAndExistingTargetAreErrors)
     overwrite.overwrite = true;
     EXPECT_TRUE(RecordingWriter::create(path_, kWidth, kHeight, kCalibration, overwrite).has_value());
     EXPECT_FALSE(RecordingWriter::create((dir_ / "x.ugvrec").string(), 0, kHeight, kCalibration).has_value());
+}
+
+/// A disk that fills up while recording: a 256 KiB tmpfs mounted over a folder of the test's own (needs root, or
+/// CAP_SYS_ADMIN: skipped with a message otherwise), frames of 64 x 64 (8.3 KiB a record).
+TEST_F(RecordingTest, DiskFullKeepsEveryEarlierFrameAndAppendsGoOnOnceThereIsRoom)
+{
+    const std::filesystem::path mountPoint = dir_ / "small-disk";
+    std::filesystem::create_directories(mountPoint);
+    if (::mount("tmpfs", mountPoint.c_str(), "tmpfs", 0, "size=256k") != 0) {
+        GTEST_SKIP() << "cannot mount a 256 KiB tmpfs on " << mountPoint << " (" << std::strerror(errno)
+                     << "): the disk-full test needs root (CAP_SYS_ADMIN)";
+    }
+    struct Unmount {
+        std::string path;
+        ~Unmount() { (void)::umount2(path.c_str(), MNT_DETACH); }
+    } unmount{mountPoint.string()};
+
+    constexpr int kSide = 64;
+    Image<std::uint8_t> left(kSide, kSide);
+    Image<std::uint8_t> right(kSide, kSide);
+    const std::string path = (mountPoint / "r.ugvrec").string();
+    const std::string filler = (mountPoint / "filler").string();
+    // Most of the disk taken by another file, so that a record can be cut off half-way.
+    {
+        std::ofstream f(filler, std::ios::binary);
+        const std::vector<char> block(4096, 'x');
+        for (int k = 0; k < 48; ++k) {
+            f.write(block.data(), static_cast<std::streamsize>(block.size()));
+        }
+    }
+    auto writer = RecordingWriter::create(path, kSide, kSide, kCalibration);
+    ASSERT_TRUE(writer.has_value()) << writer.error().message();
+    std::uint64_t written = 0;
+    Result<void, SysError> appended;
+    for (int k = 0; k < 100 && appended; ++k) {
+        appended = writer->append(static_cast<std::uint64_t>(k), k, k, left.view(), right.view());
+        written += appended ? 1U : 0U;
+    }
+    ASSERT_FALSE(appended) << "the 256 KiB disk never filled up";
+    EXPECT_EQ(appended.error().code, ENOSPC);
+    ASSERT_GT(written, 0U);
+    EXPECT_EQ(writer->framesWritten(), written);
+
+    // Every frame before the full disk is there, and the file ends cleanly after the last one (no torn record).
+    const auto readBack = [&](std::uint64_t& frames) {
+        auto reader = RecordingReader::open(path);
+        ASSERT_TRUE(reader.has_value()) << reader.error().message();
+        ReadStatus status = ReadStatus::Frame;
+        while ((status = reader->next()) == ReadStatus::Frame) {
+        }
+        EXPECT_EQ(status, ReadStatus::End);
+        EXPECT_EQ(reader->corruptFrames(), 0U);
+        frames = reader->framesRead();
+    };
+    std::uint64_t frames = 0;
+    readBack(frames);
+    EXPECT_EQ(frames, written);
+
+    // Room again (the other file removed): recording goes on where it stopped.
+    std::filesystem::remove(filler);
+    ASSERT_TRUE(writer->append(1000, 0, 0, left.view(), right.view()).has_value());
+    ASSERT_TRUE(writer->close().has_value());
+    readBack(frames);
+    EXPECT_EQ(frames, written + 1);
 }
 
 TEST_F(RecordingTest, WrongSizeFrameAndWriteAfterCloseAreRefused)

@@ -89,7 +89,9 @@ public:
 
     /// Appends one frame (the images must be width x height; the header's geometry is rewritten to the packed
     /// layout). No allocation: the record is assembled in a buffer sized at create().
-    /// @return nothing, or the errno of the failed write (the file keeps every earlier frame).
+    /// @return nothing, or the errno of the failed write (ENOSPC: the disk is full). The file keeps every earlier
+    /// frame and ends after the last one: a record that was written in part is cut off again, so appends may go on
+    /// once there is room (a reader never sees a torn record from a full disk).
     Result<void, SysError> append(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs,
                                   ConstImageViewU8 left, ConstImageViewU8 right) noexcept;
     /// Flushes and closes; further appends fail with EBADF. Also done by the destructor.
@@ -107,6 +109,7 @@ private:
     std::uint32_t height_ = 0;
     bool sync_ = true;
     std::uint64_t frames_ = 0;
+    std::uint64_t endBytes_ = 0;    ///< file size after the last complete record
     std::vector<std::byte> record_; ///< prefix + frame header + payload
 };
 
