@@ -6,7 +6,7 @@
 
 #include <Eigen/LU>
 
-#include "rules.hpp"
+#include "ugv/correlator/rules.hpp"
 
 namespace ugv::correlator {
 namespace {

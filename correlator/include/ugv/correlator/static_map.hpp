@@ -1,0 +1,113 @@
+#pragma once
+
+/// @file
+/// Mode `pose-corrected`'s static objects and their rules:
+/// - every static observation is kept in its UGV's frame (a bounded reservoir per track and offset window), so
+///   that pose corrections and estimated pose errors re-project it exactly (rebuild);
+/// - a new track joins the nearest object within the chi-square gate (Mahalanobis distance, the UGVs' pose
+///   uncertainty included unless only its own UGV saw the object), else starts one;
+/// - split: an object whose tracks form two groups far apart (associated while the pose errors were unknown)
+///   splits, the group with more observations keeps the id; merge: two objects within each other's gate become
+///   one, the earliest id kept; a duplicate of an older object is not published until the next merge folds it in;
+/// - tentative objects (fewer than minStaticObservations after tentativeTimeoutS) are dropped (clutter);
+/// - samples older than the horizon fold into their object's prior.
+///
+/// Thread-safety: thread-bound. RT-safe: no (allocates).
+
+#include <cstddef>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ugv/correlator/geodesy.hpp"
+#include "ugv/correlator/measurement_model.hpp"
+#include "ugv/correlator/messages.hpp"
+#include "ugv/correlator/object_ids.hpp"
+#include "ugv/correlator/pose_corrected_config.hpp"
+#include "ugv/correlator/rules.hpp"
+#include "ugv/correlator/ugv_pose_errors.hpp"
+
+namespace ugv::correlator {
+
+class StaticMap {
+public:
+    struct TrackWindow {
+        int window = 0;
+        std::uint64_t seen = 0;
+        std::vector<RangeBearing> samples; ///< a uniform reservoir of the `seen`
+    };
+    struct Track {
+        int ugv = -1;
+        int object = -1;
+        OoiClass cls = OoiClass::Static;
+        std::vector<TrackWindow> windows;
+        std::string key; ///< in trackIndex_
+        std::uint64_t seen = 0;
+        double lastT = 0.0;
+    };
+    struct StaticObject {
+        std::string id;
+        std::uint64_t order = 0;
+        OoiClass cls = OoiClass::Static;
+        Confirmation state = Confirmation::Unknown;
+        bool alive = true;
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d info = Eigen::Matrix2d::Zero(); ///< sum of inverse covariances
+        Eigen::Vector2d infoMean = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d measurementInfo = Eigen::Matrix2d::Zero(); ///< the same without the pose uncertainty
+        std::uint64_t observations = 0;
+        double firstT = 0.0;
+        std::vector<int> tracks;
+        Eigen::Matrix2d priorInfo = Eigen::Matrix2d::Zero(); ///< from samples dropped beyond the horizon
+        Eigen::Vector2d priorMean = Eigen::Vector2d::Zero();
+    };
+
+    explicit StaticMap(const PoseCorrectedConfig& config);
+
+    /// Stores observation `o` (of UGV index `ugv`, as `sample`) in its track and fuses it into the track's
+    /// object, associating a new track first.
+    void add(const Observation& o, int ugv, const RangeBearing& sample, const UgvPoseErrors& poses, ObjectIds& ids);
+    /// Re-fits every object from its stored samples under the current pose model, then splits and merges.
+    void rebuild(const UgvPoseErrors& poses, ObjectIds& ids);
+    /// Drops the objects still tentative at time t (and their tracks' samples).
+    void dropTentative(double t, ObjectIds& ids);
+    /// Drops the samples of windows before `oldestWindow`, folding them into their object's prior.
+    void foldBeyondHorizon(int oldestWindow);
+    void setState(int object, Confirmation state) { objects_[static_cast<std::size_t>(object)].state = state; }
+    /// Appends the published static objects to `s` and their positions to `threats`.
+    void publish(const LocalFrame& frame, const UgvPoseErrors& poses, Snapshot& s, rules::Placed& threats) const;
+    [[nodiscard]] std::size_t storedPoints() const noexcept;
+
+    /// For the pose-error solver, which estimates the objects' means jointly with the UGVs' errors.
+    [[nodiscard]] const std::vector<Track>& tracks() const noexcept { return tracks_; }
+    [[nodiscard]] const std::vector<StaticObject>& objects() const noexcept { return objects_; }
+    [[nodiscard]] std::vector<StaticObject>& objects() noexcept { return objects_; }
+
+private:
+    /// Adds `sample` to the reservoir of its track's current window.
+    void store(Track& track, const RangeBearing& sample, int window);
+    /// The alive object within the gate of `p` nearest to it, or -1.
+    [[nodiscard]] int associate(int ugv, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+                                const Eigen::Matrix2d& measurementCov) const;
+    /// Recomputes an object's estimate from its tracks' stored samples under the current pose model.
+    void refit(StaticObject& object, const UgvPoseErrors& poses) const;
+    /// The weighted mean position of a track's stored samples (and the weight).
+    [[nodiscard]] Eigen::Vector2d trackMean(int trackIndex, const UgvPoseErrors& poses, double& weight) const;
+    void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
+    void split(std::size_t object, const UgvPoseErrors& poses, ObjectIds& ids);
+    /// Two static objects within the merge gate of each other (their estimates' covariances and the floor).
+    [[nodiscard]] bool sameObject(const StaticObject& x, const StaticObject& y) const;
+    void mergeAll(ObjectIds& ids);
+
+    PoseCorrectedConfig config_;
+    std::vector<Track> tracks_;
+    std::unordered_map<std::string, int> trackIndex_;
+    std::vector<StaticObject> objects_;
+    std::mt19937_64 rng_{11};
+};
+
+} // namespace ugv::correlator

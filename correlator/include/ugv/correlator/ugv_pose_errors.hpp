@@ -1,0 +1,67 @@
+#pragma once
+
+/// @file
+/// Mode `pose-corrected`'s model of each UGV's pose errors: its estimated heading bias (constant) and position
+/// offset (one per offsetWindowS window, a random walk between windows), the map builder's explicit pose corrections
+/// (authoritative where they exist), and its learnt noise scales. It projects a stored observation to the object
+/// position it implies under that model, with the covariance of the measurement and of the remaining pose error.
+/// The estimates are written by PoseErrorSolver.
+///
+/// Thread-safety: thread-bound. RT-safe: no (allocates).
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ugv/correlator/measurement_model.hpp"
+#include "ugv/correlator/messages.hpp"
+#include "ugv/correlator/pose_corrected_config.hpp"
+
+namespace ugv::correlator {
+
+class UgvPoseErrors {
+public:
+    struct Ugv {
+        std::string name;
+        double headingBias = 0.0;                ///< [rad] estimated
+        std::vector<Eigen::Vector2d> offsets;    ///< [m] estimated, per window
+        std::vector<PoseCorrection> corrections; ///< explicit, from the map builder
+        bool solved = false;
+        /// Learnt noise (learnNoise): the measured spread of this UGV's residuals over the configured one, per
+        /// direction, never below 1 (the configured model is the floor: gates only widen with what is measured).
+        double rangeScale = 1.0;
+        double bearingScale = 1.0;
+    };
+
+    explicit UgvPoseErrors(const PoseCorrectedConfig& config);
+
+    /// The index of the UGV called `name`, added (no errors estimated yet) when new.
+    int index(const std::string& name);
+    [[nodiscard]] std::optional<int> find(const std::string& name) const;
+    [[nodiscard]] std::size_t size() const noexcept { return ugvs_.size(); }
+    [[nodiscard]] Ugv& ugv(std::size_t index) { return ugvs_[index]; }
+    [[nodiscard]] const Ugv& ugv(std::size_t index) const { return ugvs_[index]; }
+
+    void addCorrection(const PoseCorrection& correction);
+    /// The offset window of time t.
+    [[nodiscard]] int window(double t) const;
+    /// [m] the estimated offset of `ugv` at time t (zero before any estimate; the last window's after it).
+    [[nodiscard]] Eigen::Vector2d offsetAt(int ugv, double t) const;
+    /// @return true when a pose correction covers time t (dPos [m], dHeading [rad] set from it).
+    bool explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos, double& dHeading) const;
+    /// The object position `s` implies under the current pose model, and (unless `cov` is null) its covariance:
+    /// the measurement noise and, `withPose`, the UGV's remaining pose uncertainty (prior before its errors are
+    /// estimated or corrected, smaller after).
+    void project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov, bool withPose = true) const;
+
+private:
+    PoseCorrectedConfig config_;
+    std::vector<Ugv> ugvs_;
+    std::unordered_map<std::string, int> index_;
+};
+
+} // namespace ugv::correlator

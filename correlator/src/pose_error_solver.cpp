@@ -1,0 +1,321 @@
+#include "ugv/correlator/pose_error_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <Eigen/Sparse>
+
+namespace ugv::correlator {
+namespace {
+
+constexpr int kMinSamplesToSolve = 10;
+/// A weak pull of every offset to zero (this x the offset prior) keeps the fleet's common offset (unobservable)
+/// bounded.
+constexpr double kCommonOffsetPull = 0.01;
+constexpr double kWalkPriorFloor = 1e-4; ///< [m^2] keeps the random walk's prior finite without drift
+// Learnt noise (learnNoise).
+constexpr double kMadToSigma = 1.4826;         ///< sigma of a Gaussian over its median absolute deviation
+constexpr double kMaxNoiseScale = 5.0;         ///< the measured spread is trusted up to this x the configured one
+constexpr int kMinNoiseSamples = 30;           ///< fewer residuals of a UGV: the configured model
+constexpr int kMinNoiseObjectObservations = 6; ///< objects seen this often give residuals
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+/// Where each unknown sits: per UGV [heading bias, offsets of windows first..last], then per object [x, y]; -1:
+/// not solved.
+struct Layout {
+    std::vector<int> ugvBase;
+    std::vector<int> firstWindow;
+    std::vector<int> lastWindow;
+    std::vector<int> objectBase;
+    int n = 0;
+};
+
+/// The normal equations H delta = -g of one Gauss-Newton step.
+struct NormalEquations {
+    Triplets h;
+    Eigen::VectorXd g;
+};
+
+template <class Block>
+void addBlock(Triplets& h, int r, int c, const Block& m)
+{
+    for (int i = 0; i < m.rows(); ++i) {
+        for (int k = 0; k < m.cols(); ++k) {
+            h.emplace_back(r + i, c + k, m(i, k));
+        }
+    }
+}
+
+bool solvable(const StaticMap::StaticObject& so, const PoseCorrectedConfig& config)
+{
+    return so.alive && so.observations >= static_cast<std::uint64_t>(config.minStaticObservations);
+}
+
+Layout layoutOf(const StaticMap& map, const UgvPoseErrors& poses, const PoseCorrectedConfig& config)
+{
+    Layout l;
+    l.ugvBase.assign(poses.size(), -1);
+    l.firstWindow.assign(poses.size(), 0);
+    l.lastWindow.assign(poses.size(), -1);
+    std::vector<int> samplesOf(poses.size(), 0);
+    for (const StaticMap::StaticObject& so : map.objects()) {
+        if (!solvable(so, config)) {
+            continue;
+        }
+        for (const int ti : so.tracks) {
+            const StaticMap::Track& track = map.tracks()[static_cast<std::size_t>(ti)];
+            for (const StaticMap::TrackWindow& tw : track.windows) {
+                const auto u = static_cast<std::size_t>(track.ugv);
+                l.firstWindow[u] = l.lastWindow[u] < 0 ? tw.window : std::min(l.firstWindow[u], tw.window);
+                l.lastWindow[u] = std::max(l.lastWindow[u], tw.window);
+                samplesOf[u] += static_cast<int>(tw.samples.size());
+            }
+        }
+    }
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        if (samplesOf[u] >= kMinSamplesToSolve) {
+            l.ugvBase[u] = l.n;
+            l.n += 1 + 2 * (l.lastWindow[u] - l.firstWindow[u] + 1);
+        }
+    }
+    l.objectBase.assign(map.objects().size(), -1);
+    for (std::size_t j = 0; j < map.objects().size(); ++j) {
+        if (solvable(map.objects()[j], config)) {
+            l.objectBase[j] = l.n;
+            l.n += 2;
+        }
+    }
+    return l;
+}
+
+/// Windows up to the last one solved get an offset (a new one starts from the one before).
+void extendOffsets(UgvPoseErrors& poses, const Layout& l)
+{
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        auto& offsets = poses.ugv(u).offsets;
+        if (l.ugvBase[u] >= 0 && static_cast<int>(offsets.size()) <= l.lastWindow[u]) {
+            const Eigen::Vector2d last = offsets.empty() ? Eigen::Vector2d::Zero() : offsets.back();
+            offsets.resize(static_cast<std::size_t>(l.lastWindow[u]) + 1, last);
+        }
+    }
+}
+
+/// The terms of one window of one track of the object at `xo`: its samples share their unknowns, so their
+/// normal-equation terms are summed first.
+void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow& tw, const Eigen::Vector2d& objectMean,
+                    int xo, const UgvPoseErrors& poses, const Layout& l, const PoseCorrectedConfig& config,
+                    NormalEquations& eq)
+{
+    const auto u = static_cast<std::size_t>(track.ugv);
+    Eigen::Matrix2d sumW = Eigen::Matrix2d::Zero();   // sum W
+    Eigen::Vector2d sumWr = Eigen::Vector2d::Zero();  // sum W r
+    Eigen::Vector2d sumWj = Eigen::Vector2d::Zero();  // sum W jh
+    double sumJWj = 0.0;                              // sum jh' W jh
+    double sumJWr = 0.0;                              // sum jh' W r
+    Eigen::Matrix2d fixedW = Eigen::Matrix2d::Zero(); // samples under a pose correction
+    Eigen::Vector2d fixedWr = Eigen::Vector2d::Zero();
+    const double weight = static_cast<double>(tw.seen) / static_cast<double>(tw.samples.size());
+    const RangeBearingNoise noise = config.noise();
+    for (const RangeBearing& smp : tw.samples) {
+        Eigen::Vector2d p;
+        poses.project(track.ugv, smp, p, nullptr);
+        // Measurement noise only: the pose errors are unknowns here.
+        const double sr = noise.alongSigma(smp.rangeM);
+        const double sc = noise.acrossSigma(smp.rangeM);
+        Eigen::Vector2d dPos;
+        double dHeading = 0.0;
+        if (poses.explicitCorrection(track.ugv, smp.t, dPos, dHeading)) {
+            // Corrected by the map builder: a fixed constraint on the object only.
+            const Eigen::Vector2d ray = rayAt(smp.headingRad + dHeading + smp.bearingRad);
+            const Eigen::Matrix2d w = weight * rayInformation(ray, sr, sc);
+            fixedW += w;
+            fixedWr += w * (p - objectMean);
+            continue;
+        }
+        const Eigen::Vector2d ray = rayAt(smp.headingRad + dHeading + poses.ugv(u).headingBias + smp.bearingRad);
+        const Eigen::Matrix2d w = weight * rayInformation(ray, sr, sc);
+        const Eigen::Vector2d r = p - objectMean;
+        const Eigen::Vector2d jh = smp.rangeM * acrossOf(ray); // d p / d heading
+        sumW += w;
+        sumWr += w * r;
+        sumWj += w * jh;
+        sumJWj += jh.dot(w * jh);
+        sumJWr += jh.dot(w * r);
+    }
+    addBlock(eq.h, xo, xo, (sumW + fixedW).eval());
+    eq.g.segment<2>(xo) -= sumWr + fixedWr;
+    if (l.ugvBase[u] < 0 || sumW.determinant() <= 0.0) {
+        return;
+    }
+    const int th = l.ugvBase[u];
+    const int ow = th + 1 + 2 * (tw.window - l.firstWindow[u]);
+    const Eigen::Matrix<double, 1, 1> jj(sumJWj);
+    addBlock(eq.h, th, th, jj);
+    addBlock(eq.h, th, ow, sumWj.transpose());
+    addBlock(eq.h, ow, th, sumWj);
+    addBlock(eq.h, ow, ow, sumW);
+    addBlock(eq.h, th, xo, (-sumWj).transpose());
+    addBlock(eq.h, xo, th, (-sumWj).eval());
+    addBlock(eq.h, ow, xo, (-sumW).eval());
+    addBlock(eq.h, xo, ow, (-sumW).eval());
+    eq.g(th) += sumJWr;
+    eq.g.segment<2>(ow) += sumWr;
+}
+
+void addObservationTerms(const StaticMap& map, const UgvPoseErrors& poses, const Layout& l,
+                         const PoseCorrectedConfig& config, NormalEquations& eq)
+{
+    for (std::size_t j = 0; j < map.objects().size(); ++j) {
+        const StaticMap::StaticObject& so = map.objects()[j];
+        if (l.objectBase[j] < 0) {
+            continue;
+        }
+        const int xo = l.objectBase[j];
+        if (so.priorInfo.determinant() > 0.0) {
+            addBlock(eq.h, xo, xo, so.priorInfo);
+            eq.g.segment<2>(xo) += so.priorInfo * (so.mean - so.priorMean);
+        }
+        for (const int ti : so.tracks) {
+            const StaticMap::Track& track = map.tracks()[static_cast<std::size_t>(ti)];
+            for (const StaticMap::TrackWindow& tw : track.windows) {
+                addWindowTerms(track, tw, so.mean, xo, poses, l, config, eq);
+            }
+        }
+    }
+}
+
+/// The priors of the UGVs' errors: heading bias zero-mean; the first window's offset about the one carried in
+/// from before (zero at the start), each later one a random walk from the one before.
+void addPoseTerms(const UgvPoseErrors& poses, const Layout& l, const PoseCorrectedConfig& config, NormalEquations& eq)
+{
+    const double headingPrior = 1.0 / std::pow(config.headingBiasSigmaDeg * kRadPerDeg, 2);
+    const double offsetPrior = 1.0 / (config.offsetSigmaM * config.offsetSigmaM);
+    const double walkPrior =
+        1.0 / (config.driftSigmaMPerSqrtS * config.driftSigmaMPerSqrtS * config.offsetWindowS + kWalkPriorFloor);
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        if (l.ugvBase[u] < 0) {
+            continue;
+        }
+        const auto& offsets = poses.ugv(u).offsets;
+        const int th = l.ugvBase[u];
+        eq.h.emplace_back(th, th, headingPrior);
+        eq.g(th) += headingPrior * poses.ugv(u).headingBias;
+        for (int w = l.firstWindow[u]; w <= l.lastWindow[u]; ++w) {
+            const int ow = th + 1 + 2 * (w - l.firstWindow[u]);
+            const Eigen::Vector2d o = offsets[static_cast<std::size_t>(w)];
+            if (w == l.firstWindow[u]) {
+                const Eigen::Vector2d before =
+                    w > 0 ? offsets[static_cast<std::size_t>(w) - 1] : Eigen::Vector2d::Zero();
+                const double prior = w > 0 ? walkPrior : offsetPrior;
+                addBlock(eq.h, ow, ow, prior * Eigen::Matrix2d::Identity());
+                eq.g.segment<2>(ow) += prior * (o - before);
+            } else {
+                const Eigen::Vector2d prev = offsets[static_cast<std::size_t>(w) - 1];
+                const int op = ow - 2;
+                addBlock(eq.h, ow, ow, walkPrior * Eigen::Matrix2d::Identity());
+                addBlock(eq.h, op, op, walkPrior * Eigen::Matrix2d::Identity());
+                addBlock(eq.h, ow, op, -walkPrior * Eigen::Matrix2d::Identity());
+                addBlock(eq.h, op, ow, -walkPrior * Eigen::Matrix2d::Identity());
+                eq.g.segment<2>(ow) += walkPrior * (o - prev);
+                eq.g.segment<2>(op) -= walkPrior * (o - prev);
+            }
+            addBlock(eq.h, ow, ow, kCommonOffsetPull * offsetPrior * Eigen::Matrix2d::Identity());
+            eq.g.segment<2>(ow) += kCommonOffsetPull * offsetPrior * o;
+        }
+    }
+}
+
+void applyStep(const Eigen::VectorXd& delta, const Layout& l, StaticMap& map, UgvPoseErrors& poses)
+{
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        if (l.ugvBase[u] < 0) {
+            continue;
+        }
+        UgvPoseErrors::Ugv& ugv = poses.ugv(u);
+        ugv.headingBias += delta(l.ugvBase[u]);
+        for (int w = l.firstWindow[u]; w <= l.lastWindow[u]; ++w) {
+            ugv.offsets[static_cast<std::size_t>(w)] += delta.segment<2>(l.ugvBase[u] + 1 + 2 * (w - l.firstWindow[u]));
+        }
+        ugv.solved = true;
+    }
+    for (std::size_t j = 0; j < map.objects().size(); ++j) {
+        if (l.objectBase[j] >= 0) {
+            map.objects()[j].mean += delta.segment<2>(l.objectBase[j]);
+        }
+    }
+}
+
+/// 1.4826 x the median of `v` (absolute residuals over their sigma), within [1, kMaxNoiseScale]; 1 with too few.
+double robustScale(std::vector<double>& v)
+{
+    if (v.size() < static_cast<std::size_t>(kMinNoiseSamples)) {
+        return 1.0;
+    }
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return std::clamp(kMadToSigma * *mid, 1.0, kMaxNoiseScale);
+}
+
+} // namespace
+
+PoseErrorSolver::PoseErrorSolver(const PoseCorrectedConfig& config) : config_(config) {}
+
+bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses) const
+{
+    const Layout l = layoutOf(map, poses, config_);
+    if (l.n == 0) {
+        return false;
+    }
+    extendOffsets(poses, l);
+    for (int iteration = 0; iteration < config_.solveIterations; ++iteration) {
+        NormalEquations eq{{}, Eigen::VectorXd::Zero(l.n)};
+        addObservationTerms(map, poses, l, config_, eq);
+        addPoseTerms(poses, l, config_, eq);
+        Eigen::SparseMatrix<double> hm(l.n, l.n);
+        hm.setFromTriplets(eq.h.begin(), eq.h.end());
+        const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hm);
+        if (ldlt.info() != Eigen::Success) {
+            return false;
+        }
+        applyStep(ldlt.solve(-eq.g), l, map, poses);
+    }
+    return true;
+}
+
+void PoseErrorSolver::learnNoise(const StaticMap& map, UgvPoseErrors& poses) const
+{
+    const RangeBearingNoise noise = config_.noise();
+    std::vector<std::vector<double>> rangeResiduals(poses.size());
+    std::vector<std::vector<double>> crossResiduals(poses.size());
+    for (const StaticMap::StaticObject& so : map.objects()) {
+        if (!so.alive || so.observations < static_cast<std::uint64_t>(kMinNoiseObjectObservations)) {
+            continue;
+        }
+        for (const int ti : so.tracks) {
+            const StaticMap::Track& track = map.tracks()[static_cast<std::size_t>(ti)];
+            const auto u = static_cast<std::size_t>(track.ugv);
+            for (const StaticMap::TrackWindow& tw : track.windows) {
+                for (const RangeBearing& smp : tw.samples) {
+                    Eigen::Vector2d p;
+                    poses.project(track.ugv, smp, p, nullptr);
+                    const Eigen::Vector2d d = p - so.mean;
+                    const Eigen::Vector2d ray = (p - smp.ugvPos).normalized();
+                    rangeResiduals[u].push_back(std::abs(d.dot(ray)) / noise.alongSigma(smp.rangeM));
+                    crossResiduals[u].push_back(std::abs(d.dot(acrossOf(ray))) / noise.acrossSigma(smp.rangeM));
+                }
+            }
+        }
+    }
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        poses.ugv(u).rangeScale = robustScale(rangeResiduals[u]);
+        poses.ugv(u).bearingScale = robustScale(crossResiduals[u]);
+    }
+}
+
+} // namespace ugv::correlator

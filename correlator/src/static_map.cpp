@@ -1,0 +1,429 @@
+#include "ugv/correlator/static_map.hpp"
+
+#include <algorithm>
+#include <set>
+#include <utility>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "ugv/correlator/gaussian_mixture.hpp"
+
+namespace ugv::correlator {
+namespace {
+
+/// Added to a static object's covariance: its observations share their UGVs' remaining pose errors, so it is
+/// never more certain than those (the information of independent observations would say centimetres).
+constexpr double kFloorSigmaM = 0.3;
+constexpr double kSplitDistanceM = 2.0;        ///< track groups of one object at least this far apart may split
+constexpr double kMaxPriorObservations = 20.0; ///< a folded prior is worth at most this many observations
+constexpr int kTwoMeansIterations = 5;
+
+Eigen::Matrix2d floorCovariance()
+{
+    return kFloorSigmaM * kFloorSigmaM * Eigen::Matrix2d::Identity();
+}
+
+/// Each stored sample of a window stands for seen / stored observations.
+double sampleWeight(const StaticMap::TrackWindow& tw)
+{
+    return tw.samples.empty() ? 0.0 : static_cast<double>(tw.seen) / static_cast<double>(tw.samples.size());
+}
+
+void fuse(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+          const Eigen::Matrix2d& measurementCov, double weight = 1.0)
+{
+    const Eigen::Matrix2d info = weight * cov.inverse();
+    object.info += info;
+    object.infoMean += info * p;
+    object.measurementInfo += weight * measurementCov.inverse();
+    object.mean = object.info.ldlt().solve(object.infoMean);
+}
+
+/// Two groups of an object's track means (two-means seeded by the farthest pair).
+struct TwoGroups {
+    Eigen::Vector2d ca = Eigen::Vector2d::Zero();
+    Eigen::Vector2d cb = Eigen::Vector2d::Zero();
+    std::vector<bool> inB;
+    double spread = 0.0; ///< [m] the farthest mean from its group's centre
+    double wa = 0.0;
+    double wb = 0.0;
+};
+
+/// @return false when the farthest pair of means is closer than kSplitDistanceM (nothing to split).
+bool twoGroups(const std::vector<Eigen::Vector2d>& means, const std::vector<double>& weights, TwoGroups& g)
+{
+    std::size_t a = 0;
+    std::size_t b = 0;
+    for (std::size_t i = 0; i < means.size(); ++i) {
+        for (std::size_t k = i + 1; k < means.size(); ++k) {
+            if ((means[i] - means[k]).norm() > (means[a] - means[b]).norm()) {
+                a = i;
+                b = k;
+            }
+        }
+    }
+    if ((means[a] - means[b]).norm() < kSplitDistanceM) {
+        return false;
+    }
+    g.ca = means[a];
+    g.cb = means[b];
+    g.inB.assign(means.size(), false);
+    for (int iteration = 0; iteration < kTwoMeansIterations; ++iteration) {
+        Eigen::Vector2d sa = Eigen::Vector2d::Zero();
+        Eigen::Vector2d sb = Eigen::Vector2d::Zero();
+        double wa = 0.0;
+        double wb = 0.0;
+        for (std::size_t i = 0; i < means.size(); ++i) {
+            g.inB[i] = (means[i] - g.cb).norm() < (means[i] - g.ca).norm();
+            (g.inB[i] ? sb : sa) += weights[i] * means[i];
+            (g.inB[i] ? wb : wa) += weights[i];
+        }
+        if (wa <= 0.0 || wb <= 0.0) {
+            break;
+        }
+        g.ca = sa / wa;
+        g.cb = sb / wb;
+    }
+    for (std::size_t i = 0; i < means.size(); ++i) {
+        g.spread = std::max(g.spread, (means[i] - (g.inB[i] ? g.cb : g.ca)).norm());
+        (g.inB[i] ? g.wb : g.wa) += weights[i];
+    }
+    return true;
+}
+
+} // namespace
+
+StaticMap::StaticMap(const PoseCorrectedConfig& config) : config_(config) {}
+
+void StaticMap::store(Track& track, const RangeBearing& sample, int window)
+{
+    if (track.windows.empty() || track.windows.back().window != window) {
+        track.windows.push_back(TrackWindow{window, 0, {}});
+    }
+    TrackWindow& tw = track.windows.back();
+    ++tw.seen;
+    if (tw.samples.size() < config_.samplesPerTrackWindow) {
+        tw.samples.push_back(sample);
+    } else {
+        std::uniform_int_distribution<std::uint64_t> pick(0, tw.seen - 1);
+        if (const std::uint64_t slot = pick(rng_); slot < config_.samplesPerTrackWindow) {
+            tw.samples[slot] = sample;
+        }
+    }
+    ++track.seen;
+    track.lastT = sample.t;
+}
+
+int StaticMap::associate(int ugv, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+                         const Eigen::Matrix2d& measurementCov) const
+{
+    int best = -1;
+    double bestD2 = config_.gateChi2;
+    for (int i = 0; i < static_cast<int>(objects_.size()); ++i) {
+        const StaticObject& so = objects_[static_cast<std::size_t>(i)];
+        if (!so.alive) {
+            continue;
+        }
+        // Against an object only this UGV has seen, its pose error is common to both: measurement noise only.
+        const bool ownOnly = std::all_of(so.tracks.begin(), so.tracks.end(), [this, ugv](int other) {
+            return tracks_[static_cast<std::size_t>(other)].ugv == ugv;
+        });
+        const Eigen::Matrix2d objectCov = ownOnly ? Eigen::Matrix2d(so.measurementInfo.inverse())
+                                                  : Eigen::Matrix2d(so.info.inverse() + floorCovariance());
+        const double d2 = mahalanobis2(p - so.mean, (ownOnly ? measurementCov : cov) + objectCov);
+        if (d2 < bestD2) {
+            best = i;
+            bestD2 = d2;
+        }
+    }
+    return best;
+}
+
+void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, const UgvPoseErrors& poses,
+                    ObjectIds& ids)
+{
+    auto [it, inserted] = trackIndex_.try_emplace(rules::trackKey(o.ugv, o.track), static_cast<int>(tracks_.size()));
+    if (inserted) {
+        tracks_.push_back(Track{});
+        tracks_.back().ugv = ugv;
+        tracks_.back().cls = o.cls;
+        tracks_.back().key = it->first;
+    }
+    const int ti = it->second;
+    Track& track = tracks_[static_cast<std::size_t>(ti)];
+    store(track, sample, poses.window(o.t));
+    Eigen::Vector2d p;
+    Eigen::Matrix2d cov;
+    Eigen::Matrix2d measurementCov;
+    poses.project(ugv, sample, p, &cov);
+    poses.project(ugv, sample, p, &measurementCov, false);
+    if (track.object < 0) {
+        int best = associate(ugv, p, cov, measurementCov);
+        if (best < 0) {
+            best = static_cast<int>(objects_.size());
+            StaticObject created;
+            ObjectIds::Issued issued = ids.issue(true, best);
+            created.id = std::move(issued.id);
+            created.order = issued.order;
+            created.cls = o.cls;
+            created.state = rules::initialState(o.cls);
+            created.firstT = o.t;
+            objects_.push_back(std::move(created));
+        }
+        track.object = best;
+        objects_[static_cast<std::size_t>(best)].tracks.push_back(ti);
+    }
+    StaticObject& object = objects_[static_cast<std::size_t>(track.object)];
+    fuse(object, p, cov, measurementCov);
+    ++object.observations;
+}
+
+void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses) const
+{
+    object.info = object.priorInfo;
+    object.infoMean = object.priorInfo * object.priorMean;
+    object.measurementInfo = object.priorInfo;
+    for (const int ti : object.tracks) {
+        const Track& track = tracks_[static_cast<std::size_t>(ti)];
+        for (const TrackWindow& tw : track.windows) {
+            const double weight = sampleWeight(tw);
+            for (const RangeBearing& smp : tw.samples) {
+                Eigen::Vector2d p;
+                Eigen::Matrix2d cov;
+                Eigen::Matrix2d measurementCov;
+                poses.project(track.ugv, smp, p, &cov);
+                poses.project(track.ugv, smp, p, &measurementCov, false);
+                fuse(object, p, cov, measurementCov, weight);
+            }
+        }
+    }
+    if (object.info.determinant() > 0.0) {
+        object.mean = object.info.ldlt().solve(object.infoMean);
+    }
+}
+
+void StaticMap::rebuild(const UgvPoseErrors& poses, ObjectIds& ids)
+{
+    for (StaticObject& so : objects_) {
+        if (so.alive) {
+            refit(so, poses);
+        }
+    }
+    splitAll(poses, ids);
+    mergeAll(ids);
+}
+
+Eigen::Vector2d StaticMap::trackMean(int trackIndex, const UgvPoseErrors& poses, double& weight) const
+{
+    const Track& track = tracks_[static_cast<std::size_t>(trackIndex)];
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    weight = 0.0;
+    for (const TrackWindow& tw : track.windows) {
+        const double w = sampleWeight(tw);
+        for (const RangeBearing& s : tw.samples) {
+            Eigen::Vector2d p;
+            poses.project(track.ugv, s, p, nullptr);
+            sum += w * p;
+            weight += w;
+        }
+    }
+    return weight > 0.0 ? Eigen::Vector2d(sum / weight) : Eigen::Vector2d::Zero();
+}
+
+void StaticMap::splitAll(const UgvPoseErrors& poses, ObjectIds& ids)
+{
+    const std::size_t count = objects_.size();
+    for (std::size_t j = 0; j < count; ++j) {
+        if (objects_[j].alive && objects_[j].tracks.size() >= 2) {
+            split(j, poses, ids);
+        }
+    }
+}
+
+/// An object whose tracks form two groups far apart (two objects associated while the UGVs' pose errors were
+/// still unknown) splits: the group with more observations keeps the id, the other becomes a new object.
+void StaticMap::split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids)
+{
+    const std::vector<int> tracks = objects_[j].tracks;
+    std::vector<Eigen::Vector2d> means(tracks.size());
+    std::vector<double> weights(tracks.size());
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+        means[i] = trackMean(tracks[i], poses, weights[i]);
+    }
+    TwoGroups g;
+    if (!twoGroups(means, weights, g)) {
+        return;
+    }
+    if (g.wa <= 0.0 || g.wb <= 0.0 || (g.ca - g.cb).norm() < kSplitDistanceM || (g.ca - g.cb).norm() < 3.0 * g.spread) {
+        return;
+    }
+    // The smaller group leaves with a new id.
+    const bool moveB = g.wb <= g.wa;
+    const int newIndex = static_cast<int>(objects_.size());
+    StaticObject created;
+    ObjectIds::Issued issued = ids.issue(true, newIndex);
+    created.id = std::move(issued.id);
+    created.order = issued.order;
+    created.cls = objects_[j].cls;
+    created.state = objects_[j].state;
+    std::vector<int> stay;
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+        if (g.inB[i] == moveB) {
+            created.tracks.push_back(tracks[i]);
+            tracks_[static_cast<std::size_t>(tracks[i])].object = newIndex;
+            created.observations += tracks_[static_cast<std::size_t>(tracks[i])].seen;
+        } else {
+            stay.push_back(tracks[i]);
+        }
+    }
+    objects_.push_back(std::move(created));
+    StaticObject& kept = objects_[j];
+    kept.tracks = stay;
+    kept.observations = 0;
+    for (const int ti : stay) {
+        kept.observations += tracks_[static_cast<std::size_t>(ti)].seen;
+    }
+    kept.priorInfo.setZero();
+    refit(objects_[j], poses);
+    refit(objects_[static_cast<std::size_t>(newIndex)], poses);
+}
+
+bool StaticMap::sameObject(const StaticObject& x, const StaticObject& y) const
+{
+    const Eigen::Matrix2d cov = x.info.inverse() + y.info.inverse() + 2.0 * floorCovariance();
+    return mahalanobis2(x.mean - y.mean, cov) < config_.gateChi2;
+}
+
+void StaticMap::mergeAll(ObjectIds& ids)
+{
+    for (std::size_t a = 0; a < objects_.size(); ++a) {
+        for (std::size_t b = a + 1; b < objects_.size(); ++b) {
+            StaticObject& x = objects_[a];
+            StaticObject& y = objects_[b];
+            if (!x.alive || !y.alive || x.info.determinant() <= 0.0 || y.info.determinant() <= 0.0) {
+                continue;
+            }
+            if (!sameObject(x, y)) {
+                continue;
+            }
+            StaticObject& kept = x.order <= y.order ? x : y;
+            StaticObject& gone = x.order <= y.order ? y : x;
+            const int keptIndex = static_cast<int>(&kept - objects_.data());
+            for (const int ti : gone.tracks) {
+                tracks_[static_cast<std::size_t>(ti)].object = keptIndex;
+                kept.tracks.push_back(ti);
+            }
+            kept.info += gone.info;
+            kept.infoMean += gone.infoMean;
+            kept.measurementInfo += gone.measurementInfo;
+            kept.priorInfo += gone.priorInfo;
+            kept.priorMean = kept.mean;
+            kept.mean = kept.info.ldlt().solve(kept.infoMean);
+            kept.observations += gone.observations;
+            kept.state = rules::inherit(kept.state, gone.state);
+            gone.alive = false;
+            gone.tracks.clear();
+            ids.merge(gone.id, kept.id);
+        }
+    }
+}
+
+/// Clutter gathers into objects over a long mission unless objects that stay below minStaticObservations die.
+void StaticMap::dropTentative(double t, ObjectIds& ids)
+{
+    for (StaticObject& so : objects_) {
+        if (!so.alive || so.observations >= static_cast<std::uint64_t>(config_.minStaticObservations) ||
+            t - so.firstT <= config_.tentativeTimeoutS) {
+            continue;
+        }
+        so.alive = false;
+        ids.erase(so.id);
+        for (const int ti : so.tracks) {
+            Track& track = tracks_[static_cast<std::size_t>(ti)];
+            trackIndex_.erase(track.key);
+            track.windows.clear();
+            track.windows.shrink_to_fit();
+            track.object = -1;
+        }
+        so.tracks.clear();
+    }
+}
+
+void StaticMap::foldBeyondHorizon(int oldestWindow)
+{
+    for (StaticObject& so : objects_) {
+        if (!so.alive) {
+            continue;
+        }
+        std::size_t dropped = 0;
+        for (const int ti : so.tracks) {
+            auto& windows = tracks_[static_cast<std::size_t>(ti)].windows;
+            const auto keep = std::find_if(windows.begin(), windows.end(),
+                                           [oldestWindow](const TrackWindow& tw) { return tw.window >= oldestWindow; });
+            for (auto it = windows.begin(); it != keep; ++it) {
+                dropped += it->seen;
+            }
+            windows.erase(windows.begin(), keep);
+        }
+        if (dropped > 0) {
+            const double share = std::min(1.0, kMaxPriorObservations / static_cast<double>(so.observations));
+            so.priorInfo = share * so.info;
+            so.priorMean = so.mean;
+        }
+    }
+}
+
+void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Snapshot& s, rules::Placed& threats) const
+{
+    std::vector<const StaticObject*> published; // in creation order (objects_ is), so the older come first
+    for (const StaticObject& so : objects_) {
+        if (!so.alive || so.observations < static_cast<std::uint64_t>(config_.minStaticObservations) ||
+            so.info.determinant() <= 0.0) {
+            continue;
+        }
+        // A duplicate of an older object (a churned track UUID that missed the gate at first) is not shown while
+        // it waits for the next merge: its id would steal the object's for a while and then vanish.
+        if (std::any_of(published.begin(), published.end(),
+                        [&](const StaticObject* older) { return sameObject(*older, so); })) {
+            continue;
+        }
+        ObjectEstimate e;
+        e.id = so.id;
+        e.cls = so.cls;
+        frame.toLatLon(so.mean, e.lat, e.lon);
+        const Ellipse el = ellipseOf(so.info.inverse() + floorCovariance());
+        e.sigmaMajorM = el.sigmaMajor;
+        e.sigmaMinorM = el.sigmaMinor;
+        e.majorAxisDeg = el.majorAxisDeg;
+        e.state = so.state;
+        e.observations = static_cast<int>(so.observations);
+        std::set<std::string> names;
+        bool sustained = false; // a track that saw it twice: clutter falls on an object once per track
+        for (const int ti : so.tracks) {
+            names.insert(poses.ugv(static_cast<std::size_t>(tracks_[static_cast<std::size_t>(ti)].ugv)).name);
+            sustained = sustained || tracks_[static_cast<std::size_t>(ti)].seen >= 2;
+        }
+        if (!sustained && names.size() < 2) {
+            continue;
+        }
+        e.ugvs.assign(names.begin(), names.end());
+        e.zoneDiameterM = kStaticZoneDiameterM;
+        published.push_back(&so);
+        threats.emplace_back(so.mean, s.objects.size());
+        s.objects.push_back(std::move(e));
+    }
+}
+
+std::size_t StaticMap::storedPoints() const noexcept
+{
+    std::size_t n = 0;
+    for (const Track& t : tracks_) {
+        for (const TrackWindow& tw : t.windows) {
+            n += tw.samples.size();
+        }
+    }
+    return n;
+}
+
+} // namespace ugv::correlator

@@ -1,0 +1,96 @@
+#include "ugv/correlator/ugv_pose_errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ugv::correlator {
+namespace {
+
+constexpr double kSolvedHeadingSigmaDeg = 0.5; ///< remaining pose uncertainty once a UGV's errors are estimated
+constexpr double kSolvedOffsetSigmaM = 0.3;
+
+} // namespace
+
+UgvPoseErrors::UgvPoseErrors(const PoseCorrectedConfig& config) : config_(config) {}
+
+int UgvPoseErrors::index(const std::string& name)
+{
+    auto [it, inserted] = index_.try_emplace(name, static_cast<int>(ugvs_.size()));
+    if (inserted) {
+        ugvs_.push_back(Ugv{});
+        ugvs_.back().name = name;
+    }
+    return it->second;
+}
+
+std::optional<int> UgvPoseErrors::find(const std::string& name) const
+{
+    const auto it = index_.find(name);
+    if (it == index_.end()) {
+        return std::nullopt;
+    }
+    return it->second;
+}
+
+void UgvPoseErrors::addCorrection(const PoseCorrection& correction)
+{
+    ugvs_[static_cast<std::size_t>(index(correction.ugv))].corrections.push_back(correction);
+}
+
+int UgvPoseErrors::window(double t) const
+{
+    return static_cast<int>(std::floor(t / config_.offsetWindowS));
+}
+
+Eigen::Vector2d UgvPoseErrors::offsetAt(int ugv, double t) const
+{
+    const auto& offsets = ugvs_[static_cast<std::size_t>(ugv)].offsets;
+    if (offsets.empty()) {
+        return Eigen::Vector2d::Zero();
+    }
+    const int w = std::clamp(window(t), 0, static_cast<int>(offsets.size()) - 1);
+    return offsets[static_cast<std::size_t>(w)];
+}
+
+bool UgvPoseErrors::explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos, double& dHeading) const
+{
+    dPos.setZero();
+    dHeading = 0.0;
+    bool covered = false;
+    for (const PoseCorrection& c : ugvs_[static_cast<std::size_t>(ugv)].corrections) {
+        if (t >= c.sinceT && t <= c.untilT) {
+            dPos = Eigen::Vector2d(c.dEastM, c.dNorthM);
+            dHeading = c.dHeadingDeg * kRadPerDeg;
+            covered = true;
+        }
+    }
+    return covered;
+}
+
+void UgvPoseErrors::project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
+                            bool withPose) const
+{
+    const Ugv& u = ugvs_[static_cast<std::size_t>(ugv)];
+    Eigen::Vector2d dPos;
+    double dHeading = 0.0;
+    // The map builder's correction is authoritative where it exists; the estimated errors cover the rest.
+    const bool corrected = explicitCorrection(ugv, s.t, dPos, dHeading);
+    const double az = s.headingRad + dHeading + (corrected ? 0.0 : u.headingBias) + s.bearingRad;
+    const Eigen::Vector2d ray = rayAt(az);
+    p = s.ugvPos + dPos + (corrected ? Eigen::Vector2d::Zero() : offsetAt(ugv, s.t)) + s.rangeM * ray;
+    if (cov == nullptr) {
+        return;
+    }
+    const Eigen::Vector2d across = acrossOf(ray);
+    const RangeBearingNoise noise = config_.noise();
+    const double sr = noise.alongSigma(s.rangeM, u.rangeScale);
+    const bool knownPose = u.solved || corrected;
+    const double headingSigma =
+        withPose ? (knownPose ? kSolvedHeadingSigmaDeg : config_.headingBiasSigmaDeg) * kRadPerDeg : 0.0;
+    const double sc2 = std::pow(noise.acrossSigma(s.rangeM, u.bearingScale), 2) + std::pow(s.rangeM * headingSigma, 2);
+    const double offset = withPose ? (knownPose ? kSolvedOffsetSigmaM : config_.offsetSigmaM) : 0.0;
+    *cov = sr * sr * ray * ray.transpose() + sc2 * across * across.transpose() +
+           offset * offset * Eigen::Matrix2d::Identity();
+}
+
+} // namespace ugv::correlator
