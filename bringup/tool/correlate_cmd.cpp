@@ -297,8 +297,9 @@ int runCorrelate(int argc, char** argv)
         return correlateFromDds(args, *mode, *period, *lateWindow, out);
     }
 
-    correlator::CorrelatorFeed feed(*mode, *period, *lateWindow,
-                                    [] { return std::chrono::steady_clock::now().time_since_epoch(); });
+    correlator::CorrelatorFeed feed(*mode, *period, *lateWindow, [] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    });
     std::string line;
     std::size_t lineNumber = 0;
     std::size_t bad = 0;
@@ -344,8 +345,8 @@ int runCorrelate(int argc, char** argv)
     if (bad > kMaxReportedLines) {
         std::cerr << args.get("input") << ": " << bad - kMaxReportedLines << " more bad line(s) not shown\n";
     }
-    const double seconds = std::chrono::duration<double>(feed.addTime()).count();
-    const double snapshotSeconds = std::chrono::duration<double>(feed.snapshotTime()).count();
+    const double seconds = feed.addSeconds();
+    const double snapshotSeconds = feed.snapshotSeconds();
     const std::size_t messages = feed.applied();
     const std::size_t snapshots = feed.snapshots();
     if (feed.skippedSnapshots() > 0) {

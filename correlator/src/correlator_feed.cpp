@@ -33,9 +33,9 @@ std::size_t CorrelatorFeed::storedPoints() const
     return std::visit([](const auto& c) { return c.storedPoints(); }, state_.correlator);
 }
 
-std::chrono::nanoseconds CorrelatorFeed::now() const
+double CorrelatorFeed::now() const
 {
-    return stopwatch_ ? stopwatch_() : std::chrono::nanoseconds{0};
+    return stopwatch_ ? stopwatch_() : 0.0;
 }
 
 double CorrelatorFeed::timeOf(const Message& m) noexcept
@@ -92,7 +92,7 @@ Snapshot CorrelatorFeed::take(double t, const OnSnapshot& onSnapshot, double emi
             return c.snapshot(t);
         },
         state_.correlator);
-    snapshotBusy_ += now() - t0;
+    snapshotBusyS_ += now() - t0;
     ++state_.snapshots;
     if (onSnapshot && t >= emitFrom) {
         onSnapshot(s);
@@ -134,7 +134,7 @@ Result<void, Error> CorrelatorFeed::applyInOrder(const Message& message, double 
     }
     const auto t0 = now();
     auto done = std::visit([&message](auto& c) { return c.add(message); }, state_.correlator);
-    addBusy_ += now() - t0;
+    addBusyS_ += now() - t0;
     if (done) {
         ++state_.applied;
         if (const auto* o = std::get_if<Observation>(&message)) {

@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -185,11 +184,11 @@ TEST(CorrelatorFeed, OlderThanTheWindowIsRefusedAndChangesNothing)
 
 TEST(CorrelatorFeed, BusyTimesComeFromTheCallersStopwatchOnly)
 {
-    constexpr std::chrono::nanoseconds kTick{10};
+    constexpr double kTickS = 0.25;
     const std::vector<Message> messages = scenario();
     ASSERT_GE(messages.size(), 2U);
-    std::chrono::nanoseconds fakeNow{0};
-    CorrelatorFeed timed(correlator::Mode::PoseCorrected, 1.0, 0.0, [&fakeNow, kTick] { return fakeNow += kTick; });
+    double fakeNowS = 0.0;
+    CorrelatorFeed timed(correlator::Mode::PoseCorrected, 1.0, 0.0, [&fakeNowS] { return fakeNowS += kTickS; });
     CorrelatorFeed untimed(correlator::Mode::PoseCorrected, 1.0);
 
     for (std::size_t i = 0; i < 2; ++i) {
@@ -197,9 +196,9 @@ TEST(CorrelatorFeed, BusyTimesComeFromTheCallersStopwatchOnly)
         ASSERT_TRUE(untimed.add(messages[i], nullptr).has_value());
     }
 
-    EXPECT_EQ(timed.addTime(), 2 * kTick); // one tick between the two reads around each add()
-    EXPECT_EQ(untimed.addTime(), std::chrono::nanoseconds{0});
-    EXPECT_EQ(untimed.snapshotTime(), std::chrono::nanoseconds{0});
+    EXPECT_DOUBLE_EQ(timed.addSeconds(), 2 * kTickS); // one tick between the two reads around each add()
+    EXPECT_DOUBLE_EQ(untimed.addSeconds(), 0.0);
+    EXPECT_DOUBLE_EQ(untimed.snapshotSeconds(), 0.0);
 }
 
 TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)

@@ -27,7 +27,6 @@
 ///
 /// Thread-safety: thread-bound. RT-safe: no.
 
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <deque>
@@ -58,9 +57,9 @@ class CorrelatorFeed {
 public:
     using OnSnapshot = std::function<void(const Snapshot&)>;
     using OnRefused = std::function<void(const Message&, const Error&)>;
-    /// The time of the caller's monotonic clock, read around add() and snapshot() for addTime()/snapshotTime():
-    /// the feed reads no clock of its own (mission time comes with the messages).
-    using Stopwatch = std::function<std::chrono::nanoseconds()>;
+    /// A reading [s] of the caller's monotonic clock, taken around add() and snapshot() for addSeconds() and
+    /// snapshotSeconds(): the feed reads no clock of its own (mission time comes with the messages).
+    using Stopwatch = std::function<double()>;
 
     /// Messages held for replays, at most (about 300 bytes each).
     static constexpr std::size_t kMaxHeldMessages = 500'000;
@@ -75,7 +74,7 @@ public:
     /// @param periodS      snapshot period in mission time [s], > 0
     /// @param lateWindowS  how much older than the latest applied message a message may be and still be put in its
     ///                     place [s], >= 0 (0: refused)
-    /// @param stopwatch    the caller's monotonic clock for addTime()/snapshotTime(); empty: both stay 0
+    /// @param stopwatch    the caller's monotonic clock for addSeconds()/snapshotSeconds(); empty: both stay 0
     CorrelatorFeed(Mode mode, double periodS, double lateWindowS = 0.0, Stopwatch stopwatch = {});
 
     /// Applies one message; every new period boundary it passes first gives a snapshot to `onSnapshot`.
@@ -99,9 +98,9 @@ public:
     [[nodiscard]] double earliestAccepted() const noexcept;
     [[nodiscard]] std::size_t storedPoints() const;
     [[nodiscard]] const std::map<std::string, UgvPose>& ugvs() const noexcept { return state_.ugvs; }
-    /// Time spent in the correlator's add() and snapshot(), by the stopwatch given (0 without one).
-    [[nodiscard]] std::chrono::nanoseconds addTime() const noexcept { return addBusy_; }
-    [[nodiscard]] std::chrono::nanoseconds snapshotTime() const noexcept { return snapshotBusy_; }
+    /// [s] spent in the correlator's add() and in advance() + snapshot(), by the stopwatch given (0 without one).
+    [[nodiscard]] double addSeconds() const noexcept { return addBusyS_; }
+    [[nodiscard]] double snapshotSeconds() const noexcept { return snapshotBusyS_; }
     [[nodiscard]] const char* mode() const noexcept;
 
 private:
@@ -140,7 +139,7 @@ private:
     void prune();
     Error tooLate(double t) const;
     /// The stopwatch's time (0 without one).
-    [[nodiscard]] std::chrono::nanoseconds now() const;
+    [[nodiscard]] double now() const;
     /// Before the last message in the correlator's order (appliedBefore; without a window: earlier).
     bool isLate(const Message& message) const;
 
@@ -154,8 +153,8 @@ private:
     std::size_t resequenced_ = 0;
     std::size_t replayed_ = 0;
     Stopwatch stopwatch_;
-    std::chrono::nanoseconds addBusy_{0};
-    std::chrono::nanoseconds snapshotBusy_{0};
+    double addBusyS_ = 0.0;      ///< [s]
+    double snapshotBusyS_ = 0.0; ///< [s]
 };
 
 } // namespace ugv::correlator
