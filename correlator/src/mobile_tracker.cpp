@@ -327,18 +327,10 @@ void MobileTracker::publish(double t, const LocalFrame& frame, Snapshot& s, rule
         if (el.sigmaMajor > kMaxPublishedMobileSigmaM) {
             continue; // predicted too long to be useful; kept (with its id) for when it is seen again
         }
-        ObjectEstimate e;
-        e.id = live.id;
-        e.cls = live.cls;
-        frame.toLatLon(position, e.lat, e.lon);
-        e.sigmaMajorM = el.sigmaMajor;
-        e.sigmaMinorM = el.sigmaMinor;
-        e.majorAxisDeg = el.majorAxisDeg;
-        e.state = live.state;
+        ObjectEstimate e = rules::estimateOf(frame, position, el, live.id, live.cls, live.state);
         e.observations = live.observations;
         e.ugvs = live.ugvs;
         std::sort(e.ugvs.begin(), e.ugvs.end());
-        e.zoneDiameterM = kMobileZoneDiameterM;
         (live.cls == OoiClass::NonCombatant ? civilians : threats).emplace_back(position, s.objects.size());
         s.objects.push_back(std::move(e));
     }

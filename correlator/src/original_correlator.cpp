@@ -488,22 +488,14 @@ Snapshot OriginalCorrelator::snapshot(double t) const
         if (!so.alive) {
             continue;
         }
-        ObjectEstimate e;
-        e.id = so.id;
-        e.cls = so.cls;
-        frame_->toLatLon(so.estimate.mean, e.lat, e.lon);
-        const Ellipse el = ellipseOf(so.estimate.cov);
-        e.sigmaMajorM = el.sigmaMajor;
-        e.sigmaMinorM = el.sigmaMinor;
-        e.majorAxisDeg = el.majorAxisDeg;
-        e.state = so.state;
+        ObjectEstimate e =
+            rules::estimateOf(*frame_, so.estimate.mean, ellipseOf(so.estimate.cov), so.id, so.cls, so.state);
         e.observations = static_cast<int>(std::lround(so.estimate.count));
         std::set<std::string> ugvs;
         for (const auto& member : so.members) {
             ugvs.insert(staticTracks_[static_cast<std::size_t>(member.first)].ugv);
         }
         e.ugvs.assign(ugvs.begin(), ugvs.end());
-        e.zoneDiameterM = kStaticZoneDiameterM;
         threats.emplace_back(so.estimate.mean, s.objects.size());
         s.objects.push_back(std::move(e));
     }
@@ -512,17 +504,11 @@ Snapshot OriginalCorrelator::snapshot(double t) const
         if (!mo.alive) {
             continue;
         }
-        ObjectEstimate e;
-        e.id = mo.id;
-        e.cls = mo.cls;
-        frame_->toLatLon(mo.pos, e.lat, e.lon);
-        e.sigmaMajorM = config_.mobileSigmaM;
-        e.sigmaMinorM = config_.mobileSigmaM;
-        e.state = mo.state;
+        const Ellipse circle{config_.mobileSigmaM, config_.mobileSigmaM, 0.0};
+        ObjectEstimate e = rules::estimateOf(*frame_, mo.pos, circle, mo.id, mo.cls, mo.state);
         e.observations = mo.observations;
         e.ugvs = mo.ugvs;
         std::sort(e.ugvs.begin(), e.ugvs.end());
-        e.zoneDiameterM = kMobileZoneDiameterM;
         (mo.cls == OoiClass::NonCombatant ? civilians : threats).emplace_back(mo.pos, s.objects.size());
         s.objects.push_back(std::move(e));
     }

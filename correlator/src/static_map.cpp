@@ -388,15 +388,8 @@ void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Sna
                         [&](const StaticObject* older) { return sameObject(*older, so); })) {
             continue;
         }
-        ObjectEstimate e;
-        e.id = so.id;
-        e.cls = so.cls;
-        frame.toLatLon(so.mean, e.lat, e.lon);
         const Ellipse el = ellipseOf(so.info.inverse() + floorCovariance());
-        e.sigmaMajorM = el.sigmaMajor;
-        e.sigmaMinorM = el.sigmaMinor;
-        e.majorAxisDeg = el.majorAxisDeg;
-        e.state = so.state;
+        ObjectEstimate e = rules::estimateOf(frame, so.mean, el, so.id, so.cls, so.state);
         e.observations = static_cast<int>(so.observations);
         std::set<std::string> names;
         bool sustained = false; // a track that saw it twice: clutter falls on an object once per track
@@ -408,7 +401,6 @@ void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Sna
             continue;
         }
         e.ugvs.assign(names.begin(), names.end());
-        e.zoneDiameterM = kStaticZoneDiameterM;
         published.push_back(&so);
         threats.emplace_back(so.mean, s.objects.size());
         s.objects.push_back(std::move(e));

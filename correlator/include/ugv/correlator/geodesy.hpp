@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 #include <GeographicLib/LocalCartesian.hpp>
 
+#include "ugv/correlator/measurement_model.hpp"
+
 namespace ugv::correlator {
 
 class LocalFrame {
@@ -39,9 +41,7 @@ private:
 /// The point at `rangeM` along compass azimuth `azimuthDeg` from `from` (east-north plane).
 [[nodiscard]] inline Eigen::Vector2d project(const Eigen::Vector2d& from, double azimuthDeg, double rangeM)
 {
-    constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-    const double a = azimuthDeg * kDegToRad;
-    return from + rangeM * Eigen::Vector2d(std::sin(a), std::cos(a));
+    return from + rangeM * rayAt(azimuthDeg * kRadPerDeg);
 }
 
 } // namespace ugv::correlator

@@ -4,7 +4,7 @@
 /// The range-bearing measurement model of mode `pose-corrected`, written once for association, the pose-error
 /// solver and noise learning: an observation stored in its UGV's reported frame, the ray it points along, its
 /// noise (range sigma a + b r along the ray, r x bearing sigma across it) and the statistical distance used by
-/// every gate. (Mode `original` projects with geodesy.hpp's project() and has no covariance model.)
+/// every gate. Mode `original` projects along the same ray (geodesy.hpp's project()) and has no covariance model.
 ///
 /// Thread-safety: value types and pure functions, reentrant. RT-safe: yes.
 

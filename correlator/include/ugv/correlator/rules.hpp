@@ -1,7 +1,7 @@
 #pragma once
 
 // Rules both correlator modes share (internal): which classes move, the initial confirmation, its inheritance on
-// merges, track keys, and the non-combatant alerts of a snapshot.
+// merges, track keys, a published object's common fields, and the non-combatant alerts of a snapshot.
 
 #include <string>
 #include <utility>
@@ -9,6 +9,8 @@
 
 #include <Eigen/Core>
 
+#include "ugv/correlator/gaussian_mixture.hpp"
+#include "ugv/correlator/geodesy.hpp"
 #include "ugv/correlator/messages.hpp"
 
 namespace ugv::correlator::rules {
@@ -36,6 +38,23 @@ inline Confirmation inherit(Confirmation kept, Confirmation absorbed) noexcept
 inline std::string trackKey(const std::string& ugv, const std::string& track)
 {
     return ugv + '\x1f' + track;
+}
+
+/// A published object as both modes fill it: id, class, confirmation, position (local frame -> WGS84), error
+/// ellipse and the safety zone of its class; the caller adds the observation count and the sources.
+inline ObjectEstimate estimateOf(const LocalFrame& frame, const Eigen::Vector2d& position, const Ellipse& ellipse,
+                                 const std::string& id, OoiClass cls, Confirmation state)
+{
+    ObjectEstimate e;
+    e.id = id;
+    e.cls = cls;
+    frame.toLatLon(position, e.lat, e.lon);
+    e.sigmaMajorM = ellipse.sigmaMajor;
+    e.sigmaMinorM = ellipse.sigmaMinor;
+    e.majorAxisDeg = ellipse.majorAxisDeg;
+    e.state = state;
+    e.zoneDiameterM = isMobileClass(cls) ? kMobileZoneDiameterM : kStaticZoneDiameterM;
+    return e;
 }
 
 /// (position in the local frame, index in snapshot.objects)

@@ -1,0 +1,110 @@
+// Parts of mode pose-corrected on their own: the measurement model (rays, noise, information) and ObjectIds (ids
+// in creation order, merges followed, erased ids gone). The rules they carry out are tested through
+// PoseCorrectedCorrelator in pose_corrected_correlator_test.cpp.
+
+#include "ugv/correlator/measurement_model.hpp"
+#include "ugv/correlator/object_ids.hpp"
+
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include "ugv/correlator/geodesy.hpp"
+
+namespace ugv::correlator {
+namespace {
+
+constexpr double kTolerance = 1e-12;
+
+TEST(MeasurementModel, RaysAreCompassDirectionsAndAcrossIsAQuarterTurnLeft)
+{
+    const Eigen::Vector2d north = rayAt(0.0);
+    const Eigen::Vector2d east = rayAt(90.0 * kRadPerDeg);
+
+    EXPECT_NEAR(north.x(), 0.0, kTolerance);
+    EXPECT_NEAR(north.y(), 1.0, kTolerance);
+    EXPECT_NEAR(east.x(), 1.0, kTolerance);
+    EXPECT_NEAR(east.y(), 0.0, kTolerance);
+    EXPECT_NEAR((acrossOf(north) - Eigen::Vector2d(1.0, 0.0)).norm(), 0.0, kTolerance);
+}
+
+TEST(MeasurementModel, OriginalProjectsAlongTheSameRay)
+{
+    const Eigen::Vector2d from(3.0, -2.0);
+    constexpr double kAzimuthDeg = 37.0;
+    constexpr double kRangeM = 12.5;
+
+    const Eigen::Vector2d p = project(from, kAzimuthDeg, kRangeM);
+
+    EXPECT_EQ(p, Eigen::Vector2d(from + kRangeM * rayAt(kAzimuthDeg * kRadPerDeg)));
+}
+
+TEST(MeasurementModel, NoiseGrowsWithRangeAndScales)
+{
+    const RangeBearingNoise sut{0.1, 0.01, 2.0};
+    constexpr double kRangeM = 20.0;
+
+    EXPECT_NEAR(sut.alongSigma(kRangeM), 0.3, kTolerance);
+    EXPECT_NEAR(sut.alongSigma(kRangeM, 2.0), 0.6, kTolerance);
+    EXPECT_NEAR(sut.acrossSigma(kRangeM), kRangeM * 2.0 * kRadPerDeg, kTolerance);
+}
+
+TEST(MeasurementModel, RayInformationIsTheInverseOfTheRayCovariance)
+{
+    const Eigen::Vector2d ray = rayAt(25.0 * kRadPerDeg);
+    const Eigen::Vector2d across = acrossOf(ray);
+    constexpr double kAlong = 0.3;
+    constexpr double kAcross = 0.7;
+    const Eigen::Matrix2d cov =
+        kAlong * kAlong * ray * ray.transpose() + kAcross * kAcross * across * across.transpose();
+
+    const Eigen::Matrix2d product = rayInformation(ray, kAlong, kAcross) * cov;
+
+    EXPECT_NEAR((product - Eigen::Matrix2d::Identity()).norm(), 0.0, 1e-9);
+    EXPECT_NEAR(mahalanobis2(kAcross * across, cov), 1.0, 1e-9);
+}
+
+TEST(ObjectIds, IssuedInCreationOrderAndFound)
+{
+    ObjectIds sut;
+
+    const ObjectIds::Issued first = sut.issue(true, 0);
+    const ObjectIds::Issued second = sut.issue(false, 4);
+
+    EXPECT_EQ(first.id, "ooi-1");
+    EXPECT_EQ(second.id, "ooi-2");
+    EXPECT_LT(first.order, second.order);
+    const auto found = sut.find("ooi-2");
+    ASSERT_TRUE(found.has_value());
+    EXPECT_FALSE(found->isStatic);
+    EXPECT_EQ(found->index, 4);
+}
+
+TEST(ObjectIds, AMergedIdLeadsToTheObjectThatAbsorbedItThroughAChain)
+{
+    ObjectIds sut;
+    const std::string a = sut.issue(true, 0).id;
+    const std::string b = sut.issue(true, 1).id;
+    const std::string c = sut.issue(true, 2).id;
+
+    sut.merge(c, b);
+    sut.merge(b, a);
+
+    const auto found = sut.find(c);
+    ASSERT_TRUE(found.has_value());
+    EXPECT_EQ(found->index, 0);
+}
+
+TEST(ObjectIds, ErasedAndUnknownIdsAreNotFound)
+{
+    ObjectIds sut;
+    const std::string a = sut.issue(true, 0).id;
+
+    sut.erase(a);
+
+    EXPECT_FALSE(sut.find(a).has_value());
+    EXPECT_FALSE(sut.find("ooi-42").has_value());
+    EXPECT_FALSE(sut.find("").has_value());
+}
+
+} // namespace
+} // namespace ugv::correlator
