@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -29,6 +31,77 @@ constexpr double kLineMinStepM = 0.3;          ///< a step along the line shorte
 constexpr double kLineMinBaselineS = 4.0;      ///< speed from history pairs at least this far apart (noise)...
 constexpr double kLineMaxBaselineS = 15.0;     ///< ...and at most this far (the longer, the more straddle a turn)
 constexpr double kLineMinSpeedSigmaMps = 0.03; ///< people do not walk at an exactly constant speed
+
+using History = std::vector<std::pair<double, Eigen::Vector2d>>;
+
+constexpr double kMadToSigma = 1.4826; ///< sigma of a normal distribution over its median absolute deviation
+
+double median(std::vector<double>& v)
+{
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+/// The principal axis of the history's positions: its centre, unit direction and rms width across it.
+/// @return false when the history is wider than kLineMaxWidthM (no line)
+bool principalAxis(const History& h, Eigen::Vector2d& centre, Eigen::Vector2d& u, double& width)
+{
+    centre = Eigen::Vector2d::Zero();
+    for (const auto& [ht, hp] : h) {
+        centre += hp;
+    }
+    centre /= static_cast<double>(h.size());
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (const auto& [ht, hp] : h) {
+        scatter += (hp - centre) * (hp - centre).transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter / static_cast<double>(h.size()));
+    width = std::sqrt(std::max(eig.eigenvalues()(0), 0.0));
+    if (width > kLineMaxWidthM) {
+        return false;
+    }
+    u = eig.eigenvectors().col(1);
+    return true;
+}
+
+/// Speeds along the line over pairs of samples kLineMinBaselineS..kLineMaxBaselineS apart. A pair that straddles
+/// a turn reads low and noise either way, but turns are a minority of pairs; their spread gives the uncertainty.
+std::vector<double> pairSpeeds(const History& h, const std::vector<double>& along)
+{
+    std::vector<double> speeds;
+    for (std::size_t i = 0, j = 0; i < h.size(); ++i) {
+        j = std::max(j, i + 1);
+        while (j < h.size() && h[j].first - h[i].first < kLineMinBaselineS) {
+            ++j;
+        }
+        if (j < h.size() && h[j].first - h[i].first <= kLineMaxBaselineS) {
+            speeds.push_back(std::abs(along[j] - along[i]) / (h[j].first - h[i].first));
+        }
+    }
+    return speeds;
+}
+
+/// A turn: consecutive steps in opposite directions. The ends [lo, hi]: beyond the extreme samples, where a pair
+/// of consecutive samples straddles a turn (both walked to the end and back at the line's speed).
+/// @return true when the history turns
+bool turnsBetweenEnds(const History& h, const std::vector<double>& along, double speed, double& lo, double& hi)
+{
+    bool reversed = false;
+    double lastStep = 0.0;
+    lo = *std::min_element(along.begin(), along.end());
+    hi = *std::max_element(along.begin(), along.end());
+    for (std::size_t i = 1; i < h.size(); ++i) {
+        const double step = along[i] - along[i - 1];
+        reversed = reversed || (step * lastStep < 0.0 && std::abs(step) > kLineMinStepM);
+        lastStep = std::abs(step) > kLineMinStepM ? step : lastStep;
+        const double dt = h[i].first - h[i - 1].first;
+        if (dt <= kLineMaxBaselineS) {
+            hi = std::max(hi, (along[i] + along[i - 1] + speed * dt) / 2.0);
+            lo = std::min(lo, (along[i] + along[i - 1] - speed * dt) / 2.0);
+        }
+    }
+    return reversed;
+}
 
 } // namespace
 
@@ -105,74 +178,35 @@ void MobileTracker::fitLine(Mobile& m)
 {
     Line& line = m.line;
     line.valid = false;
-    const auto& h = m.history;
+    const History& h = m.history;
     if (h.size() < kLineMinSamples || h.back().first - h.front().first < kLineMinSpanS) {
         return;
     }
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (const auto& [ht, hp] : h) {
-        centre += hp;
-    }
-    centre /= static_cast<double>(h.size());
-    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-    for (const auto& [ht, hp] : h) {
-        scatter += (hp - centre) * (hp - centre).transpose();
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter / static_cast<double>(h.size()));
-    const double width = std::sqrt(std::max(eig.eigenvalues()(0), 0.0));
-    if (width > kLineMaxWidthM) {
+    Eigen::Vector2d centre;
+    Eigen::Vector2d u;
+    double width = 0.0;
+    if (!principalAxis(h, centre, u, width)) {
         return;
     }
-    const Eigen::Vector2d u = eig.eigenvectors().col(1);
     std::vector<double> along(h.size());
     for (std::size_t i = 0; i < h.size(); ++i) {
         along[i] = u.dot(h[i].second - centre);
     }
-    // Speed: the median over pairs of samples kLineMinBaselineS..kLineMaxBaselineS apart. A pair that straddles
-    // a turn reads low and noise either way, but turns are a minority of pairs; the spread gives its uncertainty.
-    std::vector<double> speeds;
-    for (std::size_t i = 0, j = 0; i < h.size(); ++i) {
-        j = std::max(j, i + 1);
-        while (j < h.size() && h[j].first - h[i].first < kLineMinBaselineS) {
-            ++j;
-        }
-        if (j < h.size() && h[j].first - h[i].first <= kLineMaxBaselineS) {
-            speeds.push_back(std::abs(along[j] - along[i]) / (h[j].first - h[i].first));
-        }
-    }
+    std::vector<double> speeds = pairSpeeds(h, along);
     if (speeds.size() < kLineMinSpeedPairs) {
         return;
     }
-    const auto median = [](std::vector<double>& v) {
-        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-        return v[v.size() / 2];
-    };
     const double speed = median(speeds);
     std::vector<double> deviations;
     deviations.reserve(speeds.size());
     for (const double v : speeds) {
         deviations.push_back(std::abs(v - speed));
     }
-    constexpr double kMadToSigma = 1.4826; // of a normal distribution
     const double speedSigma = std::max(kLineMinSpeedSigmaMps, kMadToSigma * median(deviations) /
                                                                   std::sqrt(static_cast<double>(speeds.size())));
-    // A turn: consecutive steps in opposite directions. The ends: beyond the extreme samples, where a pair of
-    // consecutive samples straddles a turn (both walked to the end and back at the line's speed).
-    bool reversed = false;
-    double lastStep = 0.0;
-    double lo = *std::min_element(along.begin(), along.end());
-    double hi = *std::max_element(along.begin(), along.end());
-    for (std::size_t i = 1; i < h.size(); ++i) {
-        const double step = along[i] - along[i - 1];
-        reversed = reversed || (step * lastStep < 0.0 && std::abs(step) > kLineMinStepM);
-        lastStep = std::abs(step) > kLineMinStepM ? step : lastStep;
-        const double dt = h[i].first - h[i - 1].first;
-        if (dt <= kLineMaxBaselineS) {
-            hi = std::max(hi, (along[i] + along[i - 1] + speed * dt) / 2.0);
-            lo = std::min(lo, (along[i] + along[i - 1] - speed * dt) / 2.0);
-        }
-    }
-    if (!reversed || hi - lo < kLineMinLengthM) {
+    double lo = 0.0;
+    double hi = 0.0;
+    if (!turnsBetweenEnds(h, along, speed, lo, hi) || hi - lo < kLineMinLengthM) {
         return;
     }
     line = Line{true, centre, u, lo, hi, speed, speedSigma, width};
