@@ -1,6 +1,7 @@
 #include "ugv/bringup/calibration_file.hpp"
 
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <set>
 #include <sstream>
@@ -18,7 +19,7 @@ using vision::StereoCalibration;
 constexpr const char* kRecalibrate = "re-run 'ugvsense calibrate' to write a new calibration file";
 /// A calibration is about 3 KB and 3 levels deep (a key, an opencv-matrix, its data list). OpenCV 4.6's reader has no
 /// nesting limit (a deep file overflows the stack) and wraps integers modulo 2^32: the text is checked first.
-constexpr YamlLimits kCalibrationLimits{kMaxCalibrationBytes, 8, true};
+constexpr YamlLimits kCalibrationLimits{kMaxCalibrationBytes, 8, true, true};
 
 std::string numberText(double value)
 {
@@ -403,6 +404,10 @@ Result<vision::StereoCalibration, Error> parseText(const std::string& text, cons
         return readFile(reader);
     } catch (const cv::Exception& e) {
         return Unexpected(parseError(e, where, fix));
+    } catch (const std::exception& e) {
+        // OpenCV 4.6's YAML reader also lets std::length_error out of some broken tags (a node cut inside
+        // "!!opencv-matrix"; found by the calibration fuzz target, test/fuzz/corpus/calibration/crash-*).
+        return Unexpected(Error{where, std::string("not valid YAML: OpenCV's reader failed (") + e.what() + ")", fix});
     }
 }
 

@@ -2,8 +2,10 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
+#include <string>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -193,6 +195,17 @@ public:
             return 0.0;
         }
         return *v;
+    }
+    /// A count: a whole number in 0..INT_MAX (a JSON number beyond it is refused, not wrapped or undefined).
+    int count(const char* key)
+    {
+        const double v = num(key);
+        if (!(v >= 0.0 && v <= static_cast<double>(std::numeric_limits<int>::max()) && v == std::floor(v))) {
+            keep(lineError(std::string("'") + key + "' is " + std::to_string(v) + ", not a count 0.." +
+                           std::to_string(std::numeric_limits<int>::max())));
+            return 0;
+        }
+        return static_cast<int>(v);
     }
     std::string str(const char* key)
     {
@@ -464,7 +477,7 @@ Result<Snapshot, Error> parseSnapshotLine(std::string_view line)
         e.sigmaMinorM = f.num("sigma_minor_m");
         e.majorAxisDeg = f.num("major_axis_deg");
         const std::string state = f.str("state");
-        e.observations = static_cast<int>(f.num("observations"));
+        e.observations = f.count("observations");
         e.zoneDiameterM = f.num("zone_diameter_m");
         if (f.error()) {
             return Unexpected(*f.error());

@@ -1,15 +1,21 @@
 #include "ugv/bringup/yaml_guard.hpp"
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <string>
 #include <vector>
 
 namespace ugv::bringup {
 namespace {
 
 constexpr const char* kDamagedFix = "check that this is the right file; if it is, it is damaged: write it again";
+constexpr const char* kCalibrationShape =
+    "a calibration is 'key: value' lines, matrices as 'ugvsense calibrate' writes them, and one-line maps "
+    "(README, \"Calibrating a stereo rig\"); write it again in that form";
 
 bool isBlank(char c)
 {
@@ -67,7 +73,13 @@ public:
         }
         const std::size_t indent = text.find_first_not_of(" \t\r");
         if (indent == std::string_view::npos || text[indent] == '#') {
-            return {};
+            return limits_.openCvSubset ? openCvLine(text.substr(0, text.find_last_not_of('\r') + 1))
+                                        : Result<void, Error>{};
+        }
+        if (limits_.openCvSubset && indent == 0 && text.substr(0, 3) == "---" &&
+            text.find_first_not_of(" \t\r", 3) != npos && text[text.find_first_not_of(" \t\r", 3)] != '#') {
+            return fail("text after the document start '---' on its line (OpenCV's reader can loop forever on it)",
+                        "put '---' on a line of its own; " + std::string(kDamagedFix));
         }
         if (flow_ == 0) { // a block line: its indentation is one level below every smaller one before it
             while (!indents_.empty() && indents_.back() >= indent) {
@@ -84,7 +96,13 @@ public:
                 i == indent || isBlank(text[i - 1]) || std::string_view("[{,").find(text[i - 1]) != npos;
             // A quote opens a quoted scalar only at a token's start ("x'y" is plain text: what follows still counts).
             if ((c == '"' || c == '\'') && startsToken) {
+                const std::size_t open = i;
                 i = closingQuote(text, i);
+                if (limits_.openCvSubset && i == text.size()) {
+                    return fail(std::string("the quoted text at column ") + std::to_string(open + 1) +
+                                    " does not end on its line (OpenCV's reader can loop forever on it)",
+                                "close the quote on the same line; " + std::string(kDamagedFix));
+                }
                 indicatorsOnly = false;
                 continue;
             }
@@ -124,11 +142,145 @@ public:
                             kDamagedFix);
             }
         }
+        if (limits_.openCvSubset) {
+            return openCvLine(text.substr(0, text.find_last_not_of('\r') + 1));
+        }
         return {};
     }
 
 private:
     static constexpr std::size_t npos = std::string_view::npos;
+
+    /// The checks of YamlLimits::openCvSubset that look at a whole line: printable ASCII, the line shapes of a
+    /// calibration, matrix sizes.
+    Result<void, Error> openCvLine(std::string_view text)
+    {
+        for (std::size_t i = 0; i < text.size(); ++i) {
+            const auto byte = static_cast<unsigned char>(text[i]);
+            if ((byte < 0x20U && byte != '\t' && byte != '\r') || byte >= 0x7FU) {
+                char hex[8];
+                std::snprintf(hex, sizeof(hex), "0x%02X", byte);
+                return fail(std::string("byte ") + hex + " at column " + std::to_string(i + 1) +
+                                " is not printable ASCII (a calibration is ASCII text)",
+                            kDamagedFix);
+            }
+        }
+        std::string_view line = withoutComment(text);
+        while (!line.empty() && isBlank(line.back())) {
+            line.remove_suffix(1);
+        }
+        const std::size_t start = line.find_first_not_of(" \t");
+        if (start == npos) {
+            return {};
+        }
+        line.remove_prefix(start);
+        if (inFlowSequence_) { // the numbers of a matrix's data, over several lines
+            return flowSequenceRest(line);
+        }
+        if ((start == 0 && (line == "---" || line.rfind("%YAML:", 0) == 0))) {
+            return {};
+        }
+        std::size_t key = 0;
+        while (key < line.size() && (std::isalnum(static_cast<unsigned char>(line[key])) != 0 || line[key] == '_')) {
+            ++key;
+        }
+        if (key == 0 || key == line.size() || line[key] != ':' || (key + 1 < line.size() && line[key + 1] != ' ')) {
+            return fail("'" + std::string(line) + "' is not a 'key: value' line of a calibration", kCalibrationShape);
+        }
+        const std::string_view name = line.substr(0, key);
+        std::string_view value = line.substr(key + 1);
+        value.remove_prefix(std::min(value.size(), value.find_first_not_of(' ')));
+        if (value.empty() || value == "!!opencv-matrix" || isPlain(value) || isQuoted(value) || isFlowMap(value)) {
+            if ((name == "rows" || name == "cols") && !isMatrixSide(value)) {
+                return fail("matrix size '" + std::string(line) + "' is not a number up to " +
+                                std::to_string(kMaxMatrixSide) + " (a calibration's matrices are 4 x 4 at most)",
+                            kDamagedFix);
+            }
+            return {};
+        }
+        if (value.front() == '[') {
+            inFlowSequence_ = true;
+            return flowSequenceRest(value.substr(1));
+        }
+        return fail("the value of '" + std::string(name) +
+                        "' is not a number, word, quoted text, matrix or "
+                        "one-line { key: value } map",
+                    kCalibrationShape);
+    }
+
+    /// The rest of a flow sequence of numbers: numbers and commas, up to its ']' (then nothing).
+    Result<void, Error> flowSequenceRest(std::string_view rest)
+    {
+        for (std::size_t i = 0; i < rest.size(); ++i) {
+            const char c = rest[i];
+            if (c == ']') {
+                inFlowSequence_ = false;
+                if (rest.find_first_not_of(' ', i + 1) != npos) {
+                    return fail("text after a matrix's closing ']'", kCalibrationShape);
+                }
+                return {};
+            }
+            if (!(isNumberChar(c) || c == ',' || isBlank(c))) {
+                return fail(std::string("'") + c + "' in a matrix's data (numbers and commas only)", kCalibrationShape);
+            }
+        }
+        return {};
+    }
+
+    static bool isNumberChar(char c)
+    {
+        return isDigit(c) || std::string_view("+-.eEinfatINFAT").find(c) != npos; // also .nan and .inf
+    }
+    static bool isPlain(std::string_view v)
+    {
+        return std::all_of(v.begin(), v.end(), [](char c) {
+            return std::isalnum(static_cast<unsigned char>(c)) != 0 || std::string_view("_.+-").find(c) != npos;
+        });
+    }
+    static bool isQuoted(std::string_view v)
+    {
+        return v.size() >= 2 && (v.front() == '"' || v.front() == '\'') && closingQuote(v, 0) == v.size() - 1;
+    }
+    /// `{ key: value, key: value }` on one line, plain keys and values.
+    static bool isFlowMap(std::string_view v)
+    {
+        if (v.size() < 2 || v.front() != '{' || v.back() != '}') {
+            return false;
+        }
+        std::string_view items = v.substr(1, v.size() - 2);
+        while (!items.empty()) {
+            const std::size_t comma = items.find(',');
+            std::string_view item = items.substr(0, comma);
+            const std::size_t colon = item.find(": ");
+            const auto trim = [](std::string_view t) {
+                const std::size_t b = t.find_first_not_of(' ');
+                return b == npos ? std::string_view() : t.substr(b, t.find_last_not_of(' ') - b + 1);
+            };
+            if (colon == npos || trim(item.substr(0, colon)).empty() || !isPlain(trim(item.substr(0, colon))) ||
+                trim(item.substr(colon + 2)).empty() || !isPlain(trim(item.substr(colon + 2)))) {
+                return false;
+            }
+            items = comma == npos ? std::string_view() : items.substr(comma + 1);
+        }
+        return true;
+    }
+    static bool isMatrixSide(std::string_view v)
+    {
+        return !v.empty() && v.size() <= 2 && std::all_of(v.begin(), v.end(), isDigit) &&
+               std::stoi(std::string(v)) <= kMaxMatrixSide;
+    }
+    /// The line without a trailing comment (a '#' after a blank, outside quotes).
+    static std::string_view withoutComment(std::string_view text)
+    {
+        for (std::size_t i = 0; i < text.size(); ++i) {
+            if ((text[i] == '"' || text[i] == '\'') && (i == 0 || isBlank(text[i - 1]))) {
+                i = closingQuote(text, i);
+            } else if (text[i] == '#' && (i == 0 || isBlank(text[i - 1]))) {
+                return text.substr(0, i);
+            }
+        }
+        return text;
+    }
 
     Unexpected<Error> fail(const std::string& what, const std::string& fix) const
     {
@@ -139,6 +291,7 @@ private:
     YamlLimits limits_;
     std::size_t number_ = 0;
     int flow_ = 0;                     ///< open [ and { (across lines)
+    bool inFlowSequence_ = false;      ///< openCvSubset: inside a matrix's data [ ... ] (across lines)
     std::vector<std::size_t> indents_; ///< the indentation of the enclosing block lines
 };
 

@@ -21,11 +21,19 @@ bool cpuRuns(const char* level) noexcept
 {
 #if defined(__x86_64__)
     __builtin_cpu_init();
+#if defined(__clang__) // clang 14 knows the features, not the level names (the fuzz preset builds with it)
+    const bool v2 = __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
+    const bool v3 =
+        v2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
+#else
+    const bool v2 = __builtin_cpu_supports("x86-64-v2") != 0;
+    const bool v3 = __builtin_cpu_supports("x86-64-v3") != 0;
+#endif
     if (std::strcmp(level, "x86-64-v3") == 0) {
-        return __builtin_cpu_supports("x86-64-v3") != 0;
+        return v3;
     }
     if (std::strcmp(level, "x86-64-v2") == 0) {
-        return __builtin_cpu_supports("x86-64-v2") != 0;
+        return v2;
     }
 #endif
     (void)level;

@@ -323,5 +323,22 @@ TEST(CorrelatorFeedHostile, SnapshotLinesAreCheckedAsInputLines)
     EXPECT_TRUE(parseSnapshotLine(R"({"t": 1, "objects": [], "alerts": []})").has_value());
 }
 
+TEST(CorrelatorFeedHostile, AnObservationCountBeyondIntIsRefusedNotConverted)
+{
+    // The correlator_line fuzz target's find (test/fuzz/corpus/correlator_line/crash-observations-beyond-int.json):
+    // 3.8e124 observations was cast to int (undefined behaviour).
+    const std::string object = R"({"id": "c-1", "class": "static", "lat": -34.9, "lon": 138.6, "sigma_major_m": 1,
+        "sigma_minor_m": 0.5, "major_axis_deg": 5, "state": "unknown", "ugvs": ["ugv-1"], "zone_diameter_m": 20,
+        "observations": )";
+    for (const char* bad : {"3.8e124", "-1", "2147483648", "2.5"}) {
+        const auto parsed = parseSnapshotLine(R"({"t": 1, "alerts": [], "objects": [)" + object + bad + "}]}");
+        ASSERT_FALSE(parsed.has_value()) << bad;
+        EXPECT_NE(parsed.error().what.find("'observations' is"), std::string::npos) << parsed.error().message();
+    }
+    const auto good = parseSnapshotLine(R"({"t": 1, "alerts": [], "objects": [)" + object + "2147483647}]}");
+    ASSERT_TRUE(good.has_value()) << good.error().message();
+    EXPECT_EQ(good->objects.at(0).observations, 2147483647);
+}
+
 } // namespace
 } // namespace ugv::bringup

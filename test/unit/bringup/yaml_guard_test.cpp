@@ -7,12 +7,18 @@
 namespace ugv::bringup {
 namespace {
 
-constexpr YamlLimits kLimits{1024, 4, true};
+constexpr YamlLimits kLimits{1024, 4, true, false};
+constexpr YamlLimits kOpenCvLimits{1024, 4, true, true};
 
-std::string errorOf(const std::string& text)
+std::string errorOf(const std::string& text, const YamlLimits& limits = kLimits)
 {
-    const auto checked = checkYamlText(text, "t.yaml", kLimits);
+    const auto checked = checkYamlText(text, "t.yaml", limits);
     return checked ? std::string() : checked.error().message();
+}
+
+std::string openCvErrorOf(const std::string& text)
+{
+    return errorOf(text, kOpenCvLimits);
 }
 
 TEST(YamlGuard, AWrittenCalibrationIsWithinTheLimits)
@@ -46,6 +52,35 @@ TEST(YamlGuard, IntegersBeyondInt32AreRefusedOthersPass)
               std::string::npos);
     EXPECT_NE(errorOf("a: -2147483649\n").find("integer -2147483649"), std::string::npos);
     EXPECT_NE(errorOf("a: [1, 00000000004294967536]\n").find("integer 00000000004294967536"), std::string::npos);
+}
+
+TEST(YamlGuard, WhatOpenCVLoopsForeverOnIsRefused)
+{
+    // OpenCV 4.6 never returns from these files (the calibration fuzz target's timeouts, minimised).
+    EXPECT_NE(openCvErrorOf("%YAML:1.0\n---a: 1\n--x-\nc\n").find("t.yaml:2: text after the document start '---'"),
+              std::string::npos);
+    EXPECT_NE(openCvErrorOf("%YAML:1.0\n   dt: d\n\"a  -.\n03\n").find("t.yaml:3: the quoted text at column 1"),
+              std::string::npos);
+    EXPECT_NE(openCvErrorOf("%YAML:1.\n x:3\nihc-\n.").find("t.yaml:2: 'x:3' is not a 'key: value' line"),
+              std::string::npos);
+    // ... and what makes it allocate without bound (a 51 GB matrix).
+    EXPECT_NE(
+        openCvErrorOf("K: !!opencv-matrix\n   rows: 3\n   cols: 100000\n").find("t.yaml:3: matrix size 'cols: 100000'"),
+        std::string::npos);
+    EXPECT_NE(openCvErrorOf("K: !!opencv-matrix\n   rows: x\n").find("t.yaml:2: matrix size 'rows: x'"),
+              std::string::npos);
+    EXPECT_NE(openCvErrorOf("K: !!opencv-matrix\n   cols:\xFF 3\n").find("t.yaml:2: byte 0xFF at column 9"),
+              std::string::npos);
+    EXPECT_NE(openCvErrorOf("K: [ 1, 2,\n  3, x ]\n").find("t.yaml:2: 'x' in a matrix's data"), std::string::npos);
+    // What a calibration is: both forms pass.
+    EXPECT_EQ(openCvErrorOf("%YAML:1.0\n---\n# a comment\nschema_version: 1\nrectified: 1\nfx: 546.0  # px\n"
+                            "note: \"it's # not a comment\"\nname: 'a b'\n"
+                            "mount: { height_m: 0.59, pitch_deg: -2.5, roll_deg: 0.0 }\n"
+                            "K1: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 5.4e+02, 0., 3.2e+02,\n"
+                            "       0., -1.5e-01, .inf, 0., 0., 1. ]\nmount2:\n   height_m: 0.5\n---\n"),
+              "");
+    // Only for OpenCV: yaml-cpp (the config) reads "--- a: 1" as YAML says.
+    EXPECT_EQ(errorOf("--- a: 1\n"), "");
 }
 
 TEST(YamlGuard, SizeAndNulAreRefused)

@@ -2,6 +2,7 @@
 
 #include "ugv/bringup/correlator_dds.hpp"
 
+#include <cstring>
 #include <limits>
 #include <string>
 #include <variant>
@@ -155,6 +156,62 @@ TEST(CorrelatorDds, SnapshotRoundTripsWithObjectsAndAlerts)
     EXPECT_EQ(sut->alerts[0].nonCombatantId, "ooi-2");
     EXPECT_EQ(sut->alerts[0].objectId, "ooi-1");
     EXPECT_EQ(sut->alerts[0].distanceM, 12.5);
+}
+
+TEST(CorrelatorDds, ASampleDeclaringBillionsOfStringsIsRefusedWithoutAllocatingThem)
+{
+    // A correlated list whose object names one UGV, serialized as the bus sends it; then its UGV count (uint32 1,
+    // followed by the string "ugv-1": length 6 with its NUL) is made 2^31 - 1. fastddsgen 2.x's deserialize()
+    // resized to that count (68 GB: an out-of-memory crash of any reader, found by test/fuzz's dds_sample target);
+    // ipc/idl/harden_generated.cmake bounds it, and the sample is refused as a short one is.
+    Snapshot in;
+    in.t = 1.0;
+    ObjectEstimate a;
+    a.id = "ooi-1";
+    a.lat = -34.93;
+    a.lon = 138.63;
+    a.ugvs = {"ugv-1"};
+    in.objects = {a};
+    msg::CorrelatedOoiList sample;
+    toDds(in, "gcs", 1, 1, 0, sample);
+    msg::CorrelatedOoiListPubSubType type;
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&sample)());
+    ASSERT_TRUE(type.serialize(&sample, &payload));
+    const std::string bytes(reinterpret_cast<const char*>(payload.data), payload.length);
+    const std::string countThenName("\x01\x00\x00\x00\x06\x00\x00\x00ugv-1", 13);
+    const std::size_t at = bytes.find(countThenName);
+    ASSERT_NE(at, std::string::npos) << "the serialized UGV list was not found";
+    const unsigned char huge[4] = {0xFF, 0xFF, 0xFF, 0x7F}; // little-endian 2^31 - 1
+    std::memcpy(payload.data + at, huge, sizeof(huge));
+
+    msg::CorrelatedOoiList out;
+    EXPECT_FALSE(type.deserialize(&payload, &out));
+
+    // The unmodified sample still reads.
+    std::memcpy(payload.data + at, countThenName.data(), 4);
+    ASSERT_TRUE(type.deserialize(&payload, &out));
+    ASSERT_EQ(out.objects().size(), 1U);
+    EXPECT_EQ(out.objects()[0].ugvs().size(), 1U);
+}
+
+TEST(CorrelatorDds, ASampleWithABadEncapsulationIsRefusedNotThrown)
+{
+    // The dds_sample fuzz target's second find: an unknown CDR encapsulation (the payload's first two bytes) made
+    // fastcdr throw BadParamException, which the generated deserialize() let out of the reader (std::terminate).
+    PoseCorrection in;
+    in.t = 3.0;
+    in.ugv = "ugv-1";
+    msg::PoseCorrection sample;
+    toDds(in, "gcs", 1, sample);
+    msg::PoseCorrectionPubSubType type;
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&sample)());
+    ASSERT_TRUE(type.serialize(&sample, &payload));
+    payload.data[1] = 0x7F; // representation identifier 0x007F: no CDR kind
+
+    msg::PoseCorrection out;
+    bool accepted = true;
+    EXPECT_NO_THROW(accepted = type.deserialize(&payload, &out));
+    EXPECT_FALSE(accepted);
 }
 
 TEST(CorrelatorDds, HostileSamplesGiveAnErrorNamingTopicAndSender)

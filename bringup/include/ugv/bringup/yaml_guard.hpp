@@ -8,7 +8,12 @@
 /// - text longer than `maxBytes`, or holding a NUL byte (not a text file);
 /// - nesting deeper than `maxDepth`: block indentation levels, `key: key:` and `- -` on one line, `[` and `{` all
 ///   count (a calibration is 3 deep, the config 3; an over-estimate never under-counts);
-/// - with `refuseWideIntegers`, a plain integer outside int32 (what OpenCV would wrap).
+/// - with `refuseWideIntegers`, a plain integer outside int32 (what OpenCV would wrap);
+/// - with `openCvSubset`, what OpenCV 4.6's reader loops forever on (each found by the calibration fuzz target,
+///   test/fuzz, and kept in its corpus): text after a `---` on its line (`---a: 1`, then a line `--x`), and a quoted
+///   scalar that does not close on its line (`"a -.` then more lines); and what makes it allocate without bound:
+///   a matrix's `rows:` or `cols:` above kMaxMatrixSide (a 51 GB matrix), or a byte that is not printable ASCII (a
+///   `cols:` with bytes 0xFF before its 3 read as such a size). A calibration needs none of these.
 ///
 /// Thread-safety: reentrant. RT-safe: no.
 
@@ -21,10 +26,14 @@
 
 namespace ugv::bringup {
 
+/// The largest `rows:`/`cols:` of a matrix in the OpenCV subset (a calibration's are 4 at most, 14 for distortion).
+inline constexpr int kMaxMatrixSide = 64;
+
 struct YamlLimits {
     std::size_t maxBytes = 1U << 20; ///< [bytes]
     int maxDepth = 32;               ///< nesting levels
     bool refuseWideIntegers = false; ///< plain integers outside int32 are errors (for OpenCV's FileStorage)
+    bool openCvSubset = false;       ///< refuse what OpenCV's FileStorage hangs on (see above)
 };
 
 /// @param[in] text   the YAML text

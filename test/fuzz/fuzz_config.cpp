@@ -1,0 +1,16 @@
+// Fuzz target: the service config (YAML text) as ugvsensed and `ugvsense check-config` read it.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "ugv/bringup/config.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
+{
+    const std::string text(reinterpret_cast<const char*>(data), size);
+    const auto parsed = ugv::bringup::parseConfig(text, "fuzz.yaml", "/nonexistent");
+    if (parsed) {
+        (void)ugv::bringup::formatConfig(*parsed);
+    }
+    return 0;
+}
