@@ -277,23 +277,24 @@ std::size_t LogDrain::drainOnce()
     constexpr std::int64_t kNsPerSecond = 1'000'000'000;
     constexpr int kFractionDigits = 9;
     std::size_t written = 0;
+    const auto write = [this](const std::string& line) { writer_ != nullptr ? writer_(line) : writeLogLine(line); };
     for (std::size_t i = 0; i < channelCount_; ++i) {
         RtLogChannel& channel = *channels_[i];
         RtLogRecord record;
         while (channel.tryPop(record)) {
             std::string fraction = std::to_string(record.timestampNs % kNsPerSecond);
             fraction.insert(0, static_cast<std::size_t>(kFractionDigits) - fraction.size(), '0');
-            writeLogLine(std::string(journalPrefix(record.level)) + "[" + toString(record.category) + "] " +
-                         toString(record.level) + ": " + formatRtMessage(record.format, record.args) +
-                         " [t=" + std::to_string(record.timestampNs / kNsPerSecond) + "." + fraction + "]\n");
+            write(std::string(journalPrefix(record.level)) + "[" + toString(record.category) + "] " +
+                  toString(record.level) + ": " + formatRtMessage(record.format, record.args) +
+                  " [t=" + std::to_string(record.timestampNs / kNsPerSecond) + "." + fraction + "]\n");
             ++written;
         }
         const std::uint64_t dropped = channel.dropped();
         if (dropped != reportedDrops_[i]) {
-            writeLogLine(std::string(journalPrefix(LogLevel::Warn)) + "[platform] warn: RT log channel '" +
-                         channel.name() + "' dropped " + std::to_string(dropped - reportedDrops_[i]) +
-                         " record(s) (total " + std::to_string(dropped) + "); its ring holds " +
-                         std::to_string(kRtLogChannelCapacity) + ": log less often or drain more often\n");
+            write(std::string(journalPrefix(LogLevel::Warn)) + "[platform] warn: RT log channel '" + channel.name() +
+                  "' dropped " + std::to_string(dropped - reportedDrops_[i]) + " record(s) (total " +
+                  std::to_string(dropped) + "); its ring holds " + std::to_string(kRtLogChannelCapacity) +
+                  ": log less often or drain more often\n");
             reportedDrops_[i] = dropped;
         }
     }
@@ -331,7 +332,14 @@ void LogDrain::run(std::chrono::milliseconds period)
     const sched_param normal{};
     static_cast<void>(::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &normal)); // lowering cannot be refused
     while (!stopRequested_.load()) {
-        drainOnce();
+        try {
+            drainOnce();
+        } catch (const std::exception&) {
+            // Formatting allocates; a failure here must not end the service (the thread would call terminate).
+            // A fixed line, written without allocating, says so; the record being written is lost.
+            failures_.fetch_add(1, std::memory_order_relaxed);
+            writeLogLine("[platform] error: the log drain failed to format or write a record (lost); it goes on\n");
+        }
         std::this_thread::sleep_for(period);
     }
 }

@@ -5,9 +5,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdlib>
+#include <new>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -348,6 +351,45 @@ TEST(LogDrain, ThreadDrainsAProducerThreadInOrderAndAccountsForEveryRecord)
     EXPECT_TRUE(inOrder);
     EXPECT_GT(written, 0);
     EXPECT_EQ(written + static_cast<std::int64_t>(channel.dropped()), kRecords);
+}
+
+std::atomic<int> gThrowingWrites{0};
+
+/// A log writer that throws for its first gThrowingWrites calls, then writes as the drain does by default.
+void throwingThenRealWriter(std::string_view line)
+{
+    if (gThrowingWrites.fetch_sub(1) > 0) {
+        throw std::bad_alloc();
+    }
+    ugv::writeLogLine(line);
+}
+
+TEST(LogDrain, AThrowOutOfADrainIsCountedAndTheThreadGoesOn)
+{
+    ugv::setLogThresholds(allAt(LogLevel::Info));
+    const CapturedLog log;
+    ugv::RtLogChannel channel("producer");
+    ugv::LogDrain sut;
+    ASSERT_TRUE(sut.addChannel(channel).has_value());
+    gThrowingWrites = 3;
+    sut.setWriterForTest(&throwingThenRealWriter);
+    ASSERT_TRUE(sut.start(std::chrono::milliseconds(1)).has_value());
+
+    for (std::int64_t i = 0; i < 10; ++i) {
+        channel.log(LogLevel::Info, LogCategory::Rt, "record %lld", i);
+        std::this_thread::sleep_for(std::chrono::milliseconds(5)); // one record per drain, about
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (log.text().find("record 9") == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    ASSERT_TRUE(sut.running());
+    sut.stop();
+
+    EXPECT_EQ(sut.failures(), 3U);
+    EXPECT_NE(log.text().find("the log drain failed to format or write a record (lost); it goes on"), std::string::npos)
+        << log.text();
+    EXPECT_NE(log.text().find("[rt] info: record 9"), std::string::npos) << log.text(); // drained after the throws
 }
 
 } // namespace

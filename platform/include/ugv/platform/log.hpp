@@ -160,7 +160,9 @@ private:
 inline constexpr std::size_t kMaxRtLogChannels = 16;
 
 /// Formats and writes the records of registered channels. Channels are registered at init; the drain is the
-/// single consumer of each. Either call drainOnce() yourself or start() its thread, not both.
+/// single consumer of each. Either call drainOnce() yourself or start() its thread, not both. The thread survives
+/// a throw out of a drain (bad_alloc while a line is formatted): the record being written is lost, the failure is
+/// counted (failures()) and reported on the log output by a fixed line, and the next period drains on.
 /// Thread-safety: thread-compatible (one owner thread), except the drain thread it runs. RT-safe: no.
 class LogDrain {
 public:
@@ -188,6 +190,12 @@ public:
     void stop();
 
     [[nodiscard]] bool running() const noexcept { return thread_.joinable(); }
+    /// Drains of the thread that ended in an exception (the thread went on).
+    [[nodiscard]] std::uint64_t failures() const noexcept { return failures_.load(std::memory_order_relaxed); }
+
+    /// Where lines go: writeLogLine by default. A seam for tests (a writer that throws); set before start().
+    using LineWriter = void (*)(std::string_view line);
+    void setWriterForTest(LineWriter writer) noexcept { writer_ = writer; }
 
 private:
     void run(std::chrono::milliseconds period);
@@ -196,6 +204,8 @@ private:
     std::array<std::uint64_t, kMaxRtLogChannels> reportedDrops_{};
     std::size_t channelCount_ = 0;
     std::atomic<bool> stopRequested_{false};
+    std::atomic<std::uint64_t> failures_{0};
+    LineWriter writer_ = nullptr; ///< nullptr: writeLogLine
     std::thread thread_;
 };
 
