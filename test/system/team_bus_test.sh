@@ -12,7 +12,9 @@
 #   3. the station is killed and restarted while the UGV processes linger: the new one gets every message again
 #      from their transient-local histories (inputs.jsonl again holds the scenario), and the first run's logs are
 #      kept (inputs.1.jsonl);
-#   4. a `ugvsense listen correlated` late joiner gets the published list.
+#   4. a `ugvsense listen correlated` late joiner gets the published list;
+#   5. (netns) a network partition: UGV 3's namespace is cut off (every packet in and out dropped) for 3 s while it
+#      sends, then healed: check 1 holds, nothing it wrote meanwhile is lost (reliable writers resend).
 # Modes: loopback (every process on this host, Fast DDS shared memory and UDP), netns (each process in its own
 # network namespace on a bridge, UDP only, 20 % of received UDP packets dropped by nftables in every namespace;
 # skipped with a message when namespaces cannot be made).
@@ -126,6 +128,17 @@ wait_acked() { # LOG...: every sender says its messages were acknowledged (bound
         grep -q "acknowledged" "$work/$log.log" || fail "$log: not acknowledged"
     done
 }
+partition() { # ROLE SECONDS: cut ROLE's namespace off the network (every packet in and out dropped), then heal it
+    local ns=${ns_of[$1]}
+    ip netns exec "$ns" nft -f - <<NFT || fail "cannot cut $1 off the network"
+table inet cut {
+    chain in { type filter hook input priority -10; policy drop; }
+    chain out { type filter hook output priority -10; policy drop; }
+}
+NFT
+    sleep "$2"
+    ip netns exec "$ns" nft delete table inet cut || fail "cannot heal the partition of $1"
+}
 same_lines() { # A B: the same lines, in any order
     cmp -s <(sort "$1") <(sort "$2")
 }
@@ -143,6 +156,7 @@ sleep 4 # about 160 of its 250 observations sent at 40/s (2 s was too early on a
 kill -9 "${sender_pid[ugv-2]}"
 wait "${sender_pid[ugv-2]}" 2>/dev/null
 start_sender ugv-2 "$work/ugv-2.jsonl" ugv-2.restarted
+[ "$mode" = netns ] && partition ugv-3 3 # UGV 3 is still sending (about 250 observations at 40/s)
 wait_acked ugv-1 ugv-2.restarted ugv-3 uav
 sleep 3 # the reorder window (1 s) and the last poll
 stop_gcs
