@@ -68,18 +68,25 @@ public:
     Result<void, Error> line(std::string_view text, std::size_t number)
     {
         number_ = number;
+        if (auto scanned = scanLine(text); !scanned) {
+            return scanned;
+        }
+        return limits_.openCvSubset ? openCvLine(text.substr(0, text.find_last_not_of('\r') + 1))
+                                    : Result<void, Error>{};
+    }
+
+private:
+    static constexpr std::size_t npos = std::string_view::npos;
+
+    /// Size, NUL, nesting depth and wide integers (every YAML), and quotes that stay open (openCvSubset).
+    Result<void, Error> scanLine(std::string_view text)
+    {
         if (text.find('\0') != std::string_view::npos) {
             return fail("holds a NUL byte: not a YAML text file", kDamagedFix);
         }
         const std::size_t indent = text.find_first_not_of(" \t\r");
         if (indent == std::string_view::npos || text[indent] == '#') {
-            return limits_.openCvSubset ? openCvLine(text.substr(0, text.find_last_not_of('\r') + 1))
-                                        : Result<void, Error>{};
-        }
-        if (limits_.openCvSubset && indent == 0 && text.substr(0, 3) == "---" &&
-            text.find_first_not_of(" \t\r", 3) != npos && text[text.find_first_not_of(" \t\r", 3)] != '#') {
-            return fail("text after the document start '---' on its line (OpenCV's reader can loop forever on it)",
-                        "put '---' on a line of its own; " + std::string(kDamagedFix));
+            return {};
         }
         if (flow_ == 0) { // a block line: its indentation is one level below every smaller one before it
             while (!indents_.empty() && indents_.back() >= indent) {
@@ -142,14 +149,8 @@ public:
                             kDamagedFix);
             }
         }
-        if (limits_.openCvSubset) {
-            return openCvLine(text.substr(0, text.find_last_not_of('\r') + 1));
-        }
         return {};
     }
-
-private:
-    static constexpr std::size_t npos = std::string_view::npos;
 
     /// The checks of YamlLimits::openCvSubset that look at a whole line: printable ASCII, the line shapes of a
     /// calibration, matrix sizes.
@@ -177,7 +178,11 @@ private:
         if (inFlowSequence_) { // the numbers of a matrix's data, over several lines
             return flowSequenceRest(line);
         }
-        if ((start == 0 && (line == "---" || line.rfind("%YAML:", 0) == 0))) {
+        if (start == 0 && line.rfind("---", 0) == 0 && line != "---") {
+            return fail("text after the document start '---' on its line (OpenCV's reader can loop forever on it)",
+                        "put '---' on a line of its own; " + std::string(kDamagedFix));
+        }
+        if (start == 0 && (line == "---" || line.rfind("%YAML:", 0) == 0)) {
             return {};
         }
         std::size_t key = 0;
