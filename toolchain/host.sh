@@ -23,6 +23,7 @@ packages=(
     nlohmann-json3-dev     # JSON lines of the correlator's offline tools
     libfastrtps-dev fastddsgen fastdds-tools default-jre-headless   # DDS: Fast DDS 2.9, IDL generator (Java), discovery server
     iproute2 nftables      # the multi-host test: network namespaces and packet loss
+    openssl                # DDS Security: bringup/security/make_security.sh (CA, certificates, signed XML)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
     qemu-user              # an older x86-64 CPU for the CPU-level check's test (and aarch64 for cross.sh)

@@ -58,6 +58,17 @@ std::string senderOf(const msg::PoseCorrection& s)
     return "correction:" + s.source().to_string();
 }
 
+/// The name a sample claims to come from: an observation's UGV, else its source.
+std::string claimedName(const msg::OoiObservation& s)
+{
+    return s.ugv().to_string();
+}
+template <class Sample>
+std::string claimedName(const Sample& s)
+{
+    return s.source().to_string();
+}
+
 } // namespace
 
 LiveCorrelator::LiveCorrelator(const LiveCorrelatorOptions& options)
@@ -75,6 +86,7 @@ Result<std::unique_ptr<LiveCorrelator>, Error> LiveCorrelator::create(ipc::dds::
                                 "max_clock_skew_ms >= 0"});
     }
     std::unique_ptr<LiveCorrelator> c(new LiveCorrelator(options));
+    c->securedBus_ = bus.config().security.enabled ? &bus : nullptr;
     auto obs = bus.reader<msg::OoiObservation>();
     auto uav = bus.reader<msg::UavObservation>();
     auto confirm = bus.reader<msg::ConfirmationState>();
@@ -169,6 +181,23 @@ bool LiveCorrelator::admit(const std::string& sender, std::uint64_t sequence,
     return true;
 }
 
+bool LiveCorrelator::sentByItsOwner(const std::string& name, ipc::dds::TopicId topic,
+                                    const eprosima::fastdds::dds::SampleInfo& info)
+{
+    if (securedBus_ == nullptr) {
+        return true;
+    }
+    const std::string writer = securedBus_->writerIdentity(info);
+    if (writer == name) {
+        return true;
+    }
+    ++stats_.impersonated;
+    warn("correlator: refused: " + ipc::dds::topicName(topic, securedBus_->config()) + " naming '" + name +
+         "' written by '" + (writer.empty() ? std::string("an undiscovered writer") : writer) +
+         "' (on a secured bus a participant may send only in its own name)");
+    return false;
+}
+
 template <class Sample>
 void LiveCorrelator::drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs)
 {
@@ -180,6 +209,9 @@ void LiveCorrelator::drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs)
         if (!message) {
             ++stats_.rejected;
             warn("correlator: refused: " + message.error().message());
+            continue;
+        }
+        if (!sentByItsOwner(claimedName(s), ipc::dds::TopicOf<Sample>::id, info)) {
             continue;
         }
         std::string sender = senderOf(s);

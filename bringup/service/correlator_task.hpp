@@ -71,6 +71,7 @@ struct LiveCorrelatorStats {
     std::uint64_t received = 0;     ///< samples taken from the readers
     std::uint64_t rejected = 0;     ///< refused by the checks (malformed, hostile)
     std::uint64_t duplicates = 0;   ///< (sender, sequence) seen before
+    std::uint64_t impersonated = 0; ///< secured bus: named a sender other than the writer's identity (dropped)
     std::uint64_t flooded = 0;      ///< refused by the flood guard (aheadOfClock included)
     std::uint64_t aheadOfClock = 0; ///< of them: stamped more than maxClockSkewMs ahead of this host's clock
     std::uint64_t refused = 0;      ///< given to the correlator and refused (older than the window, unknown id)
@@ -114,6 +115,10 @@ private:
     template <class Sample>
     void drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs);
     bool admit(const std::string& sender, std::uint64_t sequence, const eprosima::fastdds::dds::SampleInfo& info);
+    /// On a secured bus: whether the sample's writer writes in the partition of `name` (the only one its
+    /// permissions allow it); always true on an open bus.
+    bool sentByItsOwner(const std::string& name, ipc::dds::TopicId topic,
+                        const eprosima::fastdds::dds::SampleInfo& info);
     void apply(std::span<const correlator::Message> batch);
     void onSnapshot(const correlator::Snapshot& s);
     /// A problem with one input: the first kMaxWarnings are kept for the log, the rest only counted.
@@ -123,6 +128,7 @@ private:
 
     LiveCorrelatorOptions options_;
     correlator::CorrelatorFeed feed_;
+    const ipc::dds::Bus* securedBus_ = nullptr; ///< set on a secured bus: who wrote each sample
     ipc::dds::Reader<ipc::dds::msg::OoiObservation> observations_;
     ipc::dds::Reader<ipc::dds::msg::UavObservation> uav_;
     ipc::dds::Reader<ipc::dds::msg::ConfirmationState> confirmations_;

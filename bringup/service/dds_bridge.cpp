@@ -41,6 +41,7 @@ ipc::dds::BusConfig busConfig(const bringup::ServiceConfig& config)
     b.rosNamespace = rosNamespace(config);
     b.discoveryServers = config.dds.discoveryServer;
     b.sharedMemory = config.dds.sharedMemory;
+    b.security = bringup::securityOf(config);
     return b;
 }
 

@@ -103,14 +103,14 @@ std::string formatBusReport(const RunResult& r)
         const LiveCorrelatorStats& c = *r.correlator;
         std::snprintf(line, sizeof(line),
                       "correlator: %llu input(s) received, %llu applied (%llu late, put in place), %llu refused as "
-                      "malformed, %llu duplicate(s), "
+                      "malformed, %llu duplicate(s), %llu in another sender's name, "
                       "%llu refused by the flood guard (%llu stamped ahead of this host's clock), %llu refused by the "
                       "correlator; %llu list(s) published\n",
                       static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.applied),
                       static_cast<unsigned long long>(c.resequenced), static_cast<unsigned long long>(c.rejected),
-                      static_cast<unsigned long long>(c.duplicates), static_cast<unsigned long long>(c.flooded),
-                      static_cast<unsigned long long>(c.aheadOfClock), static_cast<unsigned long long>(c.refused),
-                      static_cast<unsigned long long>(c.published));
+                      static_cast<unsigned long long>(c.duplicates), static_cast<unsigned long long>(c.impersonated),
+                      static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.aheadOfClock),
+                      static_cast<unsigned long long>(c.refused), static_cast<unsigned long long>(c.published));
         out += line;
     }
     return out;

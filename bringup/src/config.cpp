@@ -182,6 +182,22 @@ std::vector<KeySpec> baseKeys()
         numberKey("dds.pose_max_age_ms", Kind::Double, 1, 60000,
                   "a vehicle pose further than this from a frame's capture time is flagged stale [ms]",
                   UGV_REF(dds.poseMaxAgeMs)),
+        choiceKey<bool>("dds.security.enabled",
+                        "DDS Security: authenticated, access-controlled, encrypted bus (the files below; "
+                        "bringup/security/make_security.sh makes them)",
+                        {{"true", true}, {"false", false}}, UGV_REF(dds.security.enabled)),
+        textKey("dds.security.identity_ca", Kind::Path, "identity CA certificate (PEM)",
+                UGV_REF(dds.security.identityCa)),
+        textKey("dds.security.certificate", Kind::Path, "this vehicle's certificate (PEM; its CN is vehicle_id)",
+                UGV_REF(dds.security.certificate)),
+        textKey("dds.security.private_key", Kind::Path, "this vehicle's private key (PEM)",
+                UGV_REF(dds.security.privateKey)),
+        textKey("dds.security.permissions_ca", Kind::Path, "permissions CA certificate (PEM)",
+                UGV_REF(dds.security.permissionsCa)),
+        textKey("dds.security.governance", Kind::Path, "signed governance document (S/MIME)",
+                UGV_REF(dds.security.governance)),
+        textKey("dds.security.permissions", Kind::Path, "this vehicle's signed permissions document (S/MIME)",
+                UGV_REF(dds.security.permissions)),
         choiceKey<bool>("correlator.enabled", "run the OOI correlator on the bus's observations (lowest priority)",
                         {{"true", true}, {"false", false}}, UGV_REF(correlator.enabled)),
         choiceKey<correlator::Mode>("correlator.mode",
@@ -424,6 +440,7 @@ public:
             error(at("dds"), "dds.enabled", "is false but the correlator needs the bus", "set dds.enabled: true");
         }
         checkNames(at, atKey);
+        checkSecurity(root);
         if (config_.calibrationPath.empty()) {
             error(root, "calibration", "is empty", "set it to the file written by 'ugvsense calibrate'");
         }
@@ -460,6 +477,31 @@ public:
         if (auto servers = ipc::dds::checkDiscoveryServers(config_.dds.discoveryServer, "dds.discovery_server");
             !servers) {
             error(atKey("dds", "discovery_server"), "dds.discovery_server", servers.error().what, servers.error().fix);
+        }
+    }
+
+    /// dds.security.*: every file as ipc::dds::checkSecurityFile() reads it (the service's Bus::create checks the
+    /// same), each error at its key's line; vehicle_id names the write partition, so it must suit one.
+    void checkSecurity(const YAML::Node& root)
+    {
+        const ipc::dds::SecurityConfig sec = securityOf(config_);
+        if (!sec.enabled || !config_.dds.enabled) {
+            return;
+        }
+        const YAML::Node dds = root["dds"];
+        const YAML::Node section = dds.IsMap() && dds["security"] ? dds["security"] : dds;
+        for (const ipc::dds::SecurityFile& f : ipc::dds::securityFiles(sec)) {
+            const std::string key = std::string("dds.security.") + f.key;
+            if (auto ok = ipc::dds::checkSecurityFile(f, key); !ok) {
+                error(section.IsMap() && section[f.key] ? section[f.key] : section, key, ok.error().what,
+                      ok.error().fix);
+            }
+        }
+        if (auto ok = ipc::dds::checkIdentity(sec.identity, "vehicle_id"); !ok) {
+            error(root["vehicle_id"] ? root["vehicle_id"] : root, "vehicle_id",
+                  ok.error().what + " (with dds.security.enabled it is the certificate's name and the partition "
+                                    "this vehicle writes in)",
+                  ok.error().fix);
         }
     }
 
@@ -523,6 +565,13 @@ private:
 };
 
 } // namespace
+
+ipc::dds::SecurityConfig securityOf(const ServiceConfig& config)
+{
+    const DdsSecurityConfig& s = config.dds.security;
+    return ipc::dds::SecurityConfig{s.enabled,       s.identityCa, s.certificate, s.privateKey,
+                                    s.permissionsCa, s.governance, s.permissions, config.vehicleId};
+}
 
 Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, const std::string& sourceName,
                                                 const std::string& baseDir)

@@ -24,13 +24,32 @@ inline constexpr int kMaxDomainId = 232; ///< the RTPS UDP port formula's limit 
 /// The option specs, to append to a command's own.
 inline std::vector<OptionSpec> options()
 {
-    return {{"domain", "N", "DDS domain id 0..232, default $UGV_DDS_DOMAIN, else 0", false},
-            {"partition", "P[,P...]", "DDS partition(s) of our topics (a team, a test), default none", false},
-            {"ros-namespace", "NS", "namespace of the ROS 2 topics rt/NS/obstacle_scan..., default ugv1", false},
-            {"discovery-server", "LIST",
-             "IP:PORT[;IP:PORT...] of Fast DDS discovery servers, default multicast discovery", false},
-            {"no-shm", "", "UDP only, no Fast DDS shared memory (processes of one host in separate network namespaces)",
-             false}};
+    return {
+        {"domain", "N", "DDS domain id 0..232, default $UGV_DDS_DOMAIN, else 0", false},
+        {"partition", "P[,P...]", "DDS partition(s) of our topics (a team, a test), default none", false},
+        {"ros-namespace", "NS", "namespace of the ROS 2 topics rt/NS/obstacle_scan..., default ugv1", false},
+        {"discovery-server", "LIST", "IP:PORT[;IP:PORT...] of Fast DDS discovery servers, default multicast discovery",
+         false},
+        {"no-shm", "", "UDP only, no Fast DDS shared memory (processes of one host in separate network namespaces)",
+         false},
+        {"security", "DIR",
+         "secured bus (DDS Security) with a participant's files from bringup/security/make_security.sh: DIR "
+         "holds identity_ca.cert.pem, cert.pem, key.pem, permissions_ca.cert.pem, governance.p7s, permissions.p7s",
+         false},
+        {"identity", "NAME", "the name in --security's certificate (its CN), default DIR's last folder name", false}};
+}
+
+/// --security DIR [--identity NAME]: the files of one participant (ipc::dds::securityFromFolder).
+inline ipc::dds::SecurityConfig securityFrom(const Args& args)
+{
+    if (!args.has("security")) {
+        return {};
+    }
+    std::string dir = args.get("security");
+    while (dir.size() > 1 && dir.back() == '/') {
+        dir.pop_back();
+    }
+    return ipc::dds::securityFromFolder(dir, args.get("identity", dir.substr(dir.find_last_of('/') + 1)));
 }
 
 /// The bus settings of the command line; errors name the option (or UGV_DDS_DOMAIN) and how to fix it.
@@ -75,6 +94,7 @@ inline Result<ipc::dds::BusConfig, Error> configFrom(const Args& args, const std
     config.rosNamespace = args.get("ros-namespace", config.rosNamespace);
     config.discoveryServers = args.get("discovery-server");
     config.sharedMemory = !args.has("no-shm");
+    config.security = securityFrom(args);
     if (auto ok = ipc::dds::validate(config, "ugvsense " + command); !ok) {
         // validate() names the service's config keys; on the command line they are options.
         Error e = ok.error();
@@ -87,6 +107,8 @@ inline Result<ipc::dds::BusConfig, Error> configFrom(const Args& args, const std
             e.where = prefix + " --discovery-server";
         } else if (e.where == prefix + " domain_id") {
             e.where = prefix + " --domain";
+        } else if (e.where.rfind(prefix + " security", 0) == 0) {
+            e.where = prefix + (e.where == prefix + " security identity" ? " --identity" : " --security");
         }
         return Unexpected(e);
     }
@@ -108,6 +130,9 @@ inline std::string describe(const ipc::dds::BusConfig& config)
     }
     if (!config.discoveryServers.empty()) {
         text += ", discovery server " + config.discoveryServers;
+    }
+    if (config.security.enabled) {
+        text += ", secured as '" + config.security.identity + "'";
     }
     return text;
 }

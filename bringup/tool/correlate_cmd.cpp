@@ -23,6 +23,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "args.hpp"
+#include "bus_options.hpp"
 #include "commands.hpp"
 #include "correlator_task.hpp"
 #include "ugv/bringup/correlate_io.hpp"
@@ -168,6 +169,7 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     }
     bc.discoveryServers = args.get("discovery-server");
     bc.sharedMemory = !args.has("no-shm");
+    bc.security = bus::securityFrom(args);
     auto bus = ipc::dds::Bus::create(bc);
     if (!bus) {
         return fail(bus.error());
@@ -236,30 +238,33 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
 
 int runCorrelate(int argc, char** argv)
 {
-    Args args(kCommand,
-              "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode pose-corrected|original] "
-              "[--map MAP.png]",
-              {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", false},
-               {"from-dds", "", "take the inputs live from the DDS bus (ugvsense/ooi/*) instead of a file", false},
-               {"output", "SNAPSHOTS.jsonl", "one snapshot of the correlated objects per period (--from-dds: the last)",
-                true},
-               {"period", "S", "snapshot period, default 1 s", false},
-               {"mode", "MODE",
-                "pose-corrected (default: pose errors estimated, statistical gates, Kalman mobiles) or original "
-                "(the published algorithm); improved: an alias of pose-corrected",
-                false},
-               {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false},
-               {"duration", "S", "--from-dds: stop after S seconds (default: at Ctrl-C)", false},
-               {"domain", "N", "--from-dds: DDS domain (default $UGV_DDS_DOMAIN, else 0)", false},
-               {"partition", "P", "--from-dds: DDS partition of the team", false},
-               {"discovery-server", "LIST", "--from-dds: IP:PORT[;IP:PORT] of Fast DDS discovery servers", false},
-               {"no-shm", "", "--from-dds: UDP only, no Fast DDS shared memory", false},
-               {"reorder-ms", "MS", "--from-dds: wait this long to put inputs in time order (default 2000)", false},
-               {"late-window-s", "S",
-                "an input up to S older than the latest is still put in its place (replayed; default 300, as "
-                "correlator.late_window_s); 0: refused",
-                false},
-               {"log-dir", "DIR", "--from-dds: write inputs.jsonl and snapshots.jsonl there", false}});
+    Args args(
+        kCommand,
+        "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode pose-corrected|original] "
+        "[--map MAP.png]",
+        {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", false},
+         {"from-dds", "", "take the inputs live from the DDS bus (ugvsense/ooi/*) instead of a file", false},
+         {"output", "SNAPSHOTS.jsonl", "one snapshot of the correlated objects per period (--from-dds: the last)",
+          true},
+         {"period", "S", "snapshot period, default 1 s", false},
+         {"mode", "MODE",
+          "pose-corrected (default: pose errors estimated, statistical gates, Kalman mobiles) or original "
+          "(the published algorithm); improved: an alias of pose-corrected",
+          false},
+         {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false},
+         {"duration", "S", "--from-dds: stop after S seconds (default: at Ctrl-C)", false},
+         {"domain", "N", "--from-dds: DDS domain (default $UGV_DDS_DOMAIN, else 0)", false},
+         {"partition", "P", "--from-dds: DDS partition of the team", false},
+         {"discovery-server", "LIST", "--from-dds: IP:PORT[;IP:PORT] of Fast DDS discovery servers", false},
+         {"no-shm", "", "--from-dds: UDP only, no Fast DDS shared memory", false},
+         {"security", "DIR", "--from-dds: a secured bus, with this participant's files (listen --help)", false},
+         {"identity", "NAME", "--from-dds: the name in --security's certificate, default DIR's last folder", false},
+         {"reorder-ms", "MS", "--from-dds: wait this long to put inputs in time order (default 2000)", false},
+         {"late-window-s", "S",
+          "an input up to S older than the latest is still put in its place (replayed; default 300, as "
+          "correlator.late_window_s); 0: refused",
+          false},
+         {"log-dir", "DIR", "--from-dds: write inputs.jsonl and snapshots.jsonl there", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }

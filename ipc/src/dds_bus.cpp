@@ -1,12 +1,20 @@
 #include "ugv/ipc/dds_bus.hpp"
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+#include <unordered_map>
+
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/publisher/qos/PublisherQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 #include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
 #include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/builtin/data/WriterProxyData.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
@@ -85,7 +93,183 @@ Result<void, Error> parseServers(const std::string& list, rtps::RemoteServerList
     return {};
 }
 
+constexpr std::uintmax_t kMaxSecurityFileBytes = 1U << 20U;
+constexpr const char* kSecurityFix = "make the files with bringup/security/make_security.sh (README \"Secured bus\")";
+
+/// The Fast DDS properties that load the three builtin security plugins with `c`'s files.
+void addSecurityProperties(const SecurityConfig& c, fdds::DomainParticipantQos& pq)
+{
+    const auto uri = [](const std::string& path) { return "file://" + std::filesystem::absolute(path).string(); };
+    auto& p = pq.properties().properties();
+    p.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
+    p.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_ca", uri(c.identityCa));
+    p.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate", uri(c.certificate));
+    p.emplace_back("dds.sec.auth.builtin.PKI-DH.private_key", uri(c.privateKey));
+    p.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
+    p.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions_ca", uri(c.permissionsCa));
+    p.emplace_back("dds.sec.access.builtin.Access-Permissions.governance", uri(c.governance));
+    p.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions", uri(c.permissions));
+    p.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+}
+
+/// The participant's QoS: name, transports, discovery servers, the security plugins.
+Result<fdds::DomainParticipantQos, Error> participantQos(const BusConfig& config)
+{
+    fdds::DomainParticipantQos pq = fdds::PARTICIPANT_QOS_DEFAULT;
+    pq.name(config.participantName);
+    pq.transport().use_builtin_transports = false;
+    if (config.sharedMemory) {
+        pq.transport().user_transports.push_back(
+            std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+    }
+    pq.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
+    if (!config.discoveryServers.empty()) {
+        rtps::RemoteServerList_t servers;
+        if (auto ok = parseServers(config.discoveryServers, servers, "dds discovery_server"); !ok) {
+            return Unexpected(ok.error());
+        }
+        auto& discovery = pq.wire_protocol().builtin.discovery_config;
+        discovery.discoveryProtocol = rtps::DiscoveryProtocol_t::CLIENT;
+        discovery.m_DiscoveryServers = servers;
+    }
+    if (config.security.enabled) {
+        addSecurityProperties(config.security, pq);
+    }
+    return pq;
+}
+
+/// Our topics' partitions: as configured on an open bus; on a secured one written in `<p>.<identity>` (the only
+/// one the participant's permissions allow it) and read in `<p>.*` (every participant's).
+void applyPartitions(const BusConfig& config, fdds::PublisherQos& pubq, fdds::SubscriberQos& subq)
+{
+    if (!config.security.enabled) {
+        for (const std::string& p : config.partitions) {
+            pubq.partition().push_back(p.c_str());
+            subq.partition().push_back(p.c_str());
+        }
+        return;
+    }
+    const std::vector<std::string> team = config.partitions.empty() ? std::vector<std::string>{""} : config.partitions;
+    for (const std::string& p : team) {
+        const std::string prefix = p.empty() ? std::string() : p + ".";
+        pubq.partition().push_back((prefix + config.security.identity).c_str());
+        subq.partition().push_back((prefix + "*").c_str());
+    }
+}
+
 } // namespace
+
+/// Writer GUID -> the identity of its partition (the part after the last '.'), filled from discovery (on a secured
+/// bus only authenticated participants' writers are discovered, and their partitions were checked against their
+/// signed permissions). Thread-safe: written by Fast DDS's discovery thread, read by the bus's users; a plain mutex,
+/// as no real-time task reads it (the correlator task is SCHED_OTHER).
+class WriterIdentities : public fdds::DomainParticipantListener {
+public:
+    void on_publisher_discovery(fdds::DomainParticipant* /*participant*/,
+                                eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override
+    {
+        // A removed writer is kept: its last samples may still wait in a reader (one entry per writer ever seen,
+        // a few per process start).
+        const std::string key = guidKey(info.info.guid());
+        std::lock_guard<std::mutex> lock(mutex_);
+        const auto names = info.info.m_qos.m_partition.names();
+        const std::string first = names.empty() ? std::string() : names.front();
+        byWriter_[key] = first.substr(first.find_last_of('.') + 1);
+    }
+    std::string identity(const rtps::GUID_t& writer) const
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const auto it = byWriter_.find(guidKey(writer));
+        return it == byWriter_.end() ? std::string() : it->second;
+    }
+
+private:
+    static std::string guidKey(const rtps::GUID_t& g)
+    {
+        std::string k(reinterpret_cast<const char*>(g.guidPrefix.value), sizeof(g.guidPrefix.value));
+        return k.append(reinterpret_cast<const char*>(g.entityId.value), sizeof(g.entityId.value));
+    }
+    mutable std::mutex mutex_;
+    std::unordered_map<std::string, std::string> byWriter_;
+};
+
+std::array<SecurityFile, 6> securityFiles(const SecurityConfig& c)
+{
+    return {
+        {{"identity_ca", &c.identityCa, "-----BEGIN CERTIFICATE-----", "the identity CA's certificate (PEM)"},
+         {"certificate", &c.certificate, "-----BEGIN CERTIFICATE-----", "this participant's certificate (PEM)"},
+         {"private_key", &c.privateKey, "PRIVATE KEY-----", "this participant's private key (PEM)"},
+         {"permissions_ca", &c.permissionsCa, "-----BEGIN CERTIFICATE-----", "the permissions CA's certificate (PEM)"},
+         {"governance", &c.governance, "pkcs7-signature", "the signed governance document (S/MIME)"},
+         {"permissions", &c.permissions, "pkcs7-signature", "the signed permissions document (S/MIME)"}}};
+}
+
+SecurityConfig securityFromFolder(const std::string& folder, const std::string& identity)
+{
+    return SecurityConfig{true,
+                          folder + "/identity_ca.cert.pem",
+                          folder + "/cert.pem",
+                          folder + "/key.pem",
+                          folder + "/permissions_ca.cert.pem",
+                          folder + "/governance.p7s",
+                          folder + "/permissions.p7s",
+                          identity};
+}
+
+Result<void, Error> checkSecurityFile(const SecurityFile& file, const std::string& where)
+{
+    const std::string& path = *file.path;
+    if (path.empty()) {
+        return Unexpected(Error{where, "is empty but dds.security.enabled is true",
+                                std::string("give the path of ") + file.description + "; " + kSecurityFix});
+    }
+    // A regular file before anything opens it (a FIFO would block the open).
+    std::error_code ec;
+    const bool regular = std::filesystem::is_regular_file(path, ec);
+    const auto size = regular ? std::filesystem::file_size(path, ec) : 0;
+    std::ifstream in;
+    if (regular && !ec) {
+        in.open(path, std::ios::binary);
+    }
+    if (!regular || ec || !in) {
+        return Unexpected(Error{where, "'" + path + "' cannot be read (missing, not a file, or no permission)",
+                                std::string("give ") + file.description + " readable by the service; " + kSecurityFix});
+    }
+    if (size > kMaxSecurityFileBytes) {
+        return Unexpected(Error{where, "'" + path + "' is " + std::to_string(size) + " bytes, not a security file",
+                                std::string("give ") + file.description + " (at most 1 MB)"});
+    }
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.find(file.expected) == std::string::npos) {
+        return Unexpected(Error{where,
+                                "'" + path + "' is not " + file.description + " (no '" + file.expected + "' in it)",
+                                std::string("give ") + file.description + "; " + kSecurityFix});
+    }
+    return {};
+}
+
+Result<void, Error> checkSecurity(const SecurityConfig& config, const std::string& where)
+{
+    if (!config.enabled) {
+        return {};
+    }
+    for (const SecurityFile& f : securityFiles(config)) {
+        if (auto ok = checkSecurityFile(f, where + "." + f.key); !ok) {
+            return ok;
+        }
+    }
+    return checkIdentity(config.identity, where + " identity");
+}
+
+Result<void, Error> checkIdentity(const std::string& id, const std::string& where)
+{
+    if (id.empty() || id.size() > kMaxNameLength ||
+        id.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") != std::string::npos) {
+        return Unexpected(Error{where, "'" + id + "' cannot name a partition",
+                                "1 to 64 letters, digits, _ and -: the certificate's name (CN), e.g. ugv-1"});
+    }
+    return {};
+}
 
 Result<void, Error> validate(const BusConfig& config, const std::string& where)
 {
@@ -109,6 +293,9 @@ Result<void, Error> validate(const BusConfig& config, const std::string& where)
         if (p.empty()) {
             return Unexpected(Error{where + " partitions", "an empty partition name", "remove it or name it"});
         }
+    }
+    if (auto ok = checkSecurity(config.security, where + " security"); !ok) {
+        return ok;
     }
     return checkDiscoveryServers(config.discoveryServers, where + " discovery_server");
 }
@@ -150,38 +337,28 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
     if (auto ok = validate(config, "dds"); !ok) {
         return Unexpected(ok.error());
     }
-    fdds::DomainParticipantQos pq = fdds::PARTICIPANT_QOS_DEFAULT;
-    pq.name(config.participantName);
-    pq.transport().use_builtin_transports = false;
-    if (config.sharedMemory) {
-        pq.transport().user_transports.push_back(
-            std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+    auto pq = participantQos(config);
+    if (!pq) {
+        return Unexpected(pq.error());
     }
-    pq.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
-    if (!config.discoveryServers.empty()) {
-        rtps::RemoteServerList_t servers;
-        if (auto ok = parseServers(config.discoveryServers, servers, "dds discovery_server"); !ok) {
-            return Unexpected(ok.error());
-        }
-        auto& discovery = pq.wire_protocol().builtin.discovery_config;
-        discovery.discoveryProtocol = rtps::DiscoveryProtocol_t::CLIENT;
-        discovery.m_DiscoveryServers = servers;
-    }
-
     std::unique_ptr<Bus> bus(new Bus());
     bus->config_ = config;
+    if (config.security.enabled) {
+        bus->identities_ = std::make_unique<WriterIdentities>();
+    }
     bus->participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
-        static_cast<fdds::DomainId_t>(config.domainId), pq);
+        static_cast<fdds::DomainId_t>(config.domainId), *pq, bus->identities_.get(), fdds::StatusMask::none());
     if (bus->participant_ == nullptr) {
         return Unexpected(Error{"dds domain " + std::to_string(config.domainId), "cannot create the DDS participant",
-                                "check the network interfaces, /dev/shm, and the Fast DDS messages above"});
+                                config.security.enabled
+                                    ? "check the dds.security files: the certificate signed by the identity CA, "
+                                      "the permissions' subject equal to the certificate's, both documents signed "
+                                      "by the permissions CA, and the Fast DDS messages above"
+                                    : "check the network interfaces, /dev/shm, and the Fast DDS messages above"});
     }
     fdds::PublisherQos pubq = fdds::PUBLISHER_QOS_DEFAULT;
     fdds::SubscriberQos subq = fdds::SUBSCRIBER_QOS_DEFAULT;
-    for (const std::string& p : config.partitions) {
-        pubq.partition().push_back(p.c_str());
-        subq.partition().push_back(p.c_str());
-    }
+    applyPartitions(config, pubq, subq);
     bus->publisher_ = bus->participant_->create_publisher(pubq);
     bus->subscriber_ = bus->participant_->create_subscriber(subq);
     bus->rosPublisher_ = bus->participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
@@ -199,6 +376,11 @@ Bus::~Bus()
         participant_->delete_contained_entities();
         fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
     }
+}
+
+std::string Bus::writerIdentity(const fdds::SampleInfo& info) const
+{
+    return identities_ == nullptr ? std::string() : identities_->identity(info.sample_identity.writer_guid());
 }
 
 fdds::Topic* Bus::topic(TopicId id, MakeType make)
@@ -229,7 +411,10 @@ Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
     }
     fdds::DataWriter* w = (s.ros ? rosPublisher_ : publisher_)->create_datawriter(t, q);
     if (w == nullptr) {
-        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the writer", "a bug"});
+        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the writer",
+                                config_.security.enabled ? "does the signed permissions document allow this "
+                                                           "participant to write it in its own partition?"
+                                                         : "a bug"});
     }
     return w;
 }
@@ -245,7 +430,10 @@ Result<fdds::DataReader*, Error> Bus::makeReader(TopicId id, MakeType make)
     applyCommon(q, s);
     fdds::DataReader* r = (s.ros ? rosSubscriber_ : subscriber_)->create_datareader(t, q);
     if (r == nullptr) {
-        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the reader", "a bug"});
+        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the reader",
+                                config_.security.enabled ? "does the signed permissions document allow this "
+                                                           "participant to read it?"
+                                                         : "a bug"});
     }
     return r;
 }

@@ -7,7 +7,12 @@
 //   subscribes to ugvsense/sectors and measures hand-over -> received (the sample's publish stamp is the hand-over
 //   time). Target: p99 under 1 ms. Baseline in the same run, BM_RawWriteToSubscriber: the same sample written
 //   directly by a Fast DDS writer in a child process (no ring, no task, no conversion).
-// Both latency benchmarks report p50/p99/max counters [us] over the iterations (manual time = the latency).
+// - BM_SectorsHandoverToSubscriberSecured / BM_RawWriteToSubscriberSecured: the same two on a secured bus (DDS
+//   Security: PKI-DH, Access-Permissions, AES-GCM; the files made once per run by bringup/security/make_security.sh
+//   in a temporary folder): the cost of security against the open bus in the same run. Target: p99 at most 1.5x
+//   the open bus's (issue 22 item 4).
+// The latency benchmarks report p50/p99/max counters [us] over the iterations (manual time = the latency).
+#include <fcntl.h>
 #include <semaphore.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -16,6 +21,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <filesystem>
 #include <thread>
 #include <vector>
 
@@ -33,6 +39,45 @@ using namespace ugv;
 namespace dds = ugv::ipc::dds;
 
 constexpr int kDomain = 201;
+constexpr const char* kWriterIdentity = "bench";        ///< the child's certificate (the service's vehicle_id)
+constexpr const char* kReaderIdentity = "bench-reader"; ///< this process's
+
+/// Where this run's secured team lives (removed at the end of main).
+std::filesystem::path securityFolderPath()
+{
+    return std::filesystem::temp_directory_path() / ("ugv-bench-dds-security-" + std::to_string(::getpid()));
+}
+
+/// The secured variants' team: a CA, the child's and this process's files (folder/<identity>/), made once per run.
+/// Empty when make_security.sh failed (the secured benchmarks then skip).
+const std::string& securityFolder(const std::string& partition)
+{
+    static const std::string folder = [&partition] {
+        const std::string dir = securityFolderPath().string();
+        const pid_t maker = ::fork(); // and exec at once (no Fast DDS in the copy)
+        if (maker == 0) {
+            const int quiet = ::open("/dev/null", O_WRONLY);
+            ::dup2(quiet, STDOUT_FILENO);
+            ::execl("/bin/bash", "bash", UGV_SOURCE_DIR "/bringup/security/make_security.sh", dir.c_str(),
+                    "--partition", partition.c_str(), kWriterIdentity, kReaderIdentity, nullptr);
+            ::_exit(127);
+        }
+        int status = 0;
+        const bool made =
+            maker > 0 && ::waitpid(maker, &status, 0) == maker && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+        return made ? dir : std::string();
+    }();
+    return folder;
+}
+
+/// `bc` secured as `identity` with the files in `folder`, or as is when `folder` is empty (the open bus).
+dds::BusConfig secured(dds::BusConfig bc, const std::string& folder, const char* identity)
+{
+    if (!folder.empty()) {
+        bc.security = dds::securityFromFolder(folder + "/" + identity, identity);
+    }
+    return bc;
+}
 
 service::BusFrame sampleFrame()
 {
@@ -117,11 +162,11 @@ BENCHMARK(BM_FramePathRingPushOnly)->UseManualTime()->Iterations(20000)->Unit(be
 BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchmark::kMicrosecond);
 
 /// The child's side: the service's ring and bus task feeding the real DdsBridge, 100 frames per second.
-[[noreturn]] void runBridgeChild(const std::string& partition)
+[[noreturn]] void runBridgeChild(const std::string& partition, const std::string& security)
 {
     bringup::ServiceConfig config = benchConfig();
     config.dds.partition = partition;
-    auto bus = dds::Bus::create(service::busConfig(config));
+    auto bus = dds::Bus::create(secured(service::busConfig(config), security, kWriterIdentity));
     auto bridge = service::DdsBridge::create(**bus, config, std::chrono::milliseconds(10));
     SpscRing<service::BusFrame, 8> ring;
     sem_t ready;
@@ -148,12 +193,12 @@ BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchm
 }
 
 /// The baseline's child: the same sample straight from a Fast DDS writer, 100 per second.
-[[noreturn]] void runRawChild(const std::string& partition)
+[[noreturn]] void runRawChild(const std::string& partition, const std::string& security)
 {
     dds::BusConfig bc;
     bc.domainId = kDomain;
     bc.partitions = {partition};
-    auto bus = dds::Bus::create(bc);
+    auto bus = dds::Bus::create(secured(bc, security, kWriterIdentity));
     auto writer = (*bus)->writer<dds::msg::ObstacleSectors>();
     dds::msg::ObstacleSectors sample;
     const service::BusFrame frame = sampleFrame();
@@ -165,20 +210,30 @@ BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchm
     }
 }
 
-void measure(benchmark::State& state, bool raw)
+void measure(benchmark::State& state, bool raw, bool secure)
 {
-    const std::string partition = "bench-" + std::to_string(::getpid()) + (raw ? "-raw" : "-bridge");
+    // One secured team per run (the files name the partition); the open variants each have their own.
+    const std::string partition = "bench-" + std::to_string(::getpid()) +
+                                  (secure ? std::string("-secured")
+                                   : raw  ? std::string("-raw")
+                                          : std::string("-bridge"));
+    const std::string security = secure ? securityFolder(partition) : std::string();
+    if (secure && security.empty()) {
+        state.SkipWithError("bringup/security/make_security.sh failed (openssl missing?)");
+        return;
+    }
     // A fresh process (fork + exec of this program): a forked copy of a process that already ran Fast DDS inherits
     // its factory without its threads and hangs.
     const pid_t child = ::fork();
     if (child == 0) {
-        ::execl("/proc/self/exe", "bench-dds", raw ? "--child-raw" : "--child-bridge", partition.c_str(), nullptr);
+        ::execl("/proc/self/exe", "bench-dds", raw ? "--child-raw" : "--child-bridge", partition.c_str(),
+                security.c_str(), nullptr);
         ::_exit(127);
     }
     dds::BusConfig bc;
     bc.domainId = kDomain;
     bc.partitions = {partition};
-    auto bus = dds::Bus::create(bc);
+    auto bus = dds::Bus::create(secured(bc, security, kReaderIdentity));
     auto reader = (*bus)->reader<dds::msg::ObstacleSectors>();
     dds::msg::ObstacleSectors s;
     // The bridge's publish stamp is the hand-over's monotonic time on the bus's real-time clock.
@@ -209,27 +264,39 @@ void measure(benchmark::State& state, bool raw)
 
 void BM_SectorsHandoverToSubscriber(benchmark::State& state)
 {
-    measure(state, false);
+    measure(state, false, false);
 }
 void BM_RawWriteToSubscriber(benchmark::State& state)
 {
-    measure(state, true);
+    measure(state, true, false);
+}
+void BM_SectorsHandoverToSubscriberSecured(benchmark::State& state)
+{
+    measure(state, false, true);
+}
+void BM_RawWriteToSubscriberSecured(benchmark::State& state)
+{
+    measure(state, true, true);
 }
 BENCHMARK(BM_SectorsHandoverToSubscriber)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RawWriteToSubscriber)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SectorsHandoverToSubscriberSecured)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RawWriteToSubscriberSecured)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
 
 } // namespace
 
 int main(int argc, char** argv)
 {
-    if (argc == 3 && std::string(argv[1]) == "--child-raw") {
-        runRawChild(argv[2]);
+    if (argc == 4 && std::string(argv[1]) == "--child-raw") {
+        runRawChild(argv[2], argv[3]);
     }
-    if (argc == 3 && std::string(argv[1]) == "--child-bridge") {
-        runBridgeChild(argv[2]);
+    if (argc == 4 && std::string(argv[1]) == "--child-bridge") {
+        runBridgeChild(argv[2], argv[3]);
     }
     benchmark::Initialize(&argc, argv);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
+    std::error_code ec;
+    std::filesystem::remove_all(securityFolderPath(), ec); // the private keys too
     return 0;
 }

@@ -1,5 +1,7 @@
 #include "ugv/bringup/config.hpp"
 
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -293,6 +295,106 @@ TEST(ConfigHostile, BusNamesAndDiscoveryServerAreChecked)
                                       "dds:\n  ros_namespace: team/ugv1\n  discovery_server: 192.168.1.10:11811\n",
                                   "test.yaml", "/etc/ugvsense");
     EXPECT_TRUE(good.has_value()) << joined(good.error());
+}
+
+// dds.security.* (issue 22 item 4): with security on, every file is checked at start and by check-config, each error
+// at its key's line with what is wrong and how to make the files.
+class ConfigSecurity : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        dir_ = std::filesystem::temp_directory_path() / ("ugv-config-security-" + std::to_string(::getpid()));
+        std::filesystem::create_directories(dir_);
+        write("ca.pem", kCertificate);
+        write("cert.pem", kCertificate);
+        write("key.pem", "-----BEGIN PRIVATE KEY-----\nAA==\n-----END PRIVATE KEY-----\n");
+        write("governance.p7s", kSigned);
+        write("permissions.p7s", kSigned);
+    }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+    void write(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
+    /// A secured config whose files are in the test's folder (relative paths), `certificate` replaced.
+    [[nodiscard]] std::string yaml(const std::string& certificate = "cert.pem") const
+    {
+        return std::string(kValidMinimal) + "dds:\n  security:\n    enabled: true\n    identity_ca: ca.pem\n" +
+               "    certificate: " + certificate + "\n    private_key: key.pem\n    permissions_ca: ca.pem\n" +
+               "    governance: governance.p7s\n    permissions: permissions.p7s\n";
+    }
+
+    /// The errors of `text` read from the test's folder.
+    [[nodiscard]] std::string errorsIn(const std::string& text) const
+    {
+        auto result = parseConfig(text, "test.yaml", dir_.string());
+        EXPECT_FALSE(result.has_value()) << "expected errors for:\n" << text;
+        return result.has_value() ? std::string() : joined(result.error());
+    }
+
+    static constexpr const char* kCertificate = "-----BEGIN CERTIFICATE-----\nAA==\n-----END CERTIFICATE-----\n";
+    static constexpr const char* kSigned =
+        "MIME-Version: 1.0\nContent-Type: multipart/signed; protocol=\"application/x-pkcs7-signature\"\n";
+    std::filesystem::path dir_;
+};
+
+TEST_F(ConfigSecurity, OffByDefaultAndThenNeedsNoFiles)
+{
+    const auto sut = parseConfig(kValidMinimal, "test.yaml", "/etc/ugvsense");
+
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+    EXPECT_FALSE(sut->dds.security.enabled);
+}
+
+TEST_F(ConfigSecurity, FilesThatLookRightAreAcceptedAndResolvedAgainstTheConfigsFolder)
+{
+    const auto sut = parseConfig(yaml(), "test.yaml", dir_.string());
+
+    ASSERT_TRUE(sut.has_value()) << joined(sut.error());
+    EXPECT_TRUE(sut->dds.security.enabled);
+    EXPECT_EQ(sut->dds.security.certificate, (dir_ / "cert.pem").string());
+    EXPECT_EQ(sut->dds.security.permissions, (dir_ / "permissions.p7s").string());
+}
+
+TEST_F(ConfigSecurity, EnabledWithoutFilesNamesEveryKey)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) + "dds:\n  security:\n    enabled: true\n");
+
+    const std::string text = joined(errors);
+    EXPECT_EQ(errors.size(), 6U) << text;
+    for (const char* key :
+         {"identity_ca", "certificate", "private_key", "permissions_ca", "governance", "permissions"}) {
+        EXPECT_NE(text.find("(dds.security." + std::string(key) + "): is empty but dds.security.enabled is true"),
+                  std::string::npos)
+            << key << "\n"
+            << text;
+    }
+    EXPECT_NE(text.find("make_security.sh"), std::string::npos) << text;
+}
+
+TEST_F(ConfigSecurity, AMissingFileIsNamedWithItsLine)
+{
+    const std::string text = errorsIn(yaml("missing.pem"));
+
+    EXPECT_NE(
+        text.find("test.yaml:8 (dds.security.certificate): '" + (dir_ / "missing.pem").string() + "' cannot be read"),
+        std::string::npos)
+        << text;
+}
+
+TEST_F(ConfigSecurity, AFileOfTheWrongKindIsRefused)
+{
+    const std::string text = errorsIn(yaml("key.pem"));
+
+    EXPECT_NE(text.find("(dds.security.certificate): '" + (dir_ / "key.pem").string() +
+                        "' is not this participant's certificate (PEM)"),
+              std::string::npos)
+        << text;
+}
+
+TEST_F(ConfigSecurity, AVehicleIdThatCannotNameAPartitionIsRefusedWhenSecured)
+{
+    const std::string text = errorsIn(yaml() + "vehicle_id: ugv 1\n");
+
+    EXPECT_NE(text.find("(vehicle_id): 'ugv 1' cannot name a partition"), std::string::npos) << text;
+    EXPECT_TRUE(parseConfig(std::string(kValidMinimal) + "vehicle_id: ugv 1\n", "test.yaml", "/").has_value());
 }
 
 TEST(Config, LoadConfigReportsMissingFile)

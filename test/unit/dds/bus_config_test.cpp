@@ -3,6 +3,9 @@
 
 #include "ugv/ipc/dds_bus.hpp"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <string>
 
 #include <gtest/gtest.h>
@@ -106,6 +109,63 @@ TEST(BusConfig, CreateRefusesAnInvalidConfigWithoutAParticipant)
 
     ASSERT_FALSE(sut);
     EXPECT_NE(sut.error().what.find("233"), std::string::npos);
+}
+
+TEST(BusSecurity, OffNeedsNoFilesAndOnNeedsEvery)
+{
+    BusConfig c = good();
+    EXPECT_TRUE(validate(c, "dds"));
+    c.security.enabled = true;
+    c.security.identity = "ugv-1";
+
+    const auto sut = validate(c, "dds");
+
+    ASSERT_FALSE(sut);
+    EXPECT_EQ(sut.error().where, "dds security.identity_ca");
+    EXPECT_NE(sut.error().what.find("is empty"), std::string::npos) << sut.error().message();
+    EXPECT_NE(sut.error().fix.find("make_security.sh"), std::string::npos) << sut.error().message();
+}
+
+TEST(BusSecurity, AFileThatCannotBeReadOrIsNotWhatItShouldBeIsNamed)
+{
+    SecurityConfig s;
+    s.enabled = true;
+    s.certificate = "/nonexistent/cert.pem";
+    const auto files = securityFiles(s);
+    ASSERT_EQ(std::string(files[1].key), "certificate");
+
+    const auto missing = checkSecurityFile(files[1], "dds.security.certificate");
+    s.certificate = "/proc/self/status"; // readable, no PEM certificate in it
+    const auto wrong = checkSecurityFile(files[1], "dds.security.certificate");
+
+    ASSERT_FALSE(missing);
+    EXPECT_NE(missing.error().what.find("'/nonexistent/cert.pem' cannot be read"), std::string::npos);
+    ASSERT_FALSE(wrong);
+    EXPECT_NE(wrong.error().what.find("is not this participant's certificate (PEM)"), std::string::npos)
+        << wrong.error().message();
+}
+
+TEST(BusSecurity, AFifoIsRefusedWithoutOpeningIt)
+{
+    const std::string fifo = "/tmp/ugv-bus-security-fifo-" + std::to_string(::getpid());
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    SecurityConfig s;
+    s.certificate = fifo;
+
+    const auto sut = checkSecurityFile(securityFiles(s)[1], "dds.security.certificate"); // would block if opened
+    ::unlink(fifo.c_str());
+
+    ASSERT_FALSE(sut);
+    EXPECT_NE(sut.error().what.find("cannot be read"), std::string::npos) << sut.error().message();
+}
+
+TEST(BusSecurity, TheIdentityMustNameAPartition)
+{
+    for (const char* bad : {"", "ugv 1", "a.b", "ugv*"}) {
+        EXPECT_FALSE(checkIdentity(bad, "id")) << bad;
+    }
+    EXPECT_TRUE(checkIdentity("ugv-1", "id"));
+    EXPECT_FALSE(checkIdentity(std::string(kMaxNameLength + 1, 'u'), "id"));
 }
 
 TEST(BusTopics, ShortAndWireNamesParse)

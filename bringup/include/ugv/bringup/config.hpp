@@ -20,6 +20,10 @@
 #include "ugv/platform/result.hpp"
 #include "ugv/rt/task.hpp"
 
+namespace ugv::ipc::dds {
+struct SecurityConfig; // ugv/ipc/dds_bus.hpp
+} // namespace ugv::ipc::dds
+
 namespace ugv::bringup {
 
 enum class CameraBackend { V4l2, Libcamera, Replay };
@@ -76,6 +80,18 @@ struct HandoverConfig {
     int spinUs = 2000;
 };
 
+/// DDS Security of the bus (ipc::dds::SecurityConfig; README "Secured bus"): the files made by
+/// bringup/security/make_security.sh for this vehicle (its name, vehicle_id, is its certificate's CN).
+struct DdsSecurityConfig {
+    bool enabled = false;
+    std::string identityCa;    ///< identity CA certificate (PEM)
+    std::string certificate;   ///< this vehicle's certificate (PEM)
+    std::string privateKey;    ///< its private key (PEM)
+    std::string permissionsCa; ///< permissions CA certificate (PEM)
+    std::string governance;    ///< signed governance document (S/MIME)
+    std::string permissions;   ///< this vehicle's signed permissions document (S/MIME)
+};
+
 /// The DDS bus (ipc/dds_bus.hpp): how this process joins the vehicle's and the team's data bus.
 struct DdsConfig {
     bool enabled = true;      ///< publish sectors, scans and health, read poses (and run the correlator's bus)
@@ -87,6 +103,7 @@ struct DdsConfig {
     std::string discoveryServer; ///< "" = multicast discovery; "IP:PORT[;IP:PORT]" = Fast DDS discovery servers
     bool sharedMemory = true;    ///< Fast DDS shared memory between processes of this host (besides UDP)
     double poseMaxAgeMs = 600.0; ///< [ms] a pose further than this from the capture time is flagged stale
+    DdsSecurityConfig security;
 };
 
 /// The OOI correlator task (issue 5's algorithm, live on the bus).
@@ -130,6 +147,9 @@ Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, con
 
 /// The effective config as YAML, every key with its description and range as a comment.
 std::string formatConfig(const ServiceConfig& config);
+
+/// The bus's security settings of `config` (its identity is vehicle_id; include ugv/ipc/dds_bus.hpp to call it).
+ipc::dds::SecurityConfig securityOf(const ServiceConfig& config);
 
 /// The config file path: argv's value if given, else $UGV_CONFIG, else /etc/ugvsense/config.yaml.
 std::string configPath(const char* fromArgs);

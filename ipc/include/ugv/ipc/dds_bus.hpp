@@ -57,6 +57,44 @@ namespace ros = ::sensor_msgs::msg::dds_;
 /// longer name arrives truncated to kMaxNameLength + 1 and is refused (ugvsense.idl, ipc::dds::check).
 inline constexpr std::size_t kMaxNameLength = 64;
 
+/// DDS Security (Fast DDS's builtin plugins: PKI-DH authentication, Access-Permissions access control, AES-GCM-GMAC
+/// encryption; OpenSSL 3). Paths of PEM certificates and keys and of S/MIME-signed XML documents, as made by
+/// bringup/security/make_security.sh (the file names of a ROS 2 SROS2 enclave). With it on, this participant talks
+/// only to participants whose certificate the identity CA signed and whose signed permissions allow the topic.
+/// Our topics are then written in the partition `<partition>.<identity>` (each participant's permissions allow it
+/// only its own) and read in `<partition>.*`: Bus::writerIdentity() tells a reader whose partition a sample came
+/// from, so that a receiver can drop a sample claiming another sender (README "Secured bus").
+struct SecurityConfig {
+    bool enabled = false;
+    std::string identityCa;    ///< CA certificate that signed every participant's certificate
+    std::string certificate;   ///< this participant's certificate (subject CN=<identity>)
+    std::string privateKey;    ///< its private key
+    std::string permissionsCa; ///< CA certificate that signed the governance and permissions documents
+    std::string governance;    ///< signed governance document (what is protected, how)
+    std::string permissions;   ///< signed permissions document of this participant (what it may write and read)
+    std::string identity;      ///< the name in the certificate: the suffix of this participant's write partition
+};
+
+/// One file of a SecurityConfig, for checks that name its key.
+struct SecurityFile {
+    const char* key;         ///< the config key's last part: identity_ca, certificate, ...
+    const std::string* path; ///< into the SecurityConfig
+    const char* expected;    ///< text every such file holds (a PEM header, the S/MIME signature's type)
+    const char* description; ///< for messages
+};
+/// The six files of `config`, in the order of the config keys.
+std::array<SecurityFile, 6> securityFiles(const SecurityConfig& config);
+/// Checks that the file exists, is readable, at most 1 MB and looks like what `file` expects (before Fast DDS,
+/// whose own errors name no file). @return an error naming `where` (the key) and the path
+Result<void, Error> checkSecurityFile(const SecurityFile& file, const std::string& where);
+/// The files of one participant in a folder made by make_security.sh, named as in a ROS 2 (SROS2) enclave:
+/// identity_ca.cert.pem, cert.pem, key.pem, permissions_ca.cert.pem, governance.p7s, permissions.p7s (enabled).
+SecurityConfig securityFromFolder(const std::string& folder, const std::string& identity);
+/// Every file of an enabled config, and the identity.
+Result<void, Error> checkSecurity(const SecurityConfig& config, const std::string& where);
+/// A secured participant's identity: a partition suffix, 1..64 characters of [A-Za-z0-9_-].
+Result<void, Error> checkIdentity(const std::string& id, const std::string& where);
+
 struct BusConfig {
     int domainId = 42; ///< 0..232 (the UDP port formula's limit)
     std::string participantName = "ugvsense";
@@ -66,6 +104,7 @@ struct BusConfig {
     /// `fastdds discovery -i 0 -l IP -p PORT`), for meshes without multicast. Server i has the default prefix of id i.
     std::string discoveryServers;
     bool sharedMemory = true; ///< also Fast DDS's shared-memory transport between processes of one host
+    SecurityConfig security;  ///< off: an open bus
 };
 
 /// Checks the ranges and the discovery server list (before any DDS entity exists).
@@ -164,6 +203,8 @@ private:
     eprosima::fastdds::dds::DataReader* reader_ = nullptr;
 };
 
+class WriterIdentities;
+
 class Bus {
 public:
     /// The participant (domain, name, transports, discovery) and its publishers and subscribers.
@@ -197,6 +238,10 @@ public:
         return Reader<T>(*r);
     }
     [[nodiscard]] const BusConfig& config() const noexcept { return config_; }
+    /// On a secured bus, the identity whose partition the writer of `info`'s sample writes in (access control lets
+    /// a participant write only in its own), or "" when unknown (an open bus, or a writer not discovered).
+    /// Thread-safe (discovery runs on Fast DDS's threads).
+    [[nodiscard]] std::string writerIdentity(const eprosima::fastdds::dds::SampleInfo& info) const;
 
 private:
     Bus() = default;
@@ -212,6 +257,7 @@ private:
     eprosima::fastdds::dds::Publisher* rosPublisher_ = nullptr;   ///< the default partition (ROS 2)
     eprosima::fastdds::dds::Subscriber* rosSubscriber_ = nullptr; ///< the default partition (ROS 2)
     std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
+    std::unique_ptr<WriterIdentities> identities_; ///< writer GUID -> identity, from discovery
 };
 
 // ---- template bodies ----

@@ -1,0 +1,138 @@
+#!/usr/bin/env bash
+# The secured team bus (issue 22 item 4, DDS Security): a ground station (ugvsensed, correlator only) with
+# dds.security on, and the team's files made by bringup/security/make_security.sh (gcs, ugv-1, ugv-2), plus the same
+# names from another CA (an attacker's). Checked:
+#   1. certified ugv-1 sends its observations: every one is applied (the positive control);
+#   2. a participant without a certificate, and one whose certificate another CA signed (named ugv-2), send UGV 2's
+#      observations, the UAV fixes and the confirmations: 0 of them reach the station;
+#   3. the same two listen to the OOI positions (observations, the correlated list) for the whole test: 0 samples,
+#      while certified ugv-2 gets the correlated list, and a certified viewer (correlate --from-dds --security)
+#      applies ugv-1's observations;
+#   4. one vehicle cannot write as another: certified ugv-1 sending UGV 2's observations has each one dropped by the
+#      station (its writer's partition is ugv-1's: "in another sender's name"), ugv-1 asking to write in ugv-2's
+#      partition is refused by its own permissions, and ugv-1's certificate with ugv-2's permissions document
+#      cannot join at all.
+# Usage: secured_bus_test.sh UGVSENSE UGVSENSED MAKE_SECURITY WORKDIR DOMAIN
+set -u
+tool=$1 daemon=$2 make_security=$3 work=$4 domain=$5
+rm -rf "$work" && mkdir -p "$work"
+partition="secured-test-$$"
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done; wait 2>/dev/null; true; }
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -n 15 "$f"; done; exit 1; }
+command -v openssl >/dev/null || { echo "SKIPPED: openssl is not installed"; exit 0; }
+
+bash "$make_security" "$work/team" --partition "$partition" gcs ugv-1 ugv-2 >"$work/make.log" 2>&1 ||
+    fail "make_security.sh"
+bash "$make_security" "$work/rogue" --partition "$partition" ugv-2 >>"$work/make.log" 2>&1 ||
+    fail "make_security.sh (the other CA)"
+mkdir -p "$work/mixed" # ugv-1's certificate and key with ugv-2's (validly signed) permissions
+cp "$work/team/ugv-1/"* "$work/mixed/" && cp "$work/team/ugv-2/permissions.p7s" "$work/mixed/"
+
+"$tool" correlate-sim --setting bias --ugvs 1 --duration 30 --seed 3 --out "$work/scenario.jsonl" >/dev/null ||
+    fail "correlate-sim"
+grep '"ugv":"ugv-1"' "$work/scenario.jsonl" | grep '"kind":"observation"' >"$work/ugv-1.jsonl"
+sed 's/"ugv":"ugv-1"/"ugv":"ugv-2"/' "$work/ugv-1.jsonl" >"$work/ugv-2.jsonl" # the same, in UGV 2's name
+# What an intruder would inject: UGV 2's observations, the UAV fixes and a confirmation of every object.
+{ cat "$work/ugv-2.jsonl"; grep '"kind":"uav"' "$work/scenario.jsonl"
+  for i in 1 2 3 4 5; do echo "{\"t\":1.$i,\"kind\":\"confirm\",\"id\":\"OOI-$i\",\"state\":\"confirmed_positive\"}"; done
+} >"$work/others.jsonl"
+own=$(wc -l <"$work/ugv-1.jsonl") others=$(wc -l <"$work/others.jsonl") foreign=$(wc -l <"$work/ugv-2.jsonl")
+[ "$own" -gt 10 ] && [ "$foreign" -gt 10 ] || fail "scenario too short ($own, $foreign lines)"
+
+sec=$work/team/gcs
+cat >"$work/gcs.yaml" <<YAML
+vehicle_id: gcs
+vision:
+  enabled: false
+dds:
+  domain_id: $domain
+  partition: $partition
+  security:
+    enabled: true
+    identity_ca: $sec/identity_ca.cert.pem
+    certificate: $sec/cert.pem
+    private_key: $sec/key.pem
+    permissions_ca: $sec/permissions_ca.cert.pem
+    governance: $sec/governance.p7s
+    permissions: $sec/permissions.p7s
+correlator:
+  enabled: true
+  reorder_ms: 500
+  startup_hold_ms: 0
+  log_dir: $work/gcs
+YAML
+"$tool" check-config "$work/gcs.yaml" >"$work/check.log" 2>&1 || fail "check-config of the secured station"
+"$daemon" --config "$work/gcs.yaml" >"$work/gcs.log" 2>&1 &
+pids+=($!)
+gcs=$!
+bus=(--domain "$domain" --partition "$partition")
+background() { # LOG CMD...: CMD in the background; its pid in $last
+    local log=$1; shift
+    "$@" >"$work/$log.log" 2>&1 &
+    last=$!
+    pids+=("$last")
+}
+# 3. Listeners without a valid certificate, for the whole test. Those without one subscribe to every partition of
+# the team (<partition>.*: where the secured participants write), not to the intruders' own.
+background listen-open "$tool" listen observations --domain "$domain" --partition "$partition.*" --timeout 8
+l1=$last
+background listen-open-correlated "$tool" listen correlated --domain "$domain" --partition "$partition.*" --timeout 8
+l2=$last
+background listen-rogue "$tool" listen correlated "${bus[@]}" --security "$work/rogue/ugv-2" --timeout 8
+l3=$last
+# 1. The positive control.
+"$tool" bus-send --input "$work/ugv-1.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
+    --linger 8 >"$work/ugv-1.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 200); do grep -q "acknowledged" "$work/ugv-1.log" && break; sleep 0.1; done
+grep -q " acknowledged by 1 reader" "$work/ugv-1.log" || fail "certified ugv-1's observations were not acknowledged"
+# A certified viewer (correlate --from-dds) takes the team's inputs too.
+background viewer "$tool" correlate --from-dds --domain "$domain" --partition "$partition" \
+    --security "$work/team/ugv-2" --duration 5 --output "$work/viewer.jsonl"
+v1=$last
+# 2. Injection without a valid certificate (their writers keep their histories while they linger).
+background inject-open "$tool" bus-send --input "$work/others.jsonl" "${bus[@]}" --source ugv-2 --wait-readers 0 \
+    --linger 4
+i1=$last
+background inject-rogue "$tool" bus-send --input "$work/others.jsonl" "${bus[@]}" --source ugv-2 --wait-readers 0 \
+    --linger 4 --security "$work/rogue/ugv-2"
+i2=$last
+# 4. Writing as another vehicle.
+"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
+    >"$work/impersonate.log" 2>&1 || fail "certified ugv-1 could not send (its samples naming ugv-2)"
+"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --identity ugv-2 \
+    --wait-readers 0 >"$work/other-partition.log" 2>&1 && fail "ugv-1 could write in ugv-2's partition"
+grep -q "cannot create the writer" "$work/other-partition.log" || fail "ugv-1 in ugv-2's partition: no writer error"
+"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/mixed" --identity ugv-2 \
+    --wait-readers 0 >"$work/mixed.log" 2>&1 && fail "ugv-1's certificate joined with ugv-2's permissions"
+grep -q "cannot create the DDS participant" "$work/mixed.log" || fail "ugv-1 with ugv-2's permissions: no error"
+# 3. A certified reader gets the list.
+"$tool" listen correlated "${bus[@]}" --security "$work/team/ugv-2" --count 1 --timeout 15 >"$work/listen-ok.log" \
+    2>&1 || fail "certified ugv-2 got no correlated list"
+for p in "$l1" "$l2" "$l3" "$i1" "$i2"; do wait "$p"; done
+wait "$v1" || fail "correlate --from-dds on the secured bus"
+sleep 1 # the reorder window
+kill -TERM "$gcs"
+wait "$gcs" || fail "the ground station exited with an error"
+line=$(grep "^correlator:" "$work/gcs.log") || fail "no correlator report"
+echo "$line"
+
+cmp -s <(sort "$work/gcs/inputs.jsonl") <(sort "$work/ugv-1.jsonl") ||
+    fail "the station's inputs are not exactly certified ugv-1's $own observations"
+echo "1. certified ugv-1's $own observations applied, nothing else"
+echo "2. 0 of $others samples injected without a certificate or with another CA's"
+for l in listen-open listen-open-correlated listen-rogue; do
+    grep -q '^{' "$work/$l.log" && fail "$l printed a sample"
+done
+grep -qE "received [0-9]+ input\(s\): $own applied" "$work/viewer.log" || # ugv-1's in ugv-2's name: dropped
+    fail "the certified viewer (correlate --from-dds --security) did not apply ugv-1's $own observations alone"
+echo "3. 0 samples read without a certificate or with another CA's; certified ugv-2 got the correlated list," \
+    "and correlate --from-dds --security applied ugv-1's $own observations"
+impersonated=$(sed -E "s/.* ([0-9]+) in another sender's name.*/\1/" <<<"$line")
+[ "$impersonated" -eq "$foreign" ] ||
+    fail "$foreign observations naming ugv-2 sent by ugv-1, $impersonated dropped as in another sender's name"
+echo "4. ugv-1 as ugv-2: $impersonated of $foreign samples dropped by the station; its own permissions refuse" \
+    "ugv-2's partition; its certificate with ugv-2's permissions cannot join"
+echo "OK"
