@@ -89,6 +89,7 @@ void PoseCorrectedCorrelator::solve()
     }
     rebuildStatics();
     solver_.learnNoise(statics_, poses_);
+    solver_.learnPoseSpread(statics_, poses_);
     rebuildStatics();
 }
 

@@ -19,10 +19,13 @@ constexpr int kMinSamplesToSolve = 10;
 constexpr double kCommonOffsetPull = 0.01;
 constexpr double kWalkPriorFloor = 1e-4; ///< [m^2] keeps the random walk's prior finite without drift
 // Learnt noise (learnNoise).
-constexpr double kMadToSigma = 1.4826;         ///< sigma of a Gaussian over its median absolute deviation
-constexpr double kMaxNoiseScale = 5.0;         ///< the measured spread is trusted up to this x the configured one
-constexpr int kMinNoiseSamples = 30;           ///< fewer residuals of a UGV: the configured model
-constexpr int kMinNoiseObjectObservations = 6; ///< objects seen this often give residuals
+constexpr double kMadToSigma = 1.4826;            ///< sigma of a Gaussian over its median absolute deviation
+constexpr double kMaxNoiseScale = 5.0;            ///< the measured spread is trusted up to this x the configured one
+constexpr int kMinNoiseSamples = 30;              ///< fewer residuals of a UGV: the configured model
+constexpr int kMinNoiseObjectObservations = 6;    ///< objects seen this often give residuals
+constexpr int kMinSpreadTracks = 8;               ///< fewer tracks of a UGV on shared objects: spread not measured
+constexpr double kMedianToSigma2d = 1.0 / 1.1774; ///< per-axis sigma over the median distance of a 2-D Gaussian
+constexpr double kMaxPoseSpreadM = 2.0;           ///< [m] the measured spread is trusted up to this
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
@@ -251,6 +254,22 @@ void applyStep(const Eigen::VectorXd& delta, const Layout& l, StaticMap& map, Ug
     }
 }
 
+/// How far this solve moved each solved UGV's heading bias and latest offset (UgvPoseErrors::Ugv::headingStep).
+void recordSteps(const std::vector<UgvPoseErrors::Ugv>& before, const Layout& l, UgvPoseErrors& poses)
+{
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        if (l.ugvBase[u] < 0) {
+            continue;
+        }
+        UgvPoseErrors::Ugv& ugv = poses.ugv(u);
+        const auto last = static_cast<std::size_t>(l.lastWindow[u]);
+        const std::vector<Eigen::Vector2d>& old = before[u].offsets;
+        const Eigen::Vector2d was = old.empty() ? Eigen::Vector2d::Zero() : old[std::min(last, old.size() - 1)];
+        ugv.headingStep = std::abs(ugv.headingBias - before[u].headingBias);
+        ugv.offsetStepM = (ugv.offsets[last] - was).norm();
+    }
+}
+
 /// 1.4826 x the median of `v` (absolute residuals over their sigma), within [1, kMaxNoiseScale]; 1 with too few.
 double robustScale(std::vector<double>& v)
 {
@@ -260,6 +279,19 @@ double robustScale(std::vector<double>& v)
     const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
     return std::clamp(kMadToSigma * *mid, 1.0, kMaxNoiseScale);
+}
+
+/// The UGVs (indices) whose tracks make up `so`.
+std::vector<int> ugvsOf(const StaticMap& map, const StaticMap::StaticObject& so)
+{
+    std::vector<int> ugvs;
+    for (const int ti : so.tracks) {
+        const int u = map.tracks()[static_cast<std::size_t>(ti)].ugv;
+        if (std::find(ugvs.begin(), ugvs.end(), u) == ugvs.end()) {
+            ugvs.push_back(u);
+        }
+    }
+    return ugvs;
 }
 
 } // namespace
@@ -273,6 +305,10 @@ bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses) const
         return false;
     }
     extendOffsets(poses, l);
+    std::vector<UgvPoseErrors::Ugv> before;
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        before.push_back(poses.ugv(u));
+    }
     for (int iteration = 0; iteration < config_.solveIterations; ++iteration) {
         NormalEquations eq{{}, Eigen::VectorXd::Zero(l.n)};
         addObservationTerms(map, poses, l, config_, eq);
@@ -285,6 +321,7 @@ bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses) const
         }
         applyStep(ldlt.solve(-eq.g), l, map, poses);
     }
+    recordSteps(before, l, poses);
     return true;
 }
 
@@ -315,6 +352,34 @@ void PoseErrorSolver::learnNoise(const StaticMap& map, UgvPoseErrors& poses) con
     for (std::size_t u = 0; u < poses.size(); ++u) {
         poses.ugv(u).rangeScale = robustScale(rangeResiduals[u]);
         poses.ugv(u).bearingScale = robustScale(crossResiduals[u]);
+    }
+}
+
+void PoseErrorSolver::learnPoseSpread(const StaticMap& map, UgvPoseErrors& poses) const
+{
+    std::vector<std::vector<double>> distances(poses.size());
+    for (const StaticMap::StaticObject& so : map.objects()) {
+        if (!so.alive || so.observations < static_cast<std::uint64_t>(kMinNoiseObjectObservations) ||
+            ugvsOf(map, so).size() < 2) {
+            continue;
+        }
+        for (const int ti : so.tracks) {
+            double weight = 0.0;
+            const Eigen::Vector2d mean = map.trackMean(ti, poses, weight);
+            if (weight > 0.0) {
+                distances[static_cast<std::size_t>(map.tracks()[static_cast<std::size_t>(ti)].ugv)].push_back(
+                    (mean - so.mean).norm());
+            }
+        }
+    }
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        std::vector<double>& d = distances[u];
+        if (d.size() < static_cast<std::size_t>(kMinSpreadTracks) || !poses.ugv(u).solved) {
+            continue;
+        }
+        const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+        std::nth_element(d.begin(), mid, d.end());
+        poses.ugv(u).poseSpreadM = std::min(kMaxPoseSpreadM, kMedianToSigma2d * *mid);
     }
 }
 

@@ -37,6 +37,8 @@ void fuse(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen
     object.info += info;
     object.infoMean += info * p;
     object.measurementInfo += weight * measurementCov.inverse();
+    object.poseCovSum += weight * (cov - measurementCov);
+    object.weightSum += weight;
     object.mean = object.info.ldlt().solve(object.infoMean);
 }
 
@@ -115,14 +117,51 @@ void StaticMap::store(Track& track, const RangeBearing& sample, int window)
     track.lastT = sample.t;
 }
 
-int StaticMap::associate(int ugv, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+void StaticMap::noteInstant(int ugv, int ti, double t)
+{
+    if (instants_.size() <= static_cast<std::size_t>(ugv)) {
+        instants_.resize(static_cast<std::size_t>(ugv) + 1);
+    }
+    Instant& instant = instants_[static_cast<std::size_t>(ugv)];
+    if (instant.t != t) {
+        instant.t = t;
+        instant.tracks.clear();
+    }
+    const auto note = [this](int from, int to) {
+        auto& apart = tracks_[static_cast<std::size_t>(from)].apart;
+        if (std::find(apart.begin(), apart.end(), to) == apart.end()) {
+            apart.push_back(to);
+        }
+    };
+    for (const int other : instant.tracks) {
+        if (other != ti) {
+            note(ti, other);
+            note(other, ti);
+        }
+    }
+    instant.tracks.push_back(ti);
+}
+
+bool StaticMap::trackSeenApart(int ti, int object) const
+{
+    const auto& apart = tracks_[static_cast<std::size_t>(ti)].apart;
+    return std::any_of(apart.begin(), apart.end(),
+                       [this, object](int other) { return tracks_[static_cast<std::size_t>(other)].object == object; });
+}
+
+bool StaticMap::seenApart(const StaticObject& x, int y) const
+{
+    return std::any_of(x.tracks.begin(), x.tracks.end(), [this, y](int ti) { return trackSeenApart(ti, y); });
+}
+
+int StaticMap::associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                          const Eigen::Matrix2d& measurementCov) const
 {
     int best = -1;
     double bestD2 = config_.gateChi2;
     for (int i = 0; i < static_cast<int>(objects_.size()); ++i) {
         const StaticObject& so = objects_[static_cast<std::size_t>(i)];
-        if (!so.alive) {
+        if (!so.alive || trackSeenApart(ti, i)) {
             continue;
         }
         // Against an object only this UGV has seen, its pose error is common to both: measurement noise only.
@@ -151,6 +190,7 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
         tracks_.back().key = it->first;
     }
     const int ti = it->second;
+    noteInstant(ugv, ti, o.t);
     Track& track = tracks_[static_cast<std::size_t>(ti)];
     store(track, sample, poses.window(o.t));
     Eigen::Vector2d p;
@@ -159,7 +199,7 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
     poses.project(ugv, sample, p, &cov);
     poses.project(ugv, sample, p, &measurementCov, false);
     if (track.object < 0) {
-        int best = associate(ugv, p, cov, measurementCov);
+        int best = associate(ugv, ti, p, cov, measurementCov);
         if (best < 0) {
             best = static_cast<int>(objects_.size());
             StaticObject created;
@@ -184,6 +224,8 @@ void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses) const
     object.info = object.priorInfo;
     object.infoMean = object.priorInfo * object.priorMean;
     object.measurementInfo = object.priorInfo;
+    object.poseCovSum.setZero();
+    object.weightSum = 0.0;
     for (const int ti : object.tracks) {
         const Track& track = tracks_[static_cast<std::size_t>(ti)];
         for (const TrackWindow& tw : track.windows) {
@@ -295,6 +337,15 @@ bool StaticMap::sameObject(const StaticObject& x, const StaticObject& y) const
     return mahalanobis2(x.mean - y.mean, cov) < config_.gateChi2;
 }
 
+bool StaticMap::maybeSameObject(const StaticObject& x, const StaticObject& y) const
+{
+    const auto poseCov = [](const StaticObject& so) {
+        return so.weightSum > 0.0 ? Eigen::Matrix2d(so.poseCovSum / so.weightSum) : Eigen::Matrix2d::Zero();
+    };
+    const Eigen::Matrix2d cov = x.info.inverse() + y.info.inverse() + 2.0 * floorCovariance() + poseCov(x) + poseCov(y);
+    return mahalanobis2(x.mean - y.mean, cov) < config_.gateChi2;
+}
+
 void StaticMap::mergeAll(ObjectIds& ids)
 {
     for (std::size_t a = 0; a < objects_.size(); ++a) {
@@ -304,7 +355,7 @@ void StaticMap::mergeAll(ObjectIds& ids)
             if (!x.alive || !y.alive || x.info.determinant() <= 0.0 || y.info.determinant() <= 0.0) {
                 continue;
             }
-            if (!sameObject(x, y)) {
+            if (!sameObject(x, y) || seenApart(x, static_cast<int>(b))) {
                 continue;
             }
             StaticObject& kept = x.order <= y.order ? x : y;
@@ -317,6 +368,8 @@ void StaticMap::mergeAll(ObjectIds& ids)
             kept.info += gone.info;
             kept.infoMean += gone.infoMean;
             kept.measurementInfo += gone.measurementInfo;
+            kept.poseCovSum += gone.poseCovSum;
+            kept.weightSum += gone.weightSum;
             kept.priorInfo += gone.priorInfo;
             kept.priorMean = kept.mean;
             kept.mean = kept.info.ldlt().solve(kept.infoMean);
@@ -382,10 +435,13 @@ void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Sna
             so.info.determinant() <= 0.0) {
             continue;
         }
-        // A duplicate of an older object (a churned track UUID that missed the gate at first) is not shown while
-        // it waits for the next merge: its id would steal the object's for a while and then vanish.
-        if (std::any_of(published.begin(), published.end(),
-                        [&](const StaticObject* older) { return sameObject(*older, so); })) {
+        // A possible duplicate of an older object (a churned track UUID that missed the gate, or the UGVs' pose
+        // errors putting one object in two places) is not shown while it waits for a merge: its id would steal the
+        // object's for a while and then vanish. Unless one UGV saw both at one instant: then they are two.
+        const int index = static_cast<int>(&so - objects_.data());
+        if (std::any_of(published.begin(), published.end(), [&](const StaticObject* older) {
+                return maybeSameObject(*older, so) && !seenApart(*older, index);
+            })) {
             continue;
         }
         const Ellipse el = ellipseOf(so.info.inverse() + floorCovariance());

@@ -67,6 +67,24 @@ bool UgvPoseErrors::explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos,
     return covered;
 }
 
+double UgvPoseErrors::priorHeadingSigma() const
+{
+    return config_.headingBiasSigmaDeg * kRadPerDeg;
+}
+
+/// Once estimated (or corrected), the pose error left: what was measured (how far the last solve still moved the
+/// estimate, the spread about other UGVs' objects), never below the model's floor nor above the prior.
+UgvPoseErrors::PoseSigmas UgvPoseErrors::remainingSigmas(const Ugv& u, bool corrected) const
+{
+    if (corrected) {
+        return {kSolvedHeadingSigmaDeg * kRadPerDeg, kSolvedOffsetSigmaM};
+    }
+    const double heading = std::clamp(u.headingStep, kSolvedHeadingSigmaDeg * kRadPerDeg, priorHeadingSigma());
+    const double offset = std::clamp(std::max(u.poseSpreadM, u.offsetStepM), kSolvedOffsetSigmaM,
+                                     std::max(kSolvedOffsetSigmaM, config_.offsetSigmaM));
+    return {heading, offset};
+}
+
 void UgvPoseErrors::project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
                             bool withPose) const
 {
@@ -85,10 +103,11 @@ void UgvPoseErrors::project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, 
     const RangeBearingNoise noise = config_.noise();
     const double sr = noise.alongSigma(s.rangeM, u.rangeScale);
     const bool knownPose = u.solved || corrected;
-    const double headingSigma =
-        withPose ? (knownPose ? kSolvedHeadingSigmaDeg : config_.headingBiasSigmaDeg) * kRadPerDeg : 0.0;
+    const PoseSigmas sigmas =
+        knownPose ? remainingSigmas(u, corrected) : PoseSigmas{priorHeadingSigma(), config_.offsetSigmaM};
+    const double headingSigma = withPose ? sigmas.heading : 0.0;
     const double sc2 = std::pow(noise.acrossSigma(s.rangeM, u.bearingScale), 2) + std::pow(s.rangeM * headingSigma, 2);
-    const double offset = withPose ? (knownPose ? kSolvedOffsetSigmaM : config_.offsetSigmaM) : 0.0;
+    const double offset = withPose ? sigmas.offsetM : 0.0;
     *cov = sr * sr * ray * ray.transpose() + sc2 * across * across.transpose() +
            offset * offset * Eigen::Matrix2d::Identity();
 }

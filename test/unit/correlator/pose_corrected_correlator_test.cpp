@@ -311,7 +311,8 @@ TEST(PoseCorrectedCorrelator, DuplicatesFromABiasedUgvMergeIntoTheEarliestId)
 /// A close pair that the UGVs' unknown heading errors first put in one place. ugv-1 reads its heading 4 deg to the
 /// right, ugv-2 4 deg to the left (the fleet's mean error is zero, so the estimated errors are the true ones).
 /// Post B, 4 m east of post A, is hidden from ugv-1: ugv-2's B lands 1.3 m from ugv-1's A, well inside the gate of
-/// an object whose pose errors are unknown, so one object is published for both. Posts both UGVs see elsewhere
+/// an object whose pose errors are unknown, and ugv-2 sees A and B at alternate instants (never both at one, which
+/// would tell them apart), so one object is published for both. Posts both UGVs see elsewhere
 /// let the solve (every 120 s) estimate the errors; then ugv-2's B track lies 4 m from the A tracks and the object
 /// splits. bFirst: ugv-2 sees B from the start and A only later, so B founds the object and still loses the id
 /// (A has two tracks, more observations). The first solve, made with the pair still associated, is skewed (the
@@ -358,12 +359,13 @@ SplitTrace runClosePair(bool bFirst)
     const Eigen::Vector2d middle = (a + b) / 2.0;
     for (int step = 0; step < 1800; ++step) {
         const double t = step * 0.5;
-        if (bFirst && !add(scene.see(t, "ugv-2", "b", OoiClass::Static, two, b, -4.0))) {
+        const bool bInstant = step % 2 == 1;
+        if (bInstant && bFirst && !add(scene.see(t, "ugv-2", "b", OoiClass::Static, two, b, -4.0))) {
             problem(t, "add");
         }
         if (!add(scene.see(t, "ugv-1", "a", OoiClass::Static, one, a, 4.0)) ||
-            ((!bFirst || t >= 10.0) && !add(scene.see(t, "ugv-2", "a", OoiClass::Static, two, a, -4.0))) ||
-            (!bFirst && !add(scene.see(t, "ugv-2", "b", OoiClass::Static, two, b, -4.0)))) {
+            (!bInstant && (!bFirst || t >= 10.0) && !add(scene.see(t, "ugv-2", "a", OoiClass::Static, two, a, -4.0))) ||
+            (bInstant && !bFirst && !add(scene.see(t, "ugv-2", "b", OoiClass::Static, two, b, -4.0)))) {
             problem(t, "add");
         }
         for (std::size_t i = 0; i < shared.size(); ++i) {
@@ -425,7 +427,9 @@ void expectSplitKeepingTheIdAtA(const SplitTrace& trace)
     EXPECT_TRUE(trace.problems.empty()) << trace.problems.size() << " problems";
     ASSERT_FALSE(trace.published.empty());
     EXPECT_GE(trace.splitT, 120.0);
-    EXPECT_LE(trace.splitT, 250.0); // at the first or second solve
+    // By the third solve: while the solves still move the heading estimates, the part at B may be a duplicate the
+    // pose errors made (nothing tells them apart), so it is not shown before they settle.
+    EXPECT_LE(trace.splitT, 370.0);
     ASSERT_EQ(trace.last.size(), 2U);
     const bool firstIsA = (scene.local(trace.last[0]) - kPostA).norm() < (scene.local(trace.last[1]) - kPostA).norm();
     const ObjectEstimate& atA = trace.last[firstIsA ? 0 : 1];
@@ -448,6 +452,33 @@ TEST(PoseCorrectedCorrelator, AClosePairAssociatedWhileTheHeadingErrorsWereUnkno
 TEST(PoseCorrectedCorrelator, ASplitKeepsTheIdForTheLargerPartEvenWhenTheSmallerFoundedTheObject)
 {
     expectSplitKeepingTheIdAtA(runClosePair(true));
+}
+
+/// The close pair of runClosePair, but ugv-2 sees B and A at the same instants (B first): its two tracks are two
+/// objects, so its A never joins the object its B joined, however close the unknown heading errors put them.
+TEST(PoseCorrectedCorrelator, AClosePairOneUgvSeesAtOneInstantIsNeverOneObject)
+{
+    const Scene scene;
+    PoseCorrectedCorrelator sut;
+    const Eigen::Vector2d one(-10, 0);
+    const Eigen::Vector2d two(10, 0);
+    const Eigen::Vector2d middle = (kPostA + kPostB) / 2.0;
+    std::size_t fewest = 99;
+    for (int step = 0; step < 480; ++step) {
+        const double t = step * 0.5;
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-2", "b", OoiClass::Static, two, kPostB, -4.0)).has_value());
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "a", OoiClass::Static, one, kPostA, 4.0)).has_value());
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-2", "a", OoiClass::Static, two, kPostA, -4.0)).has_value());
+        if (step < 10 || step % 10 != 9) {
+            continue;
+        }
+        std::size_t near = 0;
+        for (const ObjectEstimate& o : snapshotAt(sut, t).objects) {
+            near += (scene.local(o) - middle).norm() < 6.0 ? 1U : 0U;
+        }
+        fewest = std::min(fewest, near);
+    }
+    EXPECT_EQ(fewest, 2U);
 }
 
 } // namespace
@@ -538,6 +569,38 @@ TEST(PoseCorrectedCorrelator, ADuplicateUnderAChurnedTrackIsNotShownBeforeItMerg
     EXPECT_FALSE(firstId.empty());
     EXPECT_EQ(mostShown, 2U);
     EXPECT_EQ(snapshotAt(sut, 110).objects.size(), 2U);
+}
+
+/// Before any solve ugv-2's unknown 10 deg heading error puts the post 3.5 m from ugv-1's reading, and its first
+/// reading is an outlier (range 15 m long), outside the gate: ugv-2's track makes a second object. Its estimate
+/// is certain enough for the merge gate to keep them apart, but not once the UGVs' unknown pose errors are
+/// counted: it may be the same post, so it is not shown and the post keeps one id.
+TEST(PoseCorrectedCorrelator, AnObjectThePoseErrorsMayHaveDoubledIsNotShownBesideTheOlderOne)
+{
+    const Scene scene;
+    PoseCorrectedCorrelator sut;
+    const Eigen::Vector2d post(0, 20);
+    std::string firstId;
+    std::size_t mostNear = 0;
+    for (int step = 0; step < 200; ++step) {
+        const double t = step * 0.5;
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "a", OoiClass::Static, {0, 0}, post)).has_value());
+        if (t >= 5.0) {
+            Observation o = scene.see(t, "ugv-2", "b", OoiClass::Static, {0, 0}, post, 10.0);
+            o.rangeM += t == 5.0 ? 15.0 : 0.0;
+            ASSERT_TRUE(sut.add(o).has_value());
+        }
+        std::size_t near = 0;
+        for (const ObjectEstimate& e : snapshotAt(sut, t).objects) {
+            if ((scene.local(e) - post).norm() < 6.0) {
+                firstId = firstId.empty() ? e.id : firstId;
+                EXPECT_EQ(e.id, firstId) << "t " << t;
+                ++near;
+            }
+        }
+        mostNear = std::max(mostNear, near);
+    }
+    EXPECT_EQ(mostNear, 1U);
 }
 
 } // namespace

@@ -1,9 +1,12 @@
-// Parts of mode pose-corrected on their own: the measurement model (rays, noise, information) and ObjectIds (ids
-// in creation order, merges followed, erased ids gone). The rules they carry out are tested through
-// PoseCorrectedCorrelator in pose_corrected_correlator_test.cpp.
+// Parts of mode pose-corrected on their own: the measurement model (rays, noise, information), ObjectIds (ids
+// in creation order, merges followed, erased ids gone) and UgvPoseErrors' remaining pose uncertainty. The rules they
+// carry out are tested through PoseCorrectedCorrelator in pose_corrected_correlator_test.cpp.
 
 #include "ugv/correlator/measurement_model.hpp"
 #include "ugv/correlator/object_ids.hpp"
+#include "ugv/correlator/ugv_pose_errors.hpp"
+
+#include <cmath>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -104,6 +107,41 @@ TEST(ObjectIds, ErasedAndUnknownIdsAreNotFound)
     EXPECT_FALSE(sut.find(a).has_value());
     EXPECT_FALSE(sut.find("ooi-42").has_value());
     EXPECT_FALSE(sut.find("").has_value());
+}
+
+/// The across-ray variance of an observation 20 m straight ahead of a UGV at the origin.
+double acrossVariance(const UgvPoseErrors& poses, int ugv)
+{
+    const RangeBearing s{0.0, Eigen::Vector2d::Zero(), 0.0, 20.0, 0.0};
+    Eigen::Vector2d p;
+    Eigen::Matrix2d cov;
+    poses.project(ugv, s, p, &cov);
+    return cov(0, 0); // the ray points north: across is east
+}
+
+TEST(UgvPoseErrors, AfterASolveThePoseUncertaintyLeftIsAtLeastHowFarTheSolveStillMovedTheEstimate)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors sut(config);
+    const int settled = sut.index("ugv-1");
+    const int moving = sut.index("ugv-2");
+    const int unsolved = sut.index("ugv-3");
+    for (const int u : {settled, moving}) {
+        sut.ugv(static_cast<std::size_t>(u)).solved = true;
+    }
+    sut.ugv(static_cast<std::size_t>(settled)).headingStep = 0.001 * kRadPerDeg;
+    sut.ugv(static_cast<std::size_t>(moving)).headingStep = 3.0 * kRadPerDeg; // the last solve still moved it 3 deg
+    sut.ugv(static_cast<std::size_t>(unsolved)).headingStep = 30.0 * kRadPerDeg;
+
+    const double settledVar = acrossVariance(sut, settled);
+    const double movingVar = acrossVariance(sut, moving);
+    const double priorVar = acrossVariance(sut, unsolved);
+
+    constexpr double kRange = 20.0;
+    const double movingHeading = kRange * 3.0 * kRadPerDeg;
+    EXPECT_GT(movingVar, settledVar + 0.9 * movingHeading * movingHeading);
+    EXPECT_LT(movingVar, priorVar); // never above the prior: a solved UGV is never less certain than an unsolved one
+    EXPECT_GT(priorVar, std::pow(kRange * config.headingBiasSigmaDeg * kRadPerDeg, 2));
 }
 
 } // namespace

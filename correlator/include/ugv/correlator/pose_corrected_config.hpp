@@ -24,9 +24,9 @@ struct PoseCorrectedConfig {
     // Association.
     double gateChi2 = 11.8; ///< 2 degrees of freedom, 99.7 %
     int minStaticObservations = 3;
-    double tentativeTimeoutS = 60.0;       ///< an object with fewer observations this long after its first is dropped
-    std::size_t samplesPerTrackWindow = 4; ///< reservoir per track and offset window
-    double horizonS = 1800.0;              ///< windows older than this are frozen and their samples dropped
+    double tentativeTimeoutS = 60.0;        ///< an object with fewer observations this long after its first is dropped
+    std::size_t samplesPerTrackWindow = 12; ///< reservoir per track and offset window
+    double horizonS = 1800.0;               ///< windows older than this are frozen and their samples dropped
     // Mobile objects.
     /// [m^2/s^3] density of the continuous white acceleration of a mobile object: people walk at a steady
     /// velocity for tens of seconds; turns are handled as manoeuvres (the velocity is re-learnt, see

@@ -28,6 +28,10 @@ public:
     /// spread: 1.4826 x the median absolute residual, in range and across the ray, over the configured sigma).
     void learnNoise(const StaticMap& map, UgvPoseErrors& poses) const;
 
+    /// Each UGV's remaining pose error (UgvPoseErrors::Ugv::poseSpreadM): the robust spread of its tracks' mean
+    /// positions about the objects that other UGVs saw too (the median distance over that of a 2-D Gaussian).
+    void learnPoseSpread(const StaticMap& map, UgvPoseErrors& poses) const;
+
 private:
     PoseCorrectedConfig config_;
 };

@@ -4,11 +4,13 @@
 /// Mode `pose-corrected`'s static objects and their rules:
 /// - every static observation is kept in its UGV's frame (a bounded reservoir per track and offset window), so
 ///   that pose corrections and estimated pose errors re-project it exactly (rebuild);
+/// - two tracks one UGV reports at the same instant are two objects (seen apart);
 /// - a new track joins the nearest object within the chi-square gate (Mahalanobis distance, the UGVs' pose
-///   uncertainty included unless only its own UGV saw the object), else starts one;
+///   uncertainty included unless only its own UGV saw the object) and not seen apart from it, else starts one;
 /// - split: an object whose tracks form two groups far apart (associated while the pose errors were unknown)
-///   splits, the group with more observations keeps the id; merge: two objects within each other's gate become
-///   one, the earliest id kept; a duplicate of an older object is not published until the next merge folds it in;
+///   splits, the group with more observations keeps the id; merge: two objects within each other's gate and not
+///   seen apart become one, the earliest id kept; a possible duplicate of an older object (within its gate once
+///   both objects' pose uncertainty is counted, not seen apart) is not published until a merge folds it in;
 /// - tentative objects (fewer than minStaticObservations after tentativeTimeoutS) are dropped (clutter);
 /// - samples older than the horizon fold into their object's prior.
 ///
@@ -48,6 +50,8 @@ public:
         std::string key; ///< in trackIndex_
         std::uint64_t seen = 0;
         double lastT = 0.0;
+        /// Tracks of the same UGV observed at the same instant as this one: other objects (seen apart).
+        std::vector<int> apart;
     };
     struct StaticObject {
         std::string id;
@@ -64,6 +68,10 @@ public:
         std::vector<int> tracks;
         Eigen::Matrix2d priorInfo = Eigen::Matrix2d::Zero(); ///< from samples dropped beyond the horizon
         Eigen::Vector2d priorMean = Eigen::Vector2d::Zero();
+        /// Weighted sum of its observations' pose covariance (their UGVs' remaining pose uncertainty, common to all
+        /// of a UGV's observations, so not reduced by their number) and the weights.
+        Eigen::Matrix2d poseCovSum = Eigen::Matrix2d::Zero();
+        double weightSum = 0.0;
     };
 
     explicit StaticMap(const PoseCorrectedConfig& config);
@@ -86,27 +94,42 @@ public:
     [[nodiscard]] const std::vector<Track>& tracks() const noexcept { return tracks_; }
     [[nodiscard]] const std::vector<StaticObject>& objects() const noexcept { return objects_; }
     [[nodiscard]] std::vector<StaticObject>& objects() noexcept { return objects_; }
+    /// The weighted mean position of a track's stored samples (and the weight).
+    [[nodiscard]] Eigen::Vector2d trackMean(int trackIndex, const UgvPoseErrors& poses, double& weight) const;
 
 private:
     /// Adds `sample` to the reservoir of its track's current window.
     void store(Track& track, const RangeBearing& sample, int window);
-    /// The alive object within the gate of `p` nearest to it, or -1.
-    [[nodiscard]] int associate(int ugv, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+    /// Records that track `ti` of UGV index `ugv` was observed at time t with the UGV's other tracks of that instant.
+    void noteInstant(int ugv, int ti, double t);
+    /// The alive object within the gate of `p` nearest to it and not seen apart from track `ti`, or -1.
+    [[nodiscard]] int associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                                 const Eigen::Matrix2d& measurementCov) const;
+    /// Track `ti` and a track of the object at index `object` were observed at one instant by one UGV.
+    [[nodiscard]] bool trackSeenApart(int ti, int object) const;
+    /// A track of `x` and one of the object at index `y` were observed at one instant by one UGV: two objects.
+    [[nodiscard]] bool seenApart(const StaticObject& x, int y) const;
     /// Recomputes an object's estimate from its tracks' stored samples under the current pose model.
     void refit(StaticObject& object, const UgvPoseErrors& poses) const;
-    /// The weighted mean position of a track's stored samples (and the weight).
-    [[nodiscard]] Eigen::Vector2d trackMean(int trackIndex, const UgvPoseErrors& poses, double& weight) const;
     void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
     void split(std::size_t object, const UgvPoseErrors& poses, ObjectIds& ids);
     /// Two static objects within the merge gate of each other (their estimates' covariances and the floor).
     [[nodiscard]] bool sameObject(const StaticObject& x, const StaticObject& y) const;
+    /// Two static objects within the gate of each other once their UGVs' remaining pose uncertainty is added: they
+    /// may be one object that the pose errors put in two places.
+    [[nodiscard]] bool maybeSameObject(const StaticObject& x, const StaticObject& y) const;
     void mergeAll(ObjectIds& ids);
 
     PoseCorrectedConfig config_;
     std::vector<Track> tracks_;
     std::unordered_map<std::string, int> trackIndex_;
     std::vector<StaticObject> objects_;
+    /// Per UGV index: the time of its latest observation and the tracks observed then.
+    struct Instant {
+        double t = -1.0;
+        std::vector<int> tracks;
+    };
+    std::vector<Instant> instants_;
     std::mt19937_64 rng_{11};
 };
 

@@ -35,6 +35,13 @@ public:
         /// direction, never below 1 (the configured model is the floor: gates only widen with what is measured).
         double rangeScale = 1.0;
         double bearingScale = 1.0;
+        /// [m] learnt (learnPoseSpread): the spread of this UGV's track means about the objects other UGVs saw
+        /// too, once its errors are estimated: the pose error the estimate left (0: not measured yet).
+        double poseSpreadM = 0.0;
+        /// [rad], [m] how far the last solve moved the heading bias and the latest offset: the estimate is not
+        /// known better than that (the first solve moves it from zero by the whole error).
+        double headingStep = 0.0;
+        double offsetStepM = 0.0;
     };
 
     explicit UgvPoseErrors(const PoseCorrectedConfig& config);
@@ -59,6 +66,13 @@ public:
     void project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov, bool withPose = true) const;
 
 private:
+    struct PoseSigmas {
+        double heading = 0.0; ///< [rad]
+        double offsetM = 0.0; ///< [m] per axis
+    };
+    [[nodiscard]] double priorHeadingSigma() const;
+    [[nodiscard]] PoseSigmas remainingSigmas(const Ugv& u, bool corrected) const;
+
     PoseCorrectedConfig config_;
     std::vector<Ugv> ugvs_;
     std::unordered_map<std::string, int> index_;
