@@ -1,5 +1,7 @@
 #include "frame_pipeline.hpp"
 
+#include "ugv/platform/clock.hpp"
+
 #include <ctime>
 #include <utility>
 
@@ -51,6 +53,7 @@ vision::DetectorConfig detectorConfigFrom(const bringup::ServiceConfig& config)
 FramePipeline::FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector, int width, int height)
     : rectifier_(std::move(rectifier)), detector_(std::move(detector)), width_(width), height_(height)
 {
+    detector_.setStageClock(&MonotonicClock::nowNs); // where the time goes, per stage (the service's report)
 }
 
 Result<std::unique_ptr<FramePipeline>, Error> FramePipeline::create(const vision::StereoCalibration& calibration,

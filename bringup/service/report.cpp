@@ -64,6 +64,13 @@ std::string formatReport(const ServiceReport& r, const ReportExtras& extras)
     for (int s = 0; s < kStageCount; ++s) {
         out << histogramLine(stageName(static_cast<Stage>(s)), r.stages[static_cast<std::size_t>(s)]);
     }
+    out << "detect by stage (full-pipeline frames):\n";
+    for (int s = 0; s < vision::kVisionStageCount; ++s) {
+        const rt::LatencyHistogram& h = r.detectStages[static_cast<std::size_t>(s)];
+        if (h.count() > 0 && h.max().count() > 0) { // stages the matcher mode does not run stay 0
+            out << "  " << histogramLine(vision::stageName(static_cast<vision::VisionStage>(s)), h);
+        }
+    }
     out << "cpu:";
     for (const TaskCpu& c : r.cpu) {
         std::snprintf(line, sizeof(line), " %s %.2f s (%.0f %%)", c.name, c.cpuSeconds,
@@ -97,6 +104,11 @@ std::string reportJson(const ServiceReport& r, const ReportExtras& extras)
     for (int s = 0; s < kStageCount - 1; ++s) {
         out << (s > 0 ? ",\n" : "\n") << "    \"" << stageName(static_cast<Stage>(s))
             << "\": " << histogramJson(r.stages[static_cast<std::size_t>(s)]);
+    }
+    out << "\n  },\n  \"detect_stages\": {";
+    for (int s = 0; s < vision::kVisionStageCount; ++s) {
+        out << (s > 0 ? ",\n" : "\n") << "    \"" << vision::stageName(static_cast<vision::VisionStage>(s))
+            << "\": " << histogramJson(r.detectStages[static_cast<std::size_t>(s)]);
     }
     out << "\n  },\n  \"cpu\": {";
     for (std::size_t i = 0; i < r.cpu.size(); ++i) {

@@ -313,6 +313,9 @@ Result<RunResult, Error> runService(const RunOptions& options)
         while ((*service)->nextPublished(frame)) {
             ++seen;
             framesSincePing = true;
+            if (options.onPublished) {
+                options.onPublished(frame);
+            }
             if (options.printEvery > 0 && seen % static_cast<std::uint64_t>(options.printEvery) == 0) {
                 std::printf("%s\n", summaryLine(frame).c_str());
                 std::fflush(stdout);

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -39,6 +40,9 @@ struct RunOptions {
     int printEvery = 0;                      ///< print one sector summary every N published frames (0: none)
     int pinAllTasksTo = -1;                  ///< >= 0: capture, vision and publish on this CPU (one-core budgets)
     const std::atomic<bool>* stop = nullptr; ///< set by a signal handler: stop now
+    /// Called on the monitor (calling, non-RT) thread for each published frame, in order (`ugvsense soak` samples
+    /// latency and memory with it); may be empty.
+    std::function<void(const PublishedFrame&)> onPublished;
 };
 
 struct RunResult {

@@ -193,6 +193,10 @@ void Service::start() noexcept
 
 void Service::stop() noexcept
 {
+    runner_.requestStop();
+    if (framesIn_) {
+        framesIn_->wake(); // the vision task's frame wait is iceoryx's (CLOCK_REALTIME): end it, whatever the clock did
+    }
     runner_.stopAll();
     logDrain_.stop();
     logDrain_.drainOnce(); // without a drain thread (it could not start), the records come out here
@@ -435,6 +439,9 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             degradedInARow = 0;
             const auto took = static_cast<double>(detectedNs - rectifiedNs);
             fullMeanNs = fullMeanNs > 0.0 ? 0.8 * fullMeanNs + 0.2 * took : took;
+            if (done == PipelineStatus::Ok && frames >= static_cast<std::uint64_t>(options_.warmupFrames)) {
+                recordDetectStages(pipeline_->detector().stageTimes());
+            }
         }
         const vision::GroundEstimate& ground = pipeline_->detector().groundEstimate();
         out.groundReliable = ground.reliable;
@@ -580,6 +587,13 @@ void Service::busLoop(const std::atomic<bool>& stop)
     cpuSeconds_[3].store(threadCpuSeconds(), std::memory_order_relaxed);
 }
 
+void Service::recordDetectStages(const vision::VisionStageTimes& times) noexcept
+{
+    for (std::size_t i = 0; i < detectHistograms_.size(); ++i) {
+        detectHistograms_[i].record(std::chrono::nanoseconds(times.ns[i]));
+    }
+}
+
 ServiceReport Service::report() const
 {
     ServiceReport r;
@@ -601,6 +615,7 @@ ServiceReport Service::report() const
     const std::int64_t end = endNs_.load() != 0 ? endNs_.load() : MonotonicClock::nowNs();
     r.wallSeconds = static_cast<double>(end - startNs_) * 1e-9;
     r.stages = histograms_;
+    r.detectStages = detectHistograms_;
     r.cpu = {TaskCpu{"capture", cpuSeconds_[0].load()}, TaskCpu{"vision", cpuSeconds_[1].load()},
              TaskCpu{"publish", cpuSeconds_[2].load()}, TaskCpu{"bus", cpuSeconds_[3].load()}};
     r.threads = rt::formatReport(runner_.report());

@@ -153,6 +153,9 @@ struct ServiceReport {
     std::chrono::nanoseconds deadline{};
     double wallSeconds = 0.0;
     std::array<rt::LatencyHistogram, kStageCount> stages{};
+    /// The detect stage split by vision::VisionStage, over full-pipeline frames after warm-up (degraded ones are not
+    /// in it).
+    std::array<rt::LatencyHistogram, vision::kVisionStageCount> detectStages{};
     std::array<TaskCpu, 4> cpu{};
     std::string threads; ///< rt::formatReport of the tasks
 };
@@ -215,6 +218,8 @@ private:
     ServiceOptions options_;
     std::chrono::nanoseconds period_{};
     void spinUntilFrame(std::int64_t lastRingNs, const std::atomic<bool>& stop) noexcept;
+    /// Vision task: the detector's stage times of a full-pipeline frame into the report's histograms.
+    void recordDetectStages(const vision::VisionStageTimes& times) noexcept;
     std::chrono::nanoseconds deadline_{};
     std::unique_ptr<hal::StereoCamera> camera_;
     std::unique_ptr<FramePipeline> pipeline_;
@@ -256,7 +261,8 @@ private:
     std::atomic<std::uint64_t> busDrops_{0};                     // publish
     std::atomic<std::int64_t> lastLatencyNs_{0};                 // publish
     std::array<rt::LatencyHistogram, kStageCount> histograms_{}; // publish (read after stop)
-    std::array<std::atomic<double>, 4> cpuSeconds_{};            // each task at its end
+    std::array<rt::LatencyHistogram, vision::kVisionStageCount> detectHistograms_{}; // vision (read after stop)
+    std::array<std::atomic<double>, 4> cpuSeconds_{};                                // each task at its end
     std::int64_t startNs_ = 0;
     std::atomic<std::int64_t> endNs_{0};
 };

@@ -14,6 +14,7 @@ int runDetect(int argc, char** argv);
 int runEval(int argc, char** argv);
 int runRecording(int argc, char** argv);
 int runBench(int argc, char** argv);
+int runSoak(int argc, char** argv);
 int runRecord(int argc, char** argv);
 int runCorrelate(int argc, char** argv);
 int runCorrelateSim(int argc, char** argv);

@@ -34,30 +34,6 @@ int fail(const Error& error)
     return 1;
 }
 
-/// Reads an image; empty with `why` set when the file is missing or not a readable image.
-cv::Mat readImage(const std::string& path, int flags, std::string& why)
-{
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) {
-        why = "file not found";
-        return {};
-    }
-    if (auto header = checkImageHeader(path); !header) {
-        why = header.error().what;
-        return {};
-    }
-    cv::Mat image;
-    try {
-        image = cv::imread(path, flags);
-    } catch (const std::exception& e) {
-        image.release();
-    }
-    if (image.empty()) {
-        why = "not a readable image";
-    }
-    return image;
-}
-
 const char* fallbackName(vision::GroundFallbackReason reason)
 {
     switch (reason) {
@@ -182,11 +158,11 @@ int runDetect(int argc, char** argv)
         return fail(calib.error());
     }
     std::string why;
-    const cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, why);
+    const cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, &why);
     if (left.empty()) {
         return fail(Error{args.get("left"), why, "give an existing 8-bit image file"});
     }
-    const cv::Mat right = readImage(args.get("right"), cv::IMREAD_GRAYSCALE, why);
+    const cv::Mat right = readImage(args.get("right"), cv::IMREAD_GRAYSCALE, &why);
     if (right.empty()) {
         return fail(Error{args.get("right"), why, "give an existing 8-bit image file"});
     }
@@ -238,7 +214,7 @@ int runDetect(int argc, char** argv)
         std::printf("wrote %s\n", args.get("json").c_str());
     }
     if (args.has("overlay")) {
-        const cv::Mat colour = readImage(args.get("left"), cv::IMREAD_COLOR, why);
+        const cv::Mat colour = readImage(args.get("left"), cv::IMREAD_COLOR, &why);
         bool written = false;
         if (!colour.empty()) {
             const cv::Mat overlay = makeOverlay(colour, *fullRectifier, *detector, config, projection);

@@ -25,6 +25,7 @@
 #include "commands.hpp"
 #include "detection.hpp"
 #include "eval_suite.hpp"
+#include "pair_files.hpp"
 #include "real_eval.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
@@ -692,17 +693,22 @@ bool evalPair(const std::filesystem::path& root, const StereoSet& set, vision::M
               DisparityScore& opencv, int& numDisparities)
 {
     const std::filesystem::path dir = root / set.folder;
-    cv::Mat left, right, gt8;
-    try {
-        left = cv::imread((dir / set.left).string(), cv::IMREAD_GRAYSCALE);
-        right = cv::imread((dir / set.right).string(), cv::IMREAD_GRAYSCALE);
-        gt8 = cv::imread((dir / set.gt).string(), cv::IMREAD_GRAYSCALE);
-    } catch (const std::exception&) {
-        left.release();
-    }
+    // Each header is checked before decoding (a PNG that declares a huge size is refused unread).
+    std::string why; // of the first file that failed
+    const auto read = [&](const char* file) {
+        std::string reason;
+        cv::Mat image = why.empty() ? readGrey(dir / file, &reason) : cv::Mat();
+        if (image.empty() && why.empty()) {
+            why = std::string(file) + ": " + reason;
+        }
+        return image;
+    };
+    const cv::Mat left = read(set.left);
+    const cv::Mat right = read(set.right);
+    const cv::Mat gt8 = read(set.gt);
     if (left.empty() || right.empty() || gt8.empty() || left.size() != right.size() || left.size() != gt8.size()) {
         std::cerr << "ugvsense eval: error: " << dir.string() << ": cannot read " << set.left << ", " << set.right
-                  << " and " << set.gt << " of one size\n";
+                  << " and " << set.gt << " of one size" << (why.empty() ? "" : ": " + why) << '\n';
         return false;
     }
     cv::Mat gt;

@@ -33,6 +33,8 @@ constexpr Subcommand kSubcommands[] = {
     {"listen", "print the samples of one DDS topic live, one JSON line each (field debugging)", ugv::tool::runListen},
     {"bus-send", "publish correlator input files, hostile samples or test poses on the DDS bus", ugv::tool::runBusSend},
     {"bench", "latency budget: replay a recording through the real service and report p50..max", ugv::tool::runBench},
+    {"soak", "the service for an hour (or M minutes) with the other core loaded: latency and RSS sampled",
+     ugv::tool::runSoak},
 };
 
 void printHelp(std::ostream& out)

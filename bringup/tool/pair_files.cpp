@@ -172,24 +172,34 @@ Result<void, Error> checkImageHeader(const std::filesystem::path& path)
     return {};
 }
 
-cv::Mat readGrey(const std::filesystem::path& path, std::string* why)
+cv::Mat readImage(const std::filesystem::path& path, int flags, std::string* why)
 {
-    if (auto header = checkImageHeader(path); !header) {
-        if (why != nullptr) {
-            *why = header.error().what;
-        }
-        return {};
-    }
+    std::string reason;
+    std::error_code ec;
     cv::Mat image;
-    try {
-        image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
-    } catch (const cv::Exception&) {
-        image.release();
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        reason = "file not found";
+    } else if (auto header = checkImageHeader(path); !header) {
+        reason = header.error().what;
+    } else {
+        try {
+            image = cv::imread(path.string(), flags);
+        } catch (const cv::Exception&) {
+            image.release();
+        }
+        if (image.empty()) {
+            reason = "not a readable image";
+        }
     }
-    if (image.empty() && why != nullptr) {
-        *why = "not a readable image";
+    if (why != nullptr) {
+        *why = reason;
     }
     return image;
+}
+
+cv::Mat readGrey(const std::filesystem::path& path, std::string* why)
+{
+    return readImage(path, cv::IMREAD_GRAYSCALE, why);
 }
 
 Result<cv::Size, Error> parseBoard(const std::string& command, const std::string& text)

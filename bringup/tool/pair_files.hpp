@@ -36,7 +36,11 @@ Result<PairListing, Error> listPairs(const std::filesystem::path& dir);
 /// @return an error naming the file, the declared size and the limit
 Result<void, Error> checkImageHeader(const std::filesystem::path& path);
 
-/// Reads an image as 8-bit grey after checkImageHeader(); empty on failure, with the reason in `why` when given.
+/// Reads an image with cv::imread `flags` after checkImageHeader(); empty on failure, with the reason ("file not
+/// found", the header's refusal, "not a readable image") in `why` when given.
+cv::Mat readImage(const std::filesystem::path& path, int flags, std::string* why = nullptr);
+
+/// readImage() as 8-bit grey.
 cv::Mat readGrey(const std::filesystem::path& path, std::string* why = nullptr);
 
 /// Parses "9x6" into inner corners (each in [2, 50]).

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "detection.hpp"
+#include "pair_files.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
 
@@ -462,20 +463,25 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             std::printf("%-12s skipped: only KITTI-style GT (16-bit PNG, no doffs) is scored\n", pair.name.c_str());
             continue;
         }
-        cv::Mat left, right, gtRaw;
-        try {
-            left = cv::imread(pair.left.string(), cv::IMREAD_GRAYSCALE);
-            right = cv::imread(pair.right.string(), cv::IMREAD_GRAYSCALE);
-            gtRaw = cv::imread(pair.gt.string(), cv::IMREAD_UNCHANGED);
-        } catch (const std::exception&) {
-            left.release();
-        }
+        // Each header is checked before decoding (a PNG that declares a huge size is refused unread).
+        std::string why; // of the first file that failed
+        const auto read = [&](const std::filesystem::path& file, int flags) {
+            std::string reason;
+            cv::Mat image = why.empty() ? readImage(file, flags, &reason) : cv::Mat();
+            if (image.empty() && why.empty()) {
+                why = file.filename().string() + ": " + reason;
+            }
+            return image;
+        };
+        const cv::Mat left = read(pair.left, cv::IMREAD_GRAYSCALE);
+        const cv::Mat right = read(pair.right, cv::IMREAD_GRAYSCALE);
+        const cv::Mat gtRaw = read(pair.gt, cv::IMREAD_UNCHANGED);
         const cv::Size size(pair.width, pair.height);
         if (left.empty() || right.empty() || gtRaw.type() != CV_16UC1 || left.size() != size || right.size() != size ||
             gtRaw.size() != size) {
             std::cerr << "ugvsense eval: error: " << pair.name << ": cannot read " << pair.left.string() << ", "
                       << pair.right.string() << " and the 16-bit GT " << pair.gt.string() << " of size " << pair.width
-                      << "x" << pair.height << '\n';
+                      << "x" << pair.height << (why.empty() ? "" : ": " + why) << '\n';
             return 1;
         }
         cv::Mat gt;
@@ -559,7 +565,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
              << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b) << "}";
         first = false;
         if (!options.overlayDir.empty()) {
-            cv::Mat colour = cv::imread(pair.left.string(), cv::IMREAD_COLOR);
+            cv::Mat colour = readImage(pair.left, cv::IMREAD_COLOR);
             vision::RectifierConfig fullConfig;
             fullConfig.fullFrame = true;
             auto full = vision::Rectifier::create(calib, fullConfig);

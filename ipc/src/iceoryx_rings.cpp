@@ -14,6 +14,7 @@
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"
+#include "iceoryx_posh/popo/user_trigger.hpp"
 #include "iceoryx_posh/popo/wait_set.hpp"
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
@@ -68,11 +69,14 @@ void quietIceoryxLog()
     iox::log::LogManager::GetLogManager().SetDefaultLogLevel(iox::log::LogLevel::kWarn);
 }
 
-/// A subscriber with the wait set that blocks on its data (attached for its whole life).
+/// A subscriber with the wait set that blocks on its data (attached for its whole life), and a trigger that ends a
+/// wait at once (wake()). iceoryx 2.0.3 times its waits on CLOCK_REALTIME (sem_timedwait): a clock step back
+/// during a wait stretches it by the step; frames still end it, and wake() does when the owner stops.
 struct WaitingSubscriber {
     WaitingSubscriber(Topic topic, int queueCapacity) : subscriber(describe(topic), subscriberOptions(queueCapacity))
     {
-        attached = !waitSet.attachState(subscriber, iox::popo::SubscriberState::HAS_DATA).has_error();
+        attached = !waitSet.attachState(subscriber, iox::popo::SubscriberState::HAS_DATA).has_error() &&
+                   !waitSet.attachEvent(wakeTrigger).has_error();
     }
     ~WaitingSubscriber()
     {
@@ -96,7 +100,8 @@ struct WaitingSubscriber {
     }
 
     iox::popo::UntypedSubscriber subscriber;
-    iox::popo::WaitSet<1> waitSet;
+    iox::popo::UserTrigger wakeTrigger;
+    iox::popo::WaitSet<2> waitSet; // after the trigger: destroyed first, it detaches both
     bool attached = false;
 };
 
@@ -284,6 +289,11 @@ TakeStatus FrameSubscriber::takeOldest(TakenFrame& out, std::chrono::nanoseconds
 bool FrameSubscriber::hasData() const noexcept
 {
     return impl_->subscriber.hasData();
+}
+
+void FrameSubscriber::wake() noexcept
+{
+    impl_->wakeTrigger.trigger();
 }
 
 TakeStatus FrameSubscriber::takeFrame(TakenFrame& out, std::chrono::nanoseconds timeout, bool newest) noexcept

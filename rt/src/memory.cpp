@@ -41,19 +41,19 @@ MemoryReport lockMemory(const SysOps& ops)
     return report;
 }
 
-std::optional<std::size_t> lockedBytesFromStatus(std::string_view statusText)
+std::optional<std::size_t> statusBytes(std::string_view statusText, std::string_view key)
 {
-    constexpr std::string_view kKey = "VmLck:";
     constexpr std::size_t kBytesPerKb = 1024;
-    std::size_t pos = statusText.find(kKey);
-    // The key must start a line.
-    while (pos != std::string_view::npos && pos != 0 && statusText[pos - 1] != '\n') {
-        pos = statusText.find(kKey, pos + 1);
+    std::size_t pos = statusText.find(key);
+    // The key must start a line and end at its colon.
+    while (pos != std::string_view::npos &&
+           ((pos != 0 && statusText[pos - 1] != '\n') || statusText.substr(pos + key.size(), 1) != ":")) {
+        pos = statusText.find(key, pos + 1);
     }
     if (pos == std::string_view::npos) {
         return std::nullopt;
     }
-    std::string_view rest = statusText.substr(pos + kKey.size());
+    std::string_view rest = statusText.substr(pos + key.size() + 1);
     rest.remove_prefix(std::min(rest.find_first_not_of(" \t"), rest.size()));
     std::size_t kb = 0;
     const auto [end, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), kb);
@@ -64,7 +64,12 @@ std::optional<std::size_t> lockedBytesFromStatus(std::string_view statusText)
     return kb * kBytesPerKb;
 }
 
-std::optional<std::size_t> readLockedBytes()
+std::optional<std::size_t> lockedBytesFromStatus(std::string_view statusText)
+{
+    return statusBytes(statusText, "VmLck");
+}
+
+std::optional<std::size_t> readStatusBytes(std::string_view key)
 {
     std::ifstream file("/proc/self/status");
     if (!file) {
@@ -72,7 +77,12 @@ std::optional<std::size_t> readLockedBytes()
     }
     std::ostringstream text;
     text << file.rdbuf();
-    return lockedBytesFromStatus(text.view());
+    return statusBytes(text.view(), key);
+}
+
+std::optional<std::size_t> readLockedBytes()
+{
+    return readStatusBytes("VmLck");
 }
 
 std::size_t prefaultStack(std::size_t bytes) noexcept

@@ -435,7 +435,7 @@ void CensusSgm::leftRightCheck(std::int16_t* disp) const noexcept
     }
 }
 
-bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& disp16) noexcept
+bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& disp16, VisionStageTimes* times) noexcept
 {
     const auto sizeOk = [this](ConstImageViewU8 v) {
         return v.data() != nullptr && v.width() == width_ && v.height() == height_;
@@ -444,17 +444,22 @@ bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& di
         disp16.rows != height_) {
         return false;
     }
+    StageLap lap(times);
     census(left, leftCensus_.data(), false);
     census(right, rightCensus_.data(), true);
     std::fill(paths_.begin(), paths_.end(), std::uint8_t{255});
     std::fill(pathMin_.begin(), pathMin_.end(), std::uint8_t{255});
     parity_ = 0;
+    lap.to(VisionStage::Census);
     for (int y = 0; y < height_; ++y) {
         auto* disp = disp16.ptr<std::int16_t>(y);
         std::fill(disp, disp + x0_, kInvalid);
         costRow(y);
+        lap.to(VisionStage::Cost);
         aggregateRow(disp, y > 0 ? disp16.ptr<std::int16_t>(y - 1) : nullptr, y);
+        lap.to(VisionStage::Aggregate);
         leftRightCheck(disp);
+        lap.to(VisionStage::LeftRight);
     }
     if (config_.speckleWindowSize > 0) {
         try {
@@ -464,6 +469,7 @@ bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& di
             disp16.setTo(kInvalid); // not reachable with the checked sizes; never a half-filtered output
         }
     }
+    lap.to(VisionStage::Speckle);
     return true;
 }
 

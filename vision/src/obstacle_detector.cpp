@@ -101,26 +101,34 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
         builder_.setAllUnknown(sequence, stampNs);
         return builder_.sectors();
     }
-    if (matcher_.match(rectLeftRoi, rectRightRoi) != MatchStatus::Ok) {
+    times_.clear();
+    if (matcher_.match(rectLeftRoi, rectRightRoi, &times_) != MatchStatus::Ok) {
         status_ = DetectorStatus::MatcherFailed;
         builder_.setAllUnknown(sequence, stampNs);
         return builder_.sectors();
     }
+    StageLap lap(&times_);
     const GroundEstimate& estimate = estimator_.update(matcher_.disparityView());
     ground_ = estimate.plane;
     setGroundPrior(matcher_, estimate.disparity, roi_); // for the next frame's top path
+    lap.to(VisionStage::Ground);
     ConstImageViewU8 labels;
-    if (warpGround(rectLeftRoi, estimate.disparity, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok &&
-        mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, estimate.disparity, roi_.y) ==
-            GroundMismatchStatus::Ok) {
+    const bool warped =
+        warpGround(rectLeftRoi, estimate.disparity, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok;
+    lap.to(VisionStage::Warp);
+    if (warped && mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, estimate.disparity, roi_.y) ==
+                      GroundMismatchStatus::Ok) {
         labelsToLeftGrid(estimate.disparity, false);
         labels = leftLabels_.view();
     }
+    lap.to(VisionStage::Mismatch);
     ImageView<const std::int16_t> disparity = matcher_.disparityView();
     if (verifier_.run(rectLeftRoi, rectRightRoi, disparity, estimate.disparity, roi_.y) == VerifyStatus::Ok) {
         disparity = verifier_.disparity();
     }
+    lap.to(VisionStage::Verify);
     const BuildStatus built = builder_.build(disparity, labels, ground_, sequence, stampNs);
+    lap.to(VisionStage::Sectors);
     status_ = built == BuildStatus::Ok ? DetectorStatus::Ok : DetectorStatus::BuildFailed;
     return builder_.sectors();
 }
@@ -137,16 +145,22 @@ const ObstacleSectors& ObstacleDetector::processGroundOnly(ConstImageViewU8 rect
         groundOnlyBuilder_->setAllUnknown(sequence, stampNs);
         return groundOnlyBuilder_->sectors();
     }
+    times_.clear();
+    StageLap lap(&times_);
     ground_ = configuredGround_;
     const DisparityPlane plane = ground_.disparityPlane(projection_);
-    if (warpGround(rectLeftRoi, plane, roi_.y, warped_.view(), spans_) != GroundWarpStatus::Ok ||
+    const bool warped = warpGround(rectLeftRoi, plane, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok;
+    lap.to(VisionStage::Warp);
+    if (!warped ||
         mismatch_.run(rectLeftRoi, rectRightRoi, warped_.view(), spans_, plane, roi_.y) != GroundMismatchStatus::Ok) {
         status_ = DetectorStatus::BuildFailed;
         groundOnlyBuilder_->setAllUnknown(sequence, stampNs);
         return groundOnlyBuilder_->sectors();
     }
     labelsToLeftGrid(plane, true);
+    lap.to(VisionStage::Mismatch);
     const BuildStatus built = groundOnlyBuilder_->build(sparse_.view(), leftLabels_.view(), ground_, sequence, stampNs);
+    lap.to(VisionStage::Sectors);
     groundOnlyBuilder_->markDegraded();
     status_ = built == BuildStatus::Ok ? DetectorStatus::Ok : DetectorStatus::BuildFailed;
     return groundOnlyBuilder_->sectors();

@@ -101,8 +101,9 @@ void RoiMatcher::setGroundPrior(double a, double b, double c) noexcept
     }
 }
 
-MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right) noexcept
+MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times) noexcept
 {
+    StageLap lap(times);
     const auto sizeOk = [this](ConstImageViewU8 v) {
         return v.data() != nullptr && v.width() == roiSize_.width && v.height() == roiSize_.height;
     };
@@ -117,17 +118,19 @@ MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right) noe
         cv::Mat rightDst = padRight_(image);
         header(left).copyTo(leftDst);
         header(right).copyTo(rightDst);
+        lap.to(VisionStage::MatchOther);
         if (census_) {
             const auto view = [](const cv::Mat& m) {
                 return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
             };
-            if (!census_->match(view(padLeft_), view(padRight_), disp16Padded_)) {
+            if (!census_->match(view(padLeft_), view(padRight_), disp16Padded_, times)) {
                 disp16Padded_.setTo(-kScale);
                 return MatchStatus::MatcherFailed;
             }
             return MatchStatus::Ok;
         }
         sgbm_->compute(padLeft_, padRight_, disp16Padded_);
+        lap.to(VisionStage::MatchOther);
     } catch (...) {
         disp16Padded_.setTo(-kScale);
         return MatchStatus::OpenCvFailed;

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <thread>
 #include <vector>
@@ -70,9 +71,15 @@ const std::string& securityFolder(const std::string& partition)
     return folder;
 }
 
-/// `bc` secured as `identity` with the files in `folder`, or as is when `folder` is empty (the open bus).
+/// `bc` secured as `identity` with the files in `folder`, or as is when `folder` is empty (the open bus). With
+/// UGV_BENCH_DDS_UDP=1 in the environment (the children inherit it), UDP only, as between vehicles: the team bus
+/// crosses the network, so that is the transport its cost of security is about.
 dds::BusConfig secured(dds::BusConfig bc, const std::string& folder, const char* identity)
 {
+    const char* udp = std::getenv("UGV_BENCH_DDS_UDP");
+    if (udp != nullptr && std::string(udp) == "1") {
+        bc.sharedMemory = false;
+    }
     if (!folder.empty()) {
         bc.security = dds::securityFromFolder(folder + "/" + identity, identity);
     }

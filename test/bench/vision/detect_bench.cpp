@@ -4,7 +4,9 @@
 // and the sector builder alone. Input: one ugvsense sim pair (pole at 4 m, asphalt, seed 0), 128 disparities,
 // block 5. Report ratios against BM_FullFrameSgbmBaseline (shared, noisy machines).
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -15,6 +17,7 @@
 
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
+#include "ugv/platform/clock.hpp"
 #include "ugv/rt/latency_histogram.hpp"
 #include "ugv/vision/census_sgm.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
@@ -107,15 +110,26 @@ void BM_DetectorPipeline(benchmark::State& state)
     config.matcher.mode = static_cast<MatcherMode>(state.range(0));
     auto sut =
         ObstacleDetector::create(config, kProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0})).value();
+    sut.setStageClock(&ugv::MonotonicClock::nowNs);
     std::uint64_t sequence = 0;
     FrameTimes times;
+    std::array<double, ugv::vision::kVisionStageCount> stageMs{};
     for (auto _ : state) {
         times.start();
         const auto& out = sut.process(roiView(frame().left), roiView(frame().right), ++sequence, 0);
         benchmark::DoNotOptimize(&out);
         times.stop();
+        for (int i = 0; i < ugv::vision::kVisionStageCount; ++i) {
+            stageMs[static_cast<std::size_t>(i)] +=
+                static_cast<double>(sut.stageTimes().ns[static_cast<std::size_t>(i)]) / 1e6;
+        }
     }
     times.report(state);
+    // Where the time goes: the mean of each stage per frame [ms] (issue 25 item 1).
+    for (int i = 0; i < ugv::vision::kVisionStageCount; ++i) {
+        state.counters[std::string("ms_") + stageName(static_cast<ugv::vision::VisionStage>(i))] =
+            stageMs[static_cast<std::size_t>(i)] / static_cast<double>(std::max<std::int64_t>(state.iterations(), 1));
+    }
     state.SetBytesProcessed(state.iterations() * 2 * kRoi.width * kRoi.height);
 }
 

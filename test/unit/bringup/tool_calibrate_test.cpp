@@ -275,6 +275,23 @@ TEST(ToolHostile, ImageDeclaringAHugeSizeIsRefusedBeforeDecoding)
     EXPECT_NE(rectify.output.find("left1.png: the header declares 30000x30000"), std::string::npos) << rectify.output;
 }
 
+// eval's readers (Middlebury here; the real-data reader uses the same call) check the header before decoding.
+TEST(ToolHostile, EvalRefusesAHugeImageBeforeDecoding)
+{
+    const auto dir = tempDir("huge-eval");
+    std::filesystem::create_directories(dir / "middlebury" / "tsukuba");
+    const std::string header(
+        "\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR\x00\x00\x75\x30\x00\x00\x75\x30\x08\x00\x00\x00\x00", 29);
+    for (const char* name : {"im3.png", "im4.png", "disp3.pgm"}) {
+        std::ofstream((dir / "middlebury" / "tsukuba" / name).string(), std::ios::binary) << header;
+    }
+
+    const ToolRun sut = run("eval --middlebury --data " + dir.string());
+
+    EXPECT_EQ(sut.exitCode, 1) << sut.output;
+    EXPECT_NE(sut.output.find("im3.png: the header declares 30000x30000 pixels"), std::string::npos) << sut.output;
+}
+
 TEST(ToolHostile, JpegBmpAndPgmHeadersAreCheckedToo)
 {
     const auto dir = tempDir("huge-headers");

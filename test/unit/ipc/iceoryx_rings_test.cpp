@@ -4,6 +4,7 @@
 #include "ugv/ipc/iceoryx_rings.hpp"
 
 #include <cstdint>
+#include <future>
 #include <limits>
 #include <memory>
 
@@ -63,6 +64,33 @@ TEST_F(IceoryxRings, RouDiIsReachableAndASecondOneIsRefused)
     const auto second = EmbeddedRouDi::start("ugv-ipc-test-2", 1024);
     ASSERT_FALSE(second.has_value());
     EXPECT_NE(second.error().message().find("already runs"), std::string::npos) << second.error().message();
+}
+
+// A wait of an hour ends at wake() (the service's stop), whatever the wall clock does meanwhile: without the trigger
+// this test waits an hour and ctest's timeout fails it. A wake before the wait ends the next wait; a frame that is
+// queued is still taken.
+TEST_F(IceoryxRings, WakeEndsAWaitOfAnHourAtOnce)
+{
+    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto vision = FrameSubscriber::create(1).value();
+    auto waiting = std::async(std::launch::async, [&] {
+        TakenFrame frame;
+        return vision->take(frame, std::chrono::hours(1));
+    });
+    // Until the waiter has surely begun, each wake may be consumed by a wait not yet started: repeat.
+    while (waiting.wait_for(milliseconds(20)) != std::future_status::ready) {
+        vision->wake();
+    }
+    EXPECT_EQ(waiting.get(), TakeStatus::Timeout);
+    vision->wake(); // before the wait
+    TakenFrame frame;
+    EXPECT_EQ(vision->takeOldest(frame, std::chrono::hours(1)), TakeStatus::Timeout);
+    fill(1);
+    ASSERT_TRUE(publisher->publish(7, 10, 17, left_.view(), right_.view()));
+    vision->wake();
+    ASSERT_EQ(vision->take(frame, std::chrono::hours(1)), TakeStatus::Frame);
+    EXPECT_EQ(frame.header.sequence, 7U);
+    vision->release(frame);
 }
 
 TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)

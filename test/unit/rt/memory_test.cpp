@@ -102,6 +102,17 @@ TEST(LockedBytesFromStatus, MissingOrMalformedIsNullopt)
     EXPECT_FALSE(ugv::rt::lockedBytesFromStatus("XVmLck:\t12 kB\n").has_value()); // key must start a line
 }
 
+TEST(StatusBytes, ReadsTheNamedFieldOnly)
+{
+    constexpr std::string_view kStatus = "Name:\tx\nVmRSSX:\t7 kB\nVmLck:\t1 kB\nVmRSS:\t  52100 kB\n";
+    EXPECT_EQ(ugv::rt::statusBytes(kStatus, "VmRSS"), 52100UL * 1024UL); // not VmRSSX, whose name only starts so
+    EXPECT_EQ(ugv::rt::statusBytes(kStatus, "VmLck"), 1024U);
+    EXPECT_FALSE(ugv::rt::statusBytes(kStatus, "VmHWM").has_value());
+    const auto rss = ugv::rt::readStatusBytes("VmRSS");
+    ASSERT_TRUE(rss.has_value());
+    EXPECT_GT(*rss, 0U);
+}
+
 TEST(ReadLockedBytes, ReadsThisProcess)
 {
     EXPECT_TRUE(ugv::rt::readLockedBytes().has_value());

@@ -197,6 +197,41 @@ TEST(ObstacleDetector, MismatchLabelsMarkThePoleOnTheLeftGrid)
     EXPECT_GT(onPole, positive * 6 / 10);
 }
 
+/// A clock that ticks once per read: each lap of a stage then adds exactly 1, so the counts tell which stage boundary
+/// was passed how often.
+std::int64_t ticks = 0;
+std::int64_t tickingClock() noexcept
+{
+    return ++ticks;
+}
+
+TEST(ObstacleDetector, EveryStageIsTimedWithTheClockItIsGivenAndNoneWithout)
+{
+    auto sut = makeDetector();
+    const auto frame = renderScene("pole", 4.0, 0.0);
+    (void)sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    EXPECT_EQ(sut.stageTimes().totalNs(), 0); // no clock given: vision reads none
+
+    sut.setStageClock(&tickingClock);
+    (void)sut.process(roiView(frame.left), roiView(frame.right), 2U, 0);
+
+    const VisionStageTimes& t = sut.stageTimes();
+    for (const VisionStage once :
+         {VisionStage::MatchOther, VisionStage::Census, VisionStage::Speckle, VisionStage::Ground, VisionStage::Warp,
+          VisionStage::Mismatch, VisionStage::Verify, VisionStage::Sectors}) {
+        EXPECT_EQ(t[once], 1) << stageName(once);
+    }
+    for (const VisionStage perRow : {VisionStage::Cost, VisionStage::Aggregate, VisionStage::LeftRight}) {
+        EXPECT_EQ(t[perRow], kRoi.height) << stageName(perRow); // the census matcher's row loop
+    }
+
+    (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 3U, 0); // the overload path
+    EXPECT_EQ(sut.stageTimes()[VisionStage::Warp], 1);
+    EXPECT_EQ(sut.stageTimes()[VisionStage::Mismatch], 1);
+    EXPECT_EQ(sut.stageTimes()[VisionStage::Sectors], 1);
+    EXPECT_EQ(sut.stageTimes().totalNs(), 3);
+}
+
 TEST(ObstacleDetector, BlackSaturatedAndTexturelessFramesAreUnknown)
 {
     auto sut = makeDetector();

@@ -135,6 +135,10 @@ public:
     TakeStatus takeOldest(TakenFrame& out, std::chrono::nanoseconds timeout) noexcept;
     /// True when a frame is queued (no wait, no system call: a poll of the shared-memory queue).
     [[nodiscard]] bool hasData() const noexcept;
+    /// Ends the current (or the next) wait of take()/takeOldest() at once: it returns Timeout unless a frame is
+    /// queued. From any thread; the owner calls it when it stops, so that stopping never depends on iceoryx's
+    /// timed wait, which runs on CLOCK_REALTIME (a clock step back while waiting would stretch it).
+    void wake() noexcept;
     /// Gives the chunk back to the pool.
     void release(TakenFrame& frame) noexcept;
     [[nodiscard]] std::uint64_t malformed() const noexcept { return malformed_; }

@@ -29,8 +29,15 @@ struct MemoryReport {
 /// Each refusal adds a warning (and a log line) naming the call, the errno text and the fix; never fails.
 [[nodiscard]] MemoryReport lockMemory(const SysOps& ops = realSysOps());
 
+/// @brief A "Key:   N kB" line of a /proc/<pid>/status text (key without its colon: "VmLck", "VmRSS"), in bytes;
+/// nullopt when absent or malformed.
+[[nodiscard]] std::optional<std::size_t> statusBytes(std::string_view statusText, std::string_view key);
+
 /// @brief The VmLck value of a /proc/<pid>/status text, in bytes; nullopt when absent or malformed.
 [[nodiscard]] std::optional<std::size_t> lockedBytesFromStatus(std::string_view statusText);
+
+/// @brief A "kB" field of this process's /proc/self/status ("VmRSS", "VmLck"), in bytes; nullopt when unreadable.
+[[nodiscard]] std::optional<std::size_t> readStatusBytes(std::string_view key);
 
 /// @brief VmLck of this process (reads /proc/self/status); nullopt when unreadable.
 [[nodiscard]] std::optional<std::size_t> readLockedBytes();

@@ -97,6 +97,10 @@ public:
     /// @brief Open the start gate: all task bodies begin. Does nothing before createAll() or after stopAll().
     void startAll() noexcept;
 
+    /// @brief Set the stop flag only (the bodies see it at their next look); the owner can then wake bodies that
+    /// wait on something of its own before stopAll() joins them. Any thread.
+    void requestStop() noexcept { stopRequested_.store(true, std::memory_order_release); }
+
     /// @brief Set the stop flag, open the gate (bodies not yet started are skipped) and join every thread.
     /// Idempotent.
     void stopAll() noexcept;

@@ -22,6 +22,7 @@
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/result.hpp"
+#include "ugv/vision/stage_times.hpp"
 
 namespace ugv::vision {
 
@@ -63,8 +64,10 @@ public:
     static Result<CensusSgm, Error> create(const CensusSgmConfig& config, cv::Size size);
 
     /// Disparity of `left` (reference) against `right` into `disp16` (size, CV_16S, caller-owned).
+    /// @param[out] times  when given, the time of each of its stages is added (Census .. Speckle)
     /// @return false (nothing written) when a view or disp16 has the wrong size or type.
-    bool match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& disp16) noexcept;
+    bool match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& disp16,
+               VisionStageTimes* times = nullptr) noexcept;
 
     /// The ground's disparity in this matcher's image coordinates, d = a x + b y + c [px]. The top path lags on a
     /// surface whose disparity grows down the image: its smoothness penalty favours the row above's disparity, so

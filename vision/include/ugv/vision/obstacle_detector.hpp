@@ -34,6 +34,7 @@
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 #include "ugv/vision/sector_builder.hpp"
+#include "ugv/vision/stage_times.hpp"
 
 namespace ugv::vision {
 
@@ -117,6 +118,12 @@ public:
     [[nodiscard]] float groundNoisePx() const noexcept { return builder_.groundNoisePx(); }
     /// The sector builder's config as used (maxRangeM resolved from the rig).
     [[nodiscard]] const SectorBuilderConfig& sectorConfig() const noexcept { return builder_.config(); }
+    /// Times each stage of process() and processGroundOnly() with `clock` (MonotonicClock::nowNs); nullptr (the
+    /// default) times nothing. Vision reads no clock of its own.
+    void setStageClock(StageClock clock) noexcept { times_.clock = clock; }
+    /// The time of each stage of the last frame (all 0 without a clock; the ground-only path: warp, mismatch,
+    /// sectors).
+    [[nodiscard]] const VisionStageTimes& stageTimes() const noexcept { return times_; }
 
 private:
     ObstacleDetector(RoiMatcher matcher, SectorBuilder builder, GroundEstimator estimator, GroundMismatch mismatch,
@@ -135,6 +142,7 @@ private:
     SectorBuilder builder_;
     std::optional<SectorBuilder> groundOnlyBuilder_; ///< processGroundOnly(): minSupport = groundOnlyMinSupport
     bool lastGroundOnly_ = false;
+    VisionStageTimes times_;
     GroundEstimator estimator_;
     GroundMismatch mismatch_;
     ObstacleVerifier verifier_;

@@ -22,6 +22,7 @@
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/vision/census_sgm.hpp"
+#include "ugv/vision/stage_times.hpp"
 
 namespace ugv::vision {
 
@@ -84,8 +85,10 @@ public:
 
     /// Computes the disparity of `left` (reference) against `right`.
     /// @param[in] left, right  rectified ROI images, roiSize each, 8-bit grey
+    /// @param[out] times        when given, the time of each stage is added (MatchOther, and Census .. Speckle of
+    ///                          the census matcher)
     /// @return Ok, or why the disparity is all invalid.
-    MatchStatus match(ConstImageViewU8 left, ConstImageViewU8 right) noexcept;
+    MatchStatus match(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times = nullptr) noexcept;
 
     /// Disparity of the last match, roiSize CV_16S, d * kScale with sub-pixel bits; invalid < 0. A header view
     /// into the internal (padded) buffer: valid until the next match().
