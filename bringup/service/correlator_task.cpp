@@ -58,17 +58,6 @@ std::string senderOf(const msg::PoseCorrection& s)
     return "correction:" + s.source().to_string();
 }
 
-/// The name a sample claims to come from: an observation's UGV, else its source.
-std::string claimedName(const msg::OoiObservation& s)
-{
-    return s.ugv().to_string();
-}
-template <class Sample>
-std::string claimedName(const Sample& s)
-{
-    return s.source().to_string();
-}
-
 } // namespace
 
 LiveCorrelator::LiveCorrelator(const LiveCorrelatorOptions& options)
@@ -211,7 +200,7 @@ void LiveCorrelator::drain(ipc::dds::Reader<Sample>& reader, std::int64_t nowNs)
             warn("correlator: refused: " + message.error().message());
             continue;
         }
-        if (!sentByItsOwner(claimedName(s), ipc::dds::TopicOf<Sample>::id, info)) {
+        if (!sentByItsOwner(ipc::dds::sender(s), ipc::dds::TopicOf<Sample>::id, info)) {
             continue;
         }
         std::string sender = senderOf(s);

@@ -70,6 +70,7 @@ Result<std::unique_ptr<DdsBridge>, Error> DdsBridge::create(ipc::dds::Bus& bus, 
     b->negativesOut_ = *negatives;
     b->healthOut_ = *health;
     b->poseIn_ = *pose;
+    b->securedBus_ = bus.config().security.enabled ? &bus : nullptr;
     b->health_.vehicle(config.vehicleId);
     return b;
 }
@@ -114,11 +115,15 @@ void DdsBridge::idle() noexcept
 {
     try {
         msg::VehiclePose p;
-        while (poseIn_.take(p)) {
+        eprosima::fastdds::dds::SampleInfo info;
+        while (poseIn_.take(p, &info)) {
             if (ipc::dds::check(p) != nullptr) {
                 posesRejected_.fetch_add(1, std::memory_order_relaxed);
-            } else if (p.vehicle().to_string() != vehicle_) {
+            } else if (ipc::dds::sender(p) != vehicle_) {
                 posesForeign_.fetch_add(1, std::memory_order_relaxed);
+            } else if (securedBus_ != nullptr && securedBus_->writerIdentity(info) != vehicle_) {
+                // Only this vehicle's own participants (its certificate, its partition) may say where it is.
+                posesImpersonated_.fetch_add(1, std::memory_order_relaxed);
             } else {
                 poses_.add(p);
                 posesUsed_.fetch_add(1, std::memory_order_relaxed);
@@ -150,7 +155,8 @@ void DdsBridge::publishHealth(std::int64_t nowRealNs)
     health_.camera_reconnects(lastHealth_.cameraReconnects);
     health_.camera_state(static_cast<std::uint8_t>(lastHealth_.camera));
     health_.bus_drops(busDrops_);
-    health_.rejected_messages(posesRejected_.load(std::memory_order_relaxed));
+    health_.rejected_messages(posesRejected_.load(std::memory_order_relaxed) +
+                              posesImpersonated_.load(std::memory_order_relaxed));
     if (!healthOut_.write(health_)) {
         writeFailures_.fetch_add(1, std::memory_order_relaxed);
     }
@@ -160,7 +166,8 @@ DdsBridgeStats DdsBridge::stats() const noexcept
 {
     return {framesSent_.load(std::memory_order_relaxed),    writeFailures_.load(std::memory_order_relaxed),
             posesUsed_.load(std::memory_order_relaxed),     posesForeign_.load(std::memory_order_relaxed),
-            posesRejected_.load(std::memory_order_relaxed), stalePoses_.load(std::memory_order_relaxed)};
+            posesRejected_.load(std::memory_order_relaxed), posesImpersonated_.load(std::memory_order_relaxed),
+            stalePoses_.load(std::memory_order_relaxed)};
 }
 
 } // namespace ugv::service

@@ -4,7 +4,8 @@
 /// The service on the DDS bus, run by its low-priority "bus" task (Service's BusSink):
 ///   out: ugvsense/sectors (with the pose at capture and the ground estimate), rt/<ns>/obstacle_scan (LaserScan),
 ///        rt/<ns>/negative_obstacles (PointCloud2), ugvsense/health once a second;
-///   in:  ugvsense/pose of this vehicle (others' poses are ignored; malformed ones refused and counted).
+///   in:  ugvsense/pose of this vehicle (others' poses are ignored; malformed ones refused and counted; on a secured
+///        bus a pose naming this vehicle that another participant wrote is refused and counted too).
 ///
 /// Thread-safety: thread-bound (the bus task), except stats() (relaxed atomics). RT-safe: no.
 
@@ -24,10 +25,11 @@ namespace ugv::service {
 struct DdsBridgeStats {
     std::uint64_t framesSent = 0;
     std::uint64_t writeFailures = 0;
-    std::uint64_t posesUsed = 0;     ///< poses of this vehicle taken
-    std::uint64_t posesForeign = 0;  ///< poses of other vehicles (ignored)
-    std::uint64_t posesRejected = 0; ///< malformed poses refused
-    std::uint64_t stalePoses = 0;    ///< frames sent with a stale or no pose
+    std::uint64_t posesUsed = 0;         ///< poses of this vehicle taken
+    std::uint64_t posesForeign = 0;      ///< poses of other vehicles (ignored)
+    std::uint64_t posesRejected = 0;     ///< malformed poses refused
+    std::uint64_t posesImpersonated = 0; ///< secured bus: poses naming this vehicle written by another participant
+    std::uint64_t stalePoses = 0;        ///< frames sent with a stale or no pose
 };
 
 class DdsBridge final : public BusSink {
@@ -53,6 +55,7 @@ private:
     ipc::dds::Writer<ipc::dds::ros::PointCloud2_> negativesOut_;
     ipc::dds::Writer<ipc::dds::msg::ServiceHealth> healthOut_;
     ipc::dds::Reader<ipc::dds::msg::VehiclePose> poseIn_;
+    const ipc::dds::Bus* securedBus_ = nullptr; ///< the bus when secured: whose partition a pose came from
     PoseHistory poses_;
     ipc::dds::msg::ObstacleSectors sectors_;
     ipc::dds::ros::LaserScan_ scan_;
@@ -68,6 +71,7 @@ private:
     std::atomic<std::uint64_t> posesUsed_{0};
     std::atomic<std::uint64_t> posesForeign_{0};
     std::atomic<std::uint64_t> posesRejected_{0};
+    std::atomic<std::uint64_t> posesImpersonated_{0};
     std::atomic<std::uint64_t> stalePoses_{0};
 };
 

@@ -93,10 +93,13 @@ std::string formatBusReport(const RunResult& r)
         std::snprintf(
             line, sizeof(line),
             "dds: %llu frame(s) sent (sectors, LaserScan, PointCloud2), %llu write failure(s); poses %llu "
-            "used, %llu of other vehicles, %llu refused; %llu frame(s) with a stale or no pose\n",
+            "used, %llu of other vehicles, %llu refused, %llu in this vehicle's name by another participant; %llu "
+            "frame(s) with a stale or no pose\n",
             static_cast<unsigned long long>(r.bus->framesSent), static_cast<unsigned long long>(r.bus->writeFailures),
             static_cast<unsigned long long>(r.bus->posesUsed), static_cast<unsigned long long>(r.bus->posesForeign),
-            static_cast<unsigned long long>(r.bus->posesRejected), static_cast<unsigned long long>(r.bus->stalePoses));
+            static_cast<unsigned long long>(r.bus->posesRejected),
+            static_cast<unsigned long long>(r.bus->posesImpersonated),
+            static_cast<unsigned long long>(r.bus->stalePoses));
         out += line;
     }
     if (r.correlator) {

@@ -1,6 +1,7 @@
 // ugvsense listen TOPIC: field debugging of the DDS bus. Subscribes to one of our topics with the topic's own QoS
 // (ipc/include/ugv/ipc/dds_bus.hpp) and prints every sample as one JSON line with all its fields on stdout;
-// samples that ipc::dds::check() refuses go to stderr as "refused: <reason>" and are counted. Progress and the
+// samples that ipc::dds::check() refuses, and on a secured bus those naming a sender other than their writer, go to
+// stderr as "refused: <reason>" and are counted. Progress and the
 // summary go to stderr too, so stdout stays pure JSON lines (pipe it into jq).
 
 #include <algorithm>
@@ -323,6 +324,8 @@ int listenTo(dds::Bus& bus, const ListenOptions& o)
     std::uint64_t refused = 0;
     bool timedOut = false;
     T sample;
+    eprosima::fastdds::dds::SampleInfo info;
+    const bool secured = bus.config().security.enabled;
     while (!bus::g_stop.load() && (o.count == 0 || printed < o.count)) {
         auto slice = kPollSlice;
         if (o.timeoutS > 0.0) {
@@ -336,11 +339,20 @@ int listenTo(dds::Bus& bus, const ListenOptions& o)
         if (!reader->wait(slice)) {
             continue;
         }
-        while ((o.count == 0 || printed < o.count) && reader->take(sample)) {
+        while ((o.count == 0 || printed < o.count) && reader->take(sample, &info)) {
             if (const char* why = dds::check(sample)) {
                 ++refused;
                 std::cerr << "refused: " << why << '\n';
                 continue;
+            }
+            if (const std::string claimed = dds::sender(sample); secured && !claimed.empty()) {
+                if (const std::string writer = bus.writerIdentity(info); writer != claimed) {
+                    ++refused;
+                    std::cerr << "refused: a sample naming '" << claimed << "' written by '"
+                              << (writer.empty() ? std::string("an undiscovered writer") : writer)
+                              << "' (on a secured bus a participant may send only in its own name)\n";
+                    continue;
+                }
             }
             std::cout << toJson(sample).dump() << '\n';
             std::cout.flush(); // one line at a time into a pipe or a file that another process watches
@@ -375,17 +387,19 @@ int runListen(int argc, char** argv)
     for (auto& spec : bus::options()) {
         specs.push_back(std::move(spec));
     }
-    Args args(kCommand,
-              "TOPIC [--count N] [--timeout S] [--domain N] [--partition P] [--ros-namespace NS] "
-              "[--discovery-server LIST]\n"
-              "  Subscribes to one topic of the DDS bus with the topic's QoS and prints every sample as one JSON\n"
-              "  line with all its fields on stdout (NaN and infinities as the strings \"nan\", \"inf\", \"-inf\";\n"
-              "  a PointCloud2's data as hex plus its decoded x, y, z \"points\"). Samples failing the checks the\n"
-              "  service applies go to stderr as 'refused: <reason>' and are counted; the summary goes to stderr.\n"
-              "  Stops after --count samples, after --timeout seconds, or on Ctrl-C.\n\n"
-              "  TOPIC: sectors, health, pose, observations, uav, confirmations, pose_corrections, correlated, scan,\n"
-              "  negatives, or a wire name (ugvsense/ooi/observations, rt/NS/obstacle_scan, ...)",
-              specs);
+    Args args(
+        kCommand,
+        "TOPIC [--count N] [--timeout S] [--domain N] [--partition P] [--ros-namespace NS] "
+        "[--discovery-server LIST]\n"
+        "  Subscribes to one topic of the DDS bus with the topic's QoS and prints every sample as one JSON\n"
+        "  line with all its fields on stdout (NaN and infinities as the strings \"nan\", \"inf\", \"-inf\";\n"
+        "  a PointCloud2's data as hex plus its decoded x, y, z \"points\"). Samples failing the checks the\n"
+        "  service applies (on a secured bus: a sample naming a sender other than the participant that wrote it)\n"
+        "  go to stderr as 'refused: <reason>' and are counted; the summary goes to stderr.\n"
+        "  Stops after --count samples, after --timeout seconds, or on Ctrl-C.\n\n"
+        "  TOPIC: sectors, health, pose, observations, uav, confirmations, pose_corrections, correlated, scan,\n"
+        "  negatives, or a wire name (ugvsense/ooi/observations, rt/NS/obstacle_scan, ...)",
+        specs);
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError(kCommand, parsed.error());
     }

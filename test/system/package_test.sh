@@ -35,6 +35,7 @@ echo "Depends: $(cat "$work/depends.txt")"
 for dep in 'libc6' 'libopencv-core406' 'libopencv-calib3d406' 'libfastrtps2.9' 'libyaml-cpp0.7' 'iceoryx' 'adduser'; do
     grep -q "$dep" "$work/depends.txt" || fail "Depends lacks $dep"
 done
+dpkg-deb -f "$deb" Recommends | grep -q openssl || fail "Recommends lacks openssl (ugvsense-make-security)"
 dpkg-deb -e "$deb" "$work/control"
 grep -qx /etc/ugvsense/config.yaml "$work/control/conffiles" || fail "config.yaml is not a conffile"
 grep -qx /etc/ugvsense/roudi.toml "$work/control/conffiles" || fail "roudi.toml is not a conffile"
@@ -54,7 +55,13 @@ step() { echo "== $*"; }
 
 step "dpkg -i (the package's dependencies are on this machine already)"
 dpkg -i /ugvsense.deb >/dpkg-install.log 2>&1 || { cat /dpkg-install.log; fail "dpkg -i failed"; }
-for f in /usr/bin/ugvsense /usr/sbin/ugvsensed; do [ -x "$f" ] || fail "$f missing"; done
+for f in /usr/bin/ugvsense /usr/sbin/ugvsensed /usr/bin/ugvsense-make-security; do [ -x "$f" ] || fail "$f missing"; done
+ugvsense-make-security /tmp/team --partition team-a gcs ugv-1 >/make-security.log 2>&1 ||
+    { cat /make-security.log; fail "ugvsense-make-security failed"; }
+for f in identity_ca.cert.pem cert.pem key.pem permissions_ca.cert.pem governance.p7s permissions.p7s; do
+    [ -s "/tmp/team/ugv-1/$f" ] || fail "ugvsense-make-security made no ugv-1/$f"
+done
+echo "ugvsense-make-security made the files of a team (gcs, ugv-1)"
 for f in /lib/systemd/system/ugvsensed.service /lib/systemd/system/ugvsense-roudi.service \
     /lib/systemd/system/ugvsense-default-recording.service /lib/systemd/system/ugvsense-record.service \
     /etc/ugvsense/config.yaml /etc/ugvsense/roudi.toml \

@@ -9,9 +9,9 @@
 #      while certified ugv-2 gets the correlated list, and a certified viewer (correlate --from-dds --security)
 #      applies ugv-1's observations;
 #   4. one vehicle cannot write as another: certified ugv-1 sending UGV 2's observations has each one dropped by the
-#      station (its writer's partition is ugv-1's: "in another sender's name"), ugv-1 asking to write in ugv-2's
-#      partition is refused by its own permissions, and ugv-1's certificate with ugv-2's permissions document
-#      cannot join at all.
+#      station (its writer's partition is ugv-1's: "in another sender's name") and refused by a certified listen,
+#      ugv-1 asking to write in ugv-2's partition is refused by its own permissions, and ugv-1's certificate with
+#      ugv-2's permissions document cannot join at all.
 # Usage: secured_bus_test.sh UGVSENSE UGVSENSED MAKE_SECURITY WORKDIR DOMAIN
 set -u
 tool=$1 daemon=$2 make_security=$3 work=$4 domain=$5
@@ -84,13 +84,14 @@ background listen-rogue "$tool" listen correlated "${bus[@]}" --security "$work/
 l3=$last
 # 1. The positive control.
 "$tool" bus-send --input "$work/ugv-1.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
-    --linger 8 >"$work/ugv-1.log" 2>&1 &
+    --linger 20 >"$work/ugv-1.log" 2>&1 &
 pids+=($!)
 for _ in $(seq 200); do grep -q "acknowledged" "$work/ugv-1.log" && break; sleep 0.1; done
 grep -q " acknowledged by 1 reader" "$work/ugv-1.log" || fail "certified ugv-1's observations were not acknowledged"
-# A certified viewer (correlate --from-dds) takes the team's inputs too.
+# A certified viewer (correlate --from-dds) takes the team's inputs too: ugv-1's writer keeps them for late joiners
+# while it lingers. 15 s: the secured handshakes of eight participants at once took more than 5 s on a slow CI run.
 background viewer "$tool" correlate --from-dds --domain "$domain" --partition "$partition" \
-    --security "$work/team/ugv-2" --duration 5 --output "$work/viewer.jsonl"
+    --security "$work/team/ugv-2" --duration 15 --output "$work/viewer.jsonl"
 v1=$last
 # 2. Injection without a valid certificate (their writers keep their histories while they linger).
 background inject-open "$tool" bus-send --input "$work/others.jsonl" "${bus[@]}" --source ugv-2 --wait-readers 0 \
@@ -99,9 +100,14 @@ i1=$last
 background inject-rogue "$tool" bus-send --input "$work/others.jsonl" "${bus[@]}" --source ugv-2 --wait-readers 0 \
     --linger 4 --security "$work/rogue/ugv-2"
 i2=$last
-# 4. Writing as another vehicle.
-"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
-    >"$work/impersonate.log" 2>&1 || fail "certified ugv-1 could not send (its samples naming ugv-2)"
+# 4. Writing as another vehicle. A certified listener (gcs's files) refuses each sample too; the writer lingers so
+# that its history reaches the listener however late their handshake ends.
+background listen-impersonated "$tool" listen observations "${bus[@]}" --security "$work/team/gcs" --timeout 14
+l4=$last
+"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 --linger 10 \
+    >"$work/impersonate.log" 2>&1 &
+pids+=($!)
+impersonate=$!
 "$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --identity ugv-2 \
     --wait-readers 0 >"$work/other-partition.log" 2>&1 && fail "ugv-1 could write in ugv-2's partition"
 grep -q "cannot create the writer" "$work/other-partition.log" || fail "ugv-1 in ugv-2's partition: no writer error"
@@ -111,7 +117,8 @@ grep -q "cannot create the DDS participant" "$work/mixed.log" || fail "ugv-1 wit
 # 3. A certified reader gets the list.
 "$tool" listen correlated "${bus[@]}" --security "$work/team/ugv-2" --count 1 --timeout 15 >"$work/listen-ok.log" \
     2>&1 || fail "certified ugv-2 got no correlated list"
-for p in "$l1" "$l2" "$l3" "$i1" "$i2"; do wait "$p"; done
+for p in "$l1" "$l2" "$l3" "$l4" "$i1" "$i2"; do wait "$p"; done
+wait "$impersonate" || fail "certified ugv-1 could not send (its samples naming ugv-2)"
 wait "$v1" || fail "correlate --from-dds on the secured bus"
 sleep 1 # the reorder window
 kill -TERM "$gcs"
@@ -133,6 +140,11 @@ echo "3. 0 samples read without a certificate or with another CA's; certified ug
 impersonated=$(sed -E "s/.* ([0-9]+) in another sender's name.*/\1/" <<<"$line")
 [ "$impersonated" -eq "$foreign" ] ||
     fail "$foreign observations naming ugv-2 sent by ugv-1, $impersonated dropped as in another sender's name"
-echo "4. ugv-1 as ugv-2: $impersonated of $foreign samples dropped by the station; its own permissions refuse" \
-    "ugv-2's partition; its certificate with ugv-2's permissions cannot join"
+listenRefused=$(grep -c "refused: a sample naming 'ugv-2' written by 'ugv-1'" "$work/listen-impersonated.log")
+[ "$listenRefused" -eq "$foreign" ] ||
+    fail "$foreign observations naming ugv-2 sent by ugv-1, $listenRefused refused by a certified listen"
+grep -q '"ugv":"ugv-2"' "$work/listen-impersonated.log" && fail "a certified listen printed ugv-1's sample as ugv-2's"
+echo "4. ugv-1 as ugv-2: $impersonated of $foreign samples dropped by the station and $listenRefused refused by a" \
+    "certified listen; its own permissions refuse ugv-2's partition; its certificate with ugv-2's permissions" \
+    "cannot join"
 echo "OK"

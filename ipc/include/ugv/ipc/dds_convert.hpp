@@ -61,4 +61,47 @@ const char* check(const msg::CorrelatedOoiList& s) noexcept;
 const char* check(const ros::LaserScan_& s) noexcept;
 const char* check(const ros::PointCloud2_& s) noexcept;
 
+/// The participant a sample names as its sender (vehicle, UGV or source): on a secured bus it must be the writer's
+/// identity (Bus::writerIdentity), or the sample is sent in another's name. ROS 2 samples name none (empty).
+inline std::string sender(const msg::ObstacleSectors& s)
+{
+    return s.vehicle().to_string();
+}
+inline std::string sender(const msg::ServiceHealth& s)
+{
+    return s.vehicle().to_string();
+}
+inline std::string sender(const msg::VehiclePose& s)
+{
+    return s.vehicle().to_string();
+}
+inline std::string sender(const msg::OoiObservation& s)
+{
+    return s.ugv().to_string();
+}
+inline std::string sender(const msg::UavObservation& s)
+{
+    return s.source().to_string();
+}
+inline std::string sender(const msg::ConfirmationState& s)
+{
+    return s.source().to_string();
+}
+inline std::string sender(const msg::PoseCorrection& s)
+{
+    return s.source().to_string();
+}
+inline std::string sender(const msg::CorrelatedOoiList& s)
+{
+    return s.source().to_string();
+}
+inline std::string sender(const ros::LaserScan_& /*s*/)
+{
+    return {};
+}
+inline std::string sender(const ros::PointCloud2_& /*s*/)
+{
+    return {};
+}
+
 } // namespace ugv::ipc::dds
