@@ -14,17 +14,30 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kParamsOne = 5;  ///< mean 2 + covariance 3
 constexpr int kParamsTwo = 11; ///< two of them + one weight
 
-double logDensity(const Gaussian2& g, const Eigen::Vector2d& x)
-{
-    const Eigen::Vector2d d = x - g.mean;
-    const double det = g.cov.determinant();
-    return -0.5 * d.dot(g.cov.inverse() * d) - std::log(2.0 * kPi) - 0.5 * std::log(det);
-}
+/// The log density of one component, with what does not depend on the point (inverse covariance, log
+/// determinant) computed once.
+class LogDensity {
+public:
+    explicit LogDensity(const Gaussian2& g)
+        : mean_(g.mean), inverse_(g.cov.inverse()), logDet_(std::log(g.cov.determinant()))
+    {
+    }
+    double operator()(const Eigen::Vector2d& x) const
+    {
+        const Eigen::Vector2d d = x - mean_;
+        return -0.5 * d.dot(inverse_ * d) - std::log(2.0 * kPi) - 0.5 * logDet_;
+    }
 
+private:
+    Eigen::Vector2d mean_;
+    Eigen::Matrix2d inverse_;
+    double logDet_;
+};
+
+/// log(exp(a) + exp(b)); the larger term's exp is exp(0) = 1.
 double logSumExp(double a, double b)
 {
-    const double m = std::max(a, b);
-    return m + std::log(std::exp(a - m) + std::exp(b - m));
+    return std::max(a, b) + std::log(1.0 + std::exp(-std::abs(a - b)));
 }
 
 Eigen::Matrix2d floor(double minSigmaM)
@@ -32,28 +45,42 @@ Eigen::Matrix2d floor(double minSigmaM)
     return Eigen::Matrix2d::Identity() * (minSigmaM * minSigmaM);
 }
 
-/// Weighted mean and covariance; `w` are the responsibilities of one component.
-Gaussian2 weightedFit(std::span<const Eigen::Vector2d> points, const std::vector<double>& w, double minSigmaM)
+/// Weighted means and covariances of K components, in one pass over the points for all of them; `w[k]` are the
+/// responsibilities of component k. A component without weight keeps the default mean and covariance (count 0).
+template <std::size_t K>
+std::array<Gaussian2, K> weightedFit(std::span<const Eigen::Vector2d> points,
+                                     const std::array<std::span<const double>, K>& w, double minSigmaM)
 {
-    Gaussian2 g;
-    double sum = 0.0;
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    std::array<double, K> sum{};
+    std::array<Eigen::Vector2d, K> mean;
+    mean.fill(Eigen::Vector2d::Zero());
     for (std::size_t i = 0; i < points.size(); ++i) {
-        sum += w[i];
-        mean += w[i] * points[i];
+        for (std::size_t k = 0; k < K; ++k) {
+            sum[k] += w[k][i];
+            mean[k] += w[k][i] * points[i];
+        }
     }
-    g.count = sum;
-    if (sum <= 0.0) {
-        return g;
+    for (std::size_t k = 0; k < K; ++k) {
+        if (sum[k] > 0.0) {
+            mean[k] /= sum[k];
+        }
     }
-    mean /= sum;
-    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    std::array<Eigen::Matrix2d, K> cov;
+    cov.fill(Eigen::Matrix2d::Zero());
     for (std::size_t i = 0; i < points.size(); ++i) {
-        const Eigen::Vector2d d = points[i] - mean;
-        cov += w[i] * d * d.transpose();
+        for (std::size_t k = 0; k < K; ++k) {
+            const Eigen::Vector2d d = points[i] - mean[k];
+            cov[k].noalias() += w[k][i] * d * d.transpose(); // finite and unused when sum[k] is 0
+        }
     }
-    g.mean = mean;
-    g.cov = cov / sum + floor(minSigmaM);
+    std::array<Gaussian2, K> g{};
+    for (std::size_t k = 0; k < K; ++k) {
+        g[k].count = sum[k];
+        if (sum[k] > 0.0) {
+            g[k].mean = mean[k];
+            g[k].cov = cov[k] / sum[k] + floor(minSigmaM);
+        }
+    }
     return g;
 }
 
@@ -62,7 +89,7 @@ Gaussian2 weightedFit(std::span<const Eigen::Vector2d> points, const std::vector
 Gaussian2 fitOne(std::span<const Eigen::Vector2d> points, double minSigmaM)
 {
     const std::vector<double> w(points.size(), 1.0);
-    Gaussian2 g = weightedFit(points, w, minSigmaM);
+    Gaussian2 g = weightedFit<1>(points, {w}, minSigmaM)[0];
     g.weight = 1.0;
     return g;
 }
@@ -95,7 +122,7 @@ MixtureFit fitMixture(std::span<const Eigen::Vector2d> points, const MixtureConf
         r0[i] = along[i] < median ? 1.0 : 0.0;
         r1[i] = 1.0 - r0[i];
     }
-    std::array<Gaussian2, 2> g{weightedFit(points, r0, config.minSigmaM), weightedFit(points, r1, config.minSigmaM)};
+    std::array<Gaussian2, 2> g = weightedFit<2>(points, {r0, r1}, config.minSigmaM);
     double logLikTwo = 0.0;
     for (int it = 0; it < config.maxIterations; ++it) {
         if (g[0].count <= 0.0 || g[1].count <= 0.0) {
@@ -103,10 +130,14 @@ MixtureFit fitMixture(std::span<const Eigen::Vector2d> points, const MixtureConf
         }
         g[0].weight = g[0].count / static_cast<double>(n);
         g[1].weight = g[1].count / static_cast<double>(n);
+        const double logWeight0 = std::log(g[0].weight);
+        const double logWeight1 = std::log(g[1].weight);
+        const LogDensity logDensity0(g[0]);
+        const LogDensity logDensity1(g[1]);
         double logLik = 0.0;
         for (std::size_t i = 0; i < n; ++i) {
-            const double a = std::log(g[0].weight) + logDensity(g[0], points[i]);
-            const double b = std::log(g[1].weight) + logDensity(g[1], points[i]);
+            const double a = logWeight0 + logDensity0(points[i]);
+            const double b = logWeight1 + logDensity1(points[i]);
             const double total = logSumExp(a, b);
             r0[i] = std::exp(a - total);
             r1[i] = 1.0 - r0[i];
@@ -114,14 +145,15 @@ MixtureFit fitMixture(std::span<const Eigen::Vector2d> points, const MixtureConf
         }
         const bool converged = it > 0 && std::abs(logLik - logLikTwo) < 1e-6 * std::abs(logLik);
         logLikTwo = logLik;
-        g = {weightedFit(points, r0, config.minSigmaM), weightedFit(points, r1, config.minSigmaM)};
+        g = weightedFit<2>(points, {r0, r1}, config.minSigmaM);
         if (converged) {
             break;
         }
     }
+    const LogDensity logDensityOne(fit.g[0]);
     double logLikOne = 0.0;
     for (const Eigen::Vector2d& p : points) {
-        logLikOne += logDensity(fit.g[0], p);
+        logLikOne += logDensityOne(p);
     }
     const double logN = std::log(static_cast<double>(n));
     const double bicOne = -2.0 * logLikOne + kParamsOne * logN;

@@ -245,12 +245,11 @@ void OriginalCorrelator::refreshStatic(int object)
         so.alive = false;
         return;
     }
-    std::vector<Gaussian2> parts;
-    parts.reserve(so.members.size());
+    parts_.clear();
     for (const auto& [t, c] : so.members) {
-        parts.push_back(staticTracks_[static_cast<std::size_t>(t)].fit.g[static_cast<std::size_t>(c)]);
+        parts_.push_back(staticTracks_[static_cast<std::size_t>(t)].fit.g[static_cast<std::size_t>(c)]);
     }
-    so.estimate = combine(parts);
+    so.estimate = combine(parts_);
 }
 
 void OriginalCorrelator::mergeStatic(int object)
@@ -318,10 +317,10 @@ void OriginalCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& 
     if (track.object < 0) {
         int best = -1;
         double bestDistance = config_.mergeRadiusM;
-        for (int i = 0; i < static_cast<int>(mobileObjects_.size()); ++i) {
+        for (const int i : aliveMobiles_) {
             const MobileObject& mo = mobileObjects_[static_cast<std::size_t>(i)];
             const double d = (mo.pos - estimate).norm();
-            if (mo.alive && mo.cls == o.cls && d <= bestDistance) {
+            if (mo.cls == o.cls && d <= bestDistance) {
                 best = i;
                 bestDistance = d;
             }
@@ -348,16 +347,16 @@ int OriginalCorrelator::createMobile(OoiClass cls)
     const int index = static_cast<int>(mobileObjects_.size());
     idIndex_[created.id] = {false, index};
     mobileObjects_.push_back(std::move(created));
+    aliveMobiles_.push_back(index);
     return index;
 }
 
 void OriginalCorrelator::mergeMobile(int object)
 {
-    for (int i = 0; i < static_cast<int>(mobileObjects_.size()); ++i) {
+    for (const int i : aliveMobiles_) {
         MobileObject& other = mobileObjects_[static_cast<std::size_t>(i)];
         MobileObject& self = mobileObjects_[static_cast<std::size_t>(object)];
-        if (i == object || !other.alive || other.cls != self.cls ||
-            (other.pos - self.pos).norm() > config_.mergeRadiusM) {
+        if (i == object || other.cls != self.cls || (other.pos - self.pos).norm() > config_.mergeRadiusM) {
             continue;
         }
         const int keep = self.order <= other.order ? object : i;
@@ -379,6 +378,7 @@ void OriginalCorrelator::mergeMobile(int object)
                 t.object = keep;
             }
         }
+        std::erase(aliveMobiles_, drop); // invalidates this loop's iterators: return at once
         return;
     }
 }
@@ -389,10 +389,10 @@ void OriginalCorrelator::addUav(const UavFix& u)
     const OoiClass cls = u.cls == OoiClass::NonCombatant ? OoiClass::NonCombatant : OoiClass::Mobile;
     int best = -1;
     double bestDistance = config_.uavGateM;
-    for (int i = 0; i < static_cast<int>(mobileObjects_.size()); ++i) {
+    for (const int i : aliveMobiles_) {
         const MobileObject& mo = mobileObjects_[static_cast<std::size_t>(i)];
         const double d = (mo.pos - p).norm();
-        if (mo.alive && mo.cls == cls && d <= bestDistance) {
+        if (mo.cls == cls && d <= bestDistance) {
             best = i;
             bestDistance = d;
         }
@@ -438,11 +438,13 @@ Result<void, Error> OriginalCorrelator::confirm(const Confirm& c)
 
 void OriginalCorrelator::expire(double t)
 {
-    for (MobileObject& mo : mobileObjects_) {
-        if (mo.alive && t - mo.lastT > config_.mobileTimeoutS) {
+    for (const int i : aliveMobiles_) {
+        MobileObject& mo = mobileObjects_[static_cast<std::size_t>(i)];
+        if (t - mo.lastT > config_.mobileTimeoutS) {
             mo.alive = false;
         }
     }
+    std::erase_if(aliveMobiles_, [this](int i) { return !mobileObjects_[static_cast<std::size_t>(i)].alive; });
     // Forget idle mobile tracks, static tracks that never made an object, and retire idle static tracks.
     for (auto it = mobileTrackIndex_.begin(); it != mobileTrackIndex_.end();) {
         if (t - mobileTracks_[static_cast<std::size_t>(it->second)].lastT > config_.mobileTimeoutS) {

@@ -127,7 +127,8 @@ void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow&
     const RangeBearingNoise noise = config.noise();
     for (const RangeBearing& smp : tw.samples) {
         Eigen::Vector2d p;
-        poses.project(track.ugv, smp, p, nullptr);
+        Eigen::Vector2d ray;
+        poses.project(track.ugv, smp, p, nullptr, nullptr, &ray);
         // Measurement noise only: the pose errors are unknowns here.
         const double sr = noise.alongSigma(smp.rangeM);
         const double sc = noise.acrossSigma(smp.rangeM);
@@ -135,13 +136,13 @@ void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow&
         double dHeading = 0.0;
         if (poses.explicitCorrection(track.ugv, smp.t, dPos, dHeading)) {
             // Corrected by the map builder: a fixed constraint on the object only.
-            const Eigen::Vector2d ray = rayAt(smp.headingRad + dHeading + smp.bearingRad);
-            const Eigen::Matrix2d w = weight * rayInformation(ray, sr, sc);
+            const Eigen::Vector2d fixedRay = rayAt(smp.headingRad + dHeading + smp.bearingRad);
+            const Eigen::Matrix2d w = weight * rayInformation(fixedRay, sr, sc);
             fixedW += w;
             fixedWr += w * (p - objectMean);
             continue;
         }
-        const Eigen::Vector2d ray = rayAt(smp.headingRad + dHeading + poses.ugv(u).headingBias + smp.bearingRad);
+        // `ray` is along the azimuth with the estimated heading bias.
         const Eigen::Matrix2d w = weight * rayInformation(ray, sr, sc);
         const Eigen::Vector2d r = p - objectMean;
         const Eigen::Vector2d jh = smp.rangeM * acrossOf(ray); // d p / d heading
@@ -294,6 +295,14 @@ std::vector<int> ugvsOf(const StaticMap& map, const StaticMap::StaticObject& so)
     return ugvs;
 }
 
+/// Two compressed sparse matrices of one size with the same non-zero pattern.
+bool samePattern(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b)
+{
+    return a.rows() == b.rows() && a.cols() == b.cols() && a.nonZeros() == b.nonZeros() &&
+           std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1, b.outerIndexPtr()) &&
+           std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr());
+}
+
 } // namespace
 
 PoseErrorSolver::PoseErrorSolver(const PoseCorrectedConfig& config) : config_(config) {}
@@ -309,13 +318,21 @@ bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses) const
     for (std::size_t u = 0; u < poses.size(); ++u) {
         before.push_back(poses.ugv(u));
     }
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+    Eigen::SparseMatrix<double> analysed; // the pattern of ldlt's ordering
     for (int iteration = 0; iteration < config_.solveIterations; ++iteration) {
         NormalEquations eq{{}, Eigen::VectorXd::Zero(l.n)};
         addObservationTerms(map, poses, l, config_, eq);
         addPoseTerms(poses, l, config_, eq);
         Eigen::SparseMatrix<double> hm(l.n, l.n);
         hm.setFromTriplets(eq.h.begin(), eq.h.end());
-        const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hm);
+        hm.makeCompressed();
+        // The fill-reducing ordering depends on the pattern alone: computed again only when that changes.
+        if (!samePattern(hm, analysed)) {
+            ldlt.analyzePattern(hm);
+            analysed = hm;
+        }
+        ldlt.factorize(hm);
         if (ldlt.info() != Eigen::Success) {
             return false;
         }

@@ -55,17 +55,28 @@ struct TwoGroups {
 /// @return false when the farthest pair of means is closer than kSplitDistanceM (nothing to split).
 bool twoGroups(const std::vector<Eigen::Vector2d>& means, const std::vector<double>& weights, TwoGroups& g)
 {
+    // The farthest pair, the first found in index order. A repeated point (every track with no samples left has
+    // its mean at the origin) makes no pair farther than its first occurrence did, so each point is paired once.
+    std::vector<std::size_t> distinct;
+    for (std::size_t i = 0; i < means.size(); ++i) {
+        if (std::none_of(distinct.begin(), distinct.end(), [&](std::size_t k) { return means[k] == means[i]; })) {
+            distinct.push_back(i);
+        }
+    }
     std::size_t a = 0;
     std::size_t b = 0;
-    for (std::size_t i = 0; i < means.size(); ++i) {
-        for (std::size_t k = i + 1; k < means.size(); ++k) {
-            if ((means[i] - means[k]).norm() > (means[a] - means[b]).norm()) {
-                a = i;
-                b = k;
+    double farthest = (means[a] - means[b]).norm();
+    for (std::size_t i = 0; i < distinct.size(); ++i) {
+        for (std::size_t k = i + 1; k < distinct.size(); ++k) {
+            const double d = (means[distinct[i]] - means[distinct[k]]).norm();
+            if (d > farthest) {
+                a = distinct[i];
+                b = distinct[k];
+                farthest = d;
             }
         }
     }
-    if ((means[a] - means[b]).norm() < kSplitDistanceM) {
+    if (farthest < kSplitDistanceM) {
         return false;
     }
     g.ca = means[a];
@@ -196,8 +207,7 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
     Eigen::Vector2d p;
     Eigen::Matrix2d cov;
     Eigen::Matrix2d measurementCov;
-    poses.project(ugv, sample, p, &cov);
-    poses.project(ugv, sample, p, &measurementCov, false);
+    poses.project(ugv, sample, p, &cov, &measurementCov);
     if (track.object < 0) {
         int best = associate(ugv, ti, p, cov, measurementCov);
         if (best < 0) {
@@ -234,8 +244,7 @@ void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses) const
                 Eigen::Vector2d p;
                 Eigen::Matrix2d cov;
                 Eigen::Matrix2d measurementCov;
-                poses.project(track.ugv, smp, p, &cov);
-                poses.project(track.ugv, smp, p, &measurementCov, false);
+                poses.project(track.ugv, smp, p, &cov, &measurementCov);
                 fuse(object, p, cov, measurementCov, weight);
             }
         }

@@ -86,7 +86,7 @@ UgvPoseErrors::PoseSigmas UgvPoseErrors::remainingSigmas(const Ugv& u, bool corr
 }
 
 void UgvPoseErrors::project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
-                            bool withPose) const
+                            Eigen::Matrix2d* measurementCov, Eigen::Vector2d* ray) const
 {
     const Ugv& u = ugvs_[static_cast<std::size_t>(ugv)];
     Eigen::Vector2d dPos;
@@ -94,22 +94,33 @@ void UgvPoseErrors::project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, 
     // The map builder's correction is authoritative where it exists; the estimated errors cover the rest.
     const bool corrected = explicitCorrection(ugv, s.t, dPos, dHeading);
     const double az = s.headingRad + dHeading + (corrected ? 0.0 : u.headingBias) + s.bearingRad;
-    const Eigen::Vector2d ray = rayAt(az);
-    p = s.ugvPos + dPos + (corrected ? Eigen::Vector2d::Zero() : offsetAt(ugv, s.t)) + s.rangeM * ray;
-    if (cov == nullptr) {
+    const Eigen::Vector2d along = rayAt(az);
+    p = s.ugvPos + dPos + (corrected ? Eigen::Vector2d::Zero() : offsetAt(ugv, s.t)) + s.rangeM * along;
+    if (ray != nullptr) {
+        *ray = along;
+    }
+    if (cov == nullptr && measurementCov == nullptr) {
         return;
     }
-    const Eigen::Vector2d across = acrossOf(ray);
+    const Eigen::Vector2d across = acrossOf(along);
     const RangeBearingNoise noise = config_.noise();
     const double sr = noise.alongSigma(s.rangeM, u.rangeScale);
-    const bool knownPose = u.solved || corrected;
-    const PoseSigmas sigmas =
-        knownPose ? remainingSigmas(u, corrected) : PoseSigmas{priorHeadingSigma(), config_.offsetSigmaM};
-    const double headingSigma = withPose ? sigmas.heading : 0.0;
-    const double sc2 = std::pow(noise.acrossSigma(s.rangeM, u.bearingScale), 2) + std::pow(s.rangeM * headingSigma, 2);
-    const double offset = withPose ? sigmas.offsetM : 0.0;
-    *cov = sr * sr * ray * ray.transpose() + sc2 * across * across.transpose() +
-           offset * offset * Eigen::Matrix2d::Identity();
+    // The measurement noise plus a pose uncertainty of headingSigma [rad] and offset [m] per axis.
+    const auto covariance = [&](double headingSigma, double offset) {
+        const double sc2 =
+            std::pow(noise.acrossSigma(s.rangeM, u.bearingScale), 2) + std::pow(s.rangeM * headingSigma, 2);
+        return Eigen::Matrix2d(sr * sr * along * along.transpose() + sc2 * across * across.transpose() +
+                               offset * offset * Eigen::Matrix2d::Identity());
+    };
+    if (cov != nullptr) {
+        const bool knownPose = u.solved || corrected;
+        const PoseSigmas sigmas =
+            knownPose ? remainingSigmas(u, corrected) : PoseSigmas{priorHeadingSigma(), config_.offsetSigmaM};
+        *cov = covariance(sigmas.heading, sigmas.offsetM);
+    }
+    if (measurementCov != nullptr) {
+        *measurementCov = covariance(0.0, 0.0);
+    }
 }
 
 } // namespace ugv::correlator

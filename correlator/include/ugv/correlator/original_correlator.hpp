@@ -135,6 +135,8 @@ private:
     std::vector<MobileTrack> mobileTracks_;
     std::vector<int> freeMobileTracks_;
     std::vector<MobileObject> mobileObjects_;
+    std::vector<int> aliveMobiles_; ///< indices of the alive mobile objects, ascending
+    std::vector<Gaussian2> parts_;  ///< refreshStatic()'s members' components, kept to reuse its memory
     std::unordered_map<std::string, std::string> mergedInto_;       ///< id -> the id that absorbed it
     std::unordered_map<std::string, std::pair<bool, int>> idIndex_; ///< id -> (static?, index)
     std::mt19937_64 rng_{7};

@@ -60,10 +60,12 @@ public:
     [[nodiscard]] Eigen::Vector2d offsetAt(int ugv, double t) const;
     /// @return true when a pose correction covers time t (dPos [m], dHeading [rad] set from it).
     bool explicitCorrection(int ugv, double t, Eigen::Vector2d& dPos, double& dHeading) const;
-    /// The object position `s` implies under the current pose model, and (unless `cov` is null) its covariance:
-    /// the measurement noise and, `withPose`, the UGV's remaining pose uncertainty (prior before its errors are
-    /// estimated or corrected, smaller after).
-    void project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov, bool withPose = true) const;
+    /// The object position `s` implies under the current pose model and, for each pointer that is not null: `cov`
+    /// its covariance, the measurement noise and the UGV's remaining pose uncertainty (prior before its errors are
+    /// estimated or corrected, smaller after); `measurementCov` the measurement noise alone; `ray` the unit vector
+    /// from the UGV towards it under that model.
+    void project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
+                 Eigen::Matrix2d* measurementCov = nullptr, Eigen::Vector2d* ray = nullptr) const;
 
 private:
     struct PoseSigmas {
