@@ -21,6 +21,11 @@ void ObjectIds::merge(const std::string& gone, const std::string& kept)
     mergedInto_[gone] = kept;
 }
 
+void ObjectIds::unmerge(const std::string& id)
+{
+    mergedInto_.erase(id);
+}
+
 std::optional<ObjectIds::Ref> ObjectIds::find(const std::string& id) const
 {
     std::string current = id;

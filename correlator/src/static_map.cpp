@@ -222,6 +222,7 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
             objects_.push_back(std::move(created));
         }
         track.object = best;
+        track.origin = best;
         objects_[static_cast<std::size_t>(best)].tracks.push_back(ti);
     }
     StaticObject& object = objects_[static_cast<std::size_t>(track.object)];
@@ -293,51 +294,106 @@ void StaticMap::splitAll(const UgvPoseErrors& poses, ObjectIds& ids)
 }
 
 /// An object whose tracks form two groups far apart (two objects associated while the UGVs' pose errors were
-/// still unknown) splits: the group with more observations keeps the id, the other becomes a new object.
+/// still unknown) splits: the group with more observations keeps the id, the other becomes a new object, unless the
+/// split undoes a merge: then the absorbed object comes back with its id (hysteresis). Tracks with no samples left
+/// (all folded into the prior) have no position and stay.
 void StaticMap::split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids)
 {
-    const std::vector<int> tracks = objects_[j].tracks;
-    std::vector<Eigen::Vector2d> means(tracks.size());
-    std::vector<double> weights(tracks.size());
-    for (std::size_t i = 0; i < tracks.size(); ++i) {
-        means[i] = trackMean(tracks[i], poses, weights[i]);
+    std::vector<int> tracks;
+    std::vector<Eigen::Vector2d> means;
+    std::vector<double> weights;
+    for (const int ti : objects_[j].tracks) {
+        double weight = 0.0;
+        const Eigen::Vector2d mean = trackMean(ti, poses, weight);
+        if (weight > 0.0) {
+            tracks.push_back(ti);
+            means.push_back(mean);
+            weights.push_back(weight);
+        }
     }
     TwoGroups g;
-    if (!twoGroups(means, weights, g)) {
+    if (tracks.size() < 2 || !twoGroups(means, weights, g)) {
         return;
     }
     if (g.wa <= 0.0 || g.wb <= 0.0 || (g.ca - g.cb).norm() < kSplitDistanceM || (g.ca - g.cb).norm() < 3.0 * g.spread) {
         return;
     }
-    // The smaller group leaves with a new id.
-    const bool moveB = g.wb <= g.wa;
-    const int newIndex = static_cast<int>(objects_.size());
-    StaticObject created;
-    ObjectIds::Issued issued = ids.issue(true, newIndex);
-    created.id = std::move(issued.id);
-    created.order = issued.order;
-    created.cls = objects_[j].cls;
-    created.state = objects_[j].state;
-    std::vector<int> stay;
+    std::vector<int> groupA;
+    std::vector<int> groupB;
     for (std::size_t i = 0; i < tracks.size(); ++i) {
-        if (g.inB[i] == moveB) {
-            created.tracks.push_back(tracks[i]);
-            tracks_[static_cast<std::size_t>(tracks[i])].object = newIndex;
-            created.observations += tracks_[static_cast<std::size_t>(tracks[i])].seen;
-        } else {
-            stay.push_back(tracks[i]);
+        (g.inB[i] ? groupB : groupA).push_back(tracks[i]);
+    }
+    // The group that undoes a merge leaves (the other keeps this object's id); else the smaller one.
+    const int originA = absorbedOrigin(groupA, j, ids);
+    const int originB = absorbedOrigin(groupB, j, ids);
+    const bool moveB = (originB >= 0) != (originA >= 0) ? originB >= 0 : g.wb <= g.wa;
+    const std::vector<int>& leaving = moveB ? groupB : groupA;
+    const int revived = moveB ? originB : originA;
+    std::vector<int> stay = moveB ? groupA : groupB;
+    for (const int ti : objects_[j].tracks) {
+        if (std::find(tracks.begin(), tracks.end(), ti) == tracks.end()) {
+            stay.push_back(ti); // no samples left: no position to split by
         }
     }
-    objects_.push_back(std::move(created));
+    int newIndex = revived;
+    if (revived >= 0) {
+        StaticObject& back = objects_[static_cast<std::size_t>(revived)];
+        back.alive = true;
+        back.state = objects_[j].state;
+        back.priorInfo.setZero();
+        back.tracks.clear();
+        ids.unmerge(back.id);
+    } else {
+        newIndex = static_cast<int>(objects_.size());
+        StaticObject created;
+        ObjectIds::Issued issued = ids.issue(true, newIndex);
+        created.id = std::move(issued.id);
+        created.order = issued.order;
+        created.cls = objects_[j].cls;
+        created.state = objects_[j].state;
+        objects_.push_back(std::move(created));
+    }
+    StaticObject& moved = objects_[static_cast<std::size_t>(newIndex)];
+    moved.observations = 0;
+    for (const int ti : leaving) {
+        moved.tracks.push_back(ti);
+        tracks_[static_cast<std::size_t>(ti)].object = newIndex;
+        moved.observations += tracks_[static_cast<std::size_t>(ti)].seen;
+    }
     StaticObject& kept = objects_[j];
-    kept.tracks = stay;
+    kept.tracks = std::move(stay);
     kept.observations = 0;
-    for (const int ti : stay) {
+    for (const int ti : kept.tracks) {
         kept.observations += tracks_[static_cast<std::size_t>(ti)].seen;
     }
     kept.priorInfo.setZero();
     refit(objects_[j], poses);
     refit(objects_[static_cast<std::size_t>(newIndex)], poses);
+}
+
+int StaticMap::absorbedOrigin(const std::vector<int>& tracks, std::size_t into, const ObjectIds& ids) const
+{
+    std::unordered_map<int, std::uint64_t> seenBy; // observations per origin
+    std::uint64_t total = 0;
+    for (const int ti : tracks) {
+        const Track& track = tracks_[static_cast<std::size_t>(ti)];
+        seenBy[track.origin] += track.seen;
+        total += track.seen;
+    }
+    int best = -1;
+    std::uint64_t bestSeen = 0;
+    for (const auto& [origin, seen] : seenBy) {
+        if (seen > bestSeen || (seen == bestSeen && origin < best)) {
+            best = origin;
+            bestSeen = seen;
+        }
+    }
+    if (best < 0 || static_cast<std::size_t>(best) == into || 2 * bestSeen <= total ||
+        objects_[static_cast<std::size_t>(best)].alive) {
+        return -1;
+    }
+    const auto ref = ids.find(objects_[static_cast<std::size_t>(best)].id);
+    return ref && ref->isStatic && ref->index == static_cast<int>(into) ? best : -1;
 }
 
 bool StaticMap::sameObject(const StaticObject& x, const StaticObject& y) const

@@ -1,9 +1,11 @@
 // Parts of mode pose-corrected on their own: the measurement model (rays, noise, information), ObjectIds (ids
-// in creation order, merges followed, erased ids gone) and UgvPoseErrors' remaining pose uncertainty. The rules they
-// carry out are tested through PoseCorrectedCorrelator in pose_corrected_correlator_test.cpp.
+// in creation order, merges followed, erased ids gone), UgvPoseErrors' remaining pose uncertainty and StaticMap's
+// split/merge hysteresis. The other rules they carry out are tested through PoseCorrectedCorrelator in
+// pose_corrected_correlator_test.cpp.
 
 #include "ugv/correlator/measurement_model.hpp"
 #include "ugv/correlator/object_ids.hpp"
+#include "ugv/correlator/static_map.hpp"
 #include "ugv/correlator/ugv_pose_errors.hpp"
 
 #include <cmath>
@@ -142,6 +144,63 @@ TEST(UgvPoseErrors, AfterASolveThePoseUncertaintyLeftIsAtLeastHowFarTheSolveStil
     EXPECT_GT(movingVar, settledVar + 0.9 * movingHeading * movingHeading);
     EXPECT_LT(movingVar, priorVar); // never above the prior: a solved UGV is never less certain than an unsolved one
     EXPECT_GT(priorVar, std::pow(kRange * config.headingBiasSigmaDeg * kRadPerDeg, 2));
+}
+
+/// Two posts 3.9 m apart, A seen by ugv-1 and B by ugv-2 (both UGVs' errors known: two objects, ooi-1 and ooi-2).
+/// A wrong heading estimate for ugv-2 (-10 deg, which turns B onto A) merges them into ooi-1; the estimate put
+/// right splits them again. The split undoes the merge: B's object comes back as ooi-2, not as a new ooi-3.
+TEST(StaticMap, ASplitThatUndoesAMergeGivesTheAbsorbedObjectItsIdBack)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    ObjectIds ids;
+    StaticMap sut(config);
+    const int one = poses.index("ugv-1");
+    const int two = poses.index("ugv-2");
+    poses.ugv(static_cast<std::size_t>(one)).solved = true;
+    poses.ugv(static_cast<std::size_t>(two)).solved = true;
+    const Eigen::Vector2d posOne(-10, 0);
+    const Eigen::Vector2d posTwo(10, 0);
+    const Eigen::Vector2d a(0, 20);
+    const double turn = 10.0 * kRadPerDeg;
+    const Eigen::Vector2d fromTwo = a - posTwo;
+    const Eigen::Vector2d b = posTwo + Eigen::Vector2d(std::cos(turn) * fromTwo.x() + std::sin(turn) * fromTwo.y(),
+                                                       -std::sin(turn) * fromTwo.x() + std::cos(turn) * fromTwo.y());
+    ASSERT_NEAR((a - b).norm(), 3.9, 0.05);
+    const auto see = [&](double t, int ugv, const char* name, const char* track, const Eigen::Vector2d& from,
+                         const Eigen::Vector2d& post) {
+        Observation o;
+        o.t = t;
+        o.ugv = name;
+        o.track = track;
+        o.cls = OoiClass::Static;
+        const Eigen::Vector2d d = post - from;
+        sut.add(o, ugv, RangeBearing{t, from, 0.0, d.norm(), std::atan2(d.x(), d.y())}, poses, ids);
+    };
+    for (int i = 0; i < 40; ++i) {
+        see(0.5 * i, one, "ugv-1", "a", posOne, a);
+        see(0.5 * i, two, "ugv-2", "b", posTwo, b);
+    }
+    ASSERT_EQ(sut.objects().size(), 2U);
+    const std::string idA = sut.objects()[0].id;
+    const std::string idB = sut.objects()[1].id;
+
+    poses.ugv(static_cast<std::size_t>(two)).headingBias = -turn; // wrong: B lands on A
+    sut.rebuild(poses, ids);
+    ASSERT_FALSE(sut.objects()[1].alive) << "the wrong estimate should have merged B into A";
+    ASSERT_EQ(ids.find(idB)->index, 0);
+    poses.ugv(static_cast<std::size_t>(two)).headingBias = 0.0; // put right
+    sut.rebuild(poses, ids);
+
+    ASSERT_EQ(sut.objects().size(), 2U) << "a new object was made instead of B's coming back";
+    EXPECT_TRUE(sut.objects()[0].alive);
+    EXPECT_TRUE(sut.objects()[1].alive);
+    EXPECT_EQ(sut.objects()[0].id, idA);
+    EXPECT_EQ(sut.objects()[1].id, idB);
+    EXPECT_EQ(ids.find(idB)->index, 1);
+    EXPECT_EQ(ids.find(idA)->index, 0);
+    EXPECT_LT((sut.objects()[0].mean - a).norm(), 0.1);
+    EXPECT_LT((sut.objects()[1].mean - b).norm(), 0.1);
 }
 
 } // namespace

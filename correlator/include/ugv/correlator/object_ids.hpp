@@ -2,7 +2,8 @@
 
 /// @file
 /// The ids of mode `pose-corrected`'s objects, static and mobile: issued in creation order ("ooi-N"), found by id,
-/// and an id merged into another leads to the object that absorbed it (confirmations of an old id still land).
+/// and an id merged into another leads to the object that absorbed it (confirmations of an old id still land) until
+/// a split undoes the merge.
 ///
 /// Thread-safety: thread-bound. RT-safe: no (allocates).
 
@@ -31,6 +32,8 @@ public:
     void erase(const std::string& id);
     /// `gone` was merged into `kept`: `gone` now leads to `kept`.
     void merge(const std::string& gone, const std::string& kept);
+    /// A split undid the merge of `id`: it leads to its own object again.
+    void unmerge(const std::string& id);
     /// The object of `id`, following merges; nullopt when unknown or erased.
     [[nodiscard]] std::optional<Ref> find(const std::string& id) const;
 

@@ -9,8 +9,10 @@
 ///   uncertainty included unless only its own UGV saw the object) and not seen apart from it, else starts one;
 /// - split: an object whose tracks form two groups far apart (associated while the pose errors were unknown)
 ///   splits, the group with more observations keeps the id; merge: two objects within each other's gate and not
-///   seen apart become one, the earliest id kept; a possible duplicate of an older object (within its gate once
-///   both objects' pose uncertainty is counted, not seen apart) is not published until a merge folds it in;
+///   seen apart become one, the earliest id kept; hysteresis: a split that undoes a merge (the leaving group's
+///   tracks came mostly from the absorbed object) revives that object and its id instead of making a new one; a
+///   possible duplicate of an older object (within its gate once both objects' pose uncertainty is counted, not seen
+///   apart) is not published until a merge folds it in;
 /// - tentative objects (fewer than minStaticObservations after tentativeTimeoutS) are dropped (clutter);
 /// - samples older than the horizon fold into their object's prior.
 ///
@@ -52,6 +54,9 @@ public:
         double lastT = 0.0;
         /// Tracks of the same UGV observed at the same instant as this one: other objects (seen apart).
         std::vector<int> apart;
+        /// The object this track first joined: when a merge folded that object into another and the track's group
+        /// splits off again, it gets that object's id back (the merge is undone, not a new object made).
+        int origin = -1;
     };
     struct StaticObject {
         std::string id;
@@ -113,6 +118,9 @@ private:
     void refit(StaticObject& object, const UgvPoseErrors& poses) const;
     void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
     void split(std::size_t object, const UgvPoseErrors& poses, ObjectIds& ids);
+    /// The object most of `tracks`' observations first joined, if a merge folded it into the object at `into`
+    /// (its id can come back); else -1.
+    [[nodiscard]] int absorbedOrigin(const std::vector<int>& tracks, std::size_t into, const ObjectIds& ids) const;
     /// Two static objects within the merge gate of each other (their estimates' covariances and the floor).
     [[nodiscard]] bool sameObject(const StaticObject& x, const StaticObject& y) const;
     /// Two static objects within the gate of each other once their UGVs' remaining pose uncertainty is added: they
