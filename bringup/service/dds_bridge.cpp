@@ -41,6 +41,7 @@ ipc::dds::BusConfig busConfig(const bringup::ServiceConfig& config)
     b.rosNamespace = rosNamespace(config);
     b.discoveryServers = config.dds.discoveryServer;
     b.sharedMemory = config.dds.sharedMemory;
+    b.rosReliable = config.dds.rosReliable;
     b.security = bringup::securityOf(config);
     return b;
 }
@@ -51,6 +52,7 @@ Result<std::unique_ptr<DdsBridge>, Error> DdsBridge::create(ipc::dds::Bus& bus, 
     std::unique_ptr<DdsBridge> b(new DdsBridge());
     b->vehicle_ = config.vehicleId;
     b->frameId_ = rosNamespace(config) + "/" + config.dds.frameId;
+    b->minDepthM_ = static_cast<float>(config.obstacles.minDepthM);
     b->periodS_ = static_cast<float>(static_cast<double>(period.count()) * 1e-9);
     b->poseMaxAgeNs_ = static_cast<std::int64_t>(config.dds.poseMaxAgeMs * 1e6);
     auto sectors = bus.writer<msg::ObstacleSectors>();
@@ -97,7 +99,7 @@ void DdsBridge::onFrame(const BusFrame& frame) noexcept
         }
         const bool ok = sectorsOut_.write(sectors_);
         ipc::dds::toLaserScan(frame.message.sectors, captureReal, frameId_, 0.0F, rangeMaxM_, periodS_, scan_);
-        ipc::dds::toNegativeCloud(frame.message.sectors, captureReal, frameId_, cloud_);
+        ipc::dds::toNegativeCloud(frame.message.sectors, captureReal, frameId_, minDepthM_, cloud_);
         const bool rosOk = scanOut_.write(scan_) && negativesOut_.write(cloud_);
         if (!ok || !rosOk) {
             writeFailures_.fetch_add(1, std::memory_order_relaxed);

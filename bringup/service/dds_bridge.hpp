@@ -49,6 +49,7 @@ private:
     std::string frameId_;
     float rangeMaxM_ = 50.0F;
     float periodS_ = 0.0F;
+    float minDepthM_ = 0.1F; ///< a drop's point is at least this far below the ground (obstacles.min_depth_m)
     std::int64_t poseMaxAgeNs_ = 0;
     ipc::dds::Writer<ipc::dds::msg::ObstacleSectors> sectorsOut_;
     ipc::dds::Writer<ipc::dds::ros::LaserScan_> scanOut_;

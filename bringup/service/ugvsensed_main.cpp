@@ -30,7 +30,7 @@ void usage(std::FILE* out)
              "  rt/<ns>/negative_obstacles, ugvsense/health), and the OOI correlator when the config enables it\n"
              "  (vision.enabled: false runs only the correlator: a ground station). Stops at the end of the\n"
              "  recording, after --frames, or on SIGINT/SIGTERM, and prints the latency report.\n"
-             "  $UGV_DDS_DOMAIN overrides dds.domain_id.\n\n"
+             "  $UGV_DDS_DOMAIN overrides dds.domain_id; without either, ROS 2's $ROS_DOMAIN_ID is the domain.\n\n"
              "options:\n"
              "  --config FILE      service config (default: built-in defaults; see ugvsense check-config)\n"
              "  --replay REC       replay a recording (ugvsense sim --course, recording import, record)\n"

@@ -164,7 +164,8 @@ std::vector<KeySpec> baseKeys()
                         {{"true", true}, {"false", false}}, UGV_REF(visionEnabled)),
         choiceKey<bool>("dds.enabled", "join the DDS bus: sectors, ROS 2 scans, health out; poses in",
                         {{"true", true}, {"false", false}}, UGV_REF(dds.enabled)),
-        numberKey("dds.domain_id", Kind::Int, 0, 232, "DDS domain, the same on every vehicle and the ground station",
+        numberKey("dds.domain_id", Kind::Int, 0, 232,
+                  "DDS domain, the same on every vehicle and the ground station; not given: $ROS_DOMAIN_ID, else 0",
                   UGV_REF(dds.domainId)),
         textKey("dds.partition", Kind::Text, "DDS partition of our topics (a team); empty = the default partition",
                 UGV_REF(dds.partition)),
@@ -177,6 +178,10 @@ std::vector<KeySpec> baseKeys()
             "dds.discovery_server", Kind::Text,
             "empty = multicast discovery; IP:PORT[;IP:PORT] of Fast DDS discovery servers (meshes without multicast)",
             UGV_REF(dds.discoveryServer)),
+        choiceKey<bool>("dds.ros_reliability",
+                        "the ROS 2 scan and cloud: reliable (keep last 1: RViz's and ros2 topic echo's default "
+                        "readers match, and best-effort ones too) or best_effort (only best-effort readers match)",
+                        {{"reliable", true}, {"best_effort", false}}, UGV_REF(dds.rosReliable)),
         choiceKey<bool>("dds.shared_memory", "also Fast DDS shared memory between processes of this host",
                         {{"true", true}, {"false", false}}, UGV_REF(dds.sharedMemory)),
         numberKey("dds.pose_max_age_ms", Kind::Double, 1, 60000,
@@ -564,6 +569,26 @@ private:
     ConfigErrors errors_;
 };
 
+/// ROS 2's $ROS_DOMAIN_ID when the file gives no dds.domain_id: a vehicle already set up for ROS 2 joins its domain.
+void applyRosDomainId(const YAML::Node& root, ServiceConfig& config, ConfigErrors& errors)
+{
+    if (const YAML::Node dds = root["dds"]; dds.IsDefined() && dds.IsMap() && dds["domain_id"].IsDefined()) {
+        return;
+    }
+    const char* env = std::getenv("ROS_DOMAIN_ID"); // NOLINT(concurrency-mt-unsafe): init, before threads
+    if (env == nullptr || *env == '\0') {
+        return;
+    }
+    char* end = nullptr;
+    const long id = std::strtol(env, &end, 10);
+    if (*end != '\0' || id < 0 || id > 232) {
+        errors.push_back(Error{"$ROS_DOMAIN_ID", std::string("'") + env + "' is not a DDS domain id",
+                               "give 0..232, unset it, or set dds.domain_id (which wins over it)"});
+        return;
+    }
+    config.dds.domainId = static_cast<int>(id);
+}
+
 } // namespace
 
 ipc::dds::SecurityConfig securityOf(const ServiceConfig& config)
@@ -606,6 +631,7 @@ Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, con
         env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
         parser.config().calibrationPath = env;
     }
+    applyRosDomainId(root, parser.config(), parser.errors());
     parser.crossCheck(root);
     if (!parser.errors().empty()) {
         return Unexpected(std::move(parser.errors()));

@@ -25,7 +25,7 @@ inline constexpr int kMaxDomainId = 232; ///< the RTPS UDP port formula's limit 
 inline std::vector<OptionSpec> options()
 {
     return {
-        {"domain", "N", "DDS domain id 0..232, default $UGV_DDS_DOMAIN, else 0", false},
+        {"domain", "N", "DDS domain id 0..232, default $UGV_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0", false},
         {"partition", "P[,P...]", "DDS partition(s) of our topics (a team, a test), default none", false},
         {"ros-namespace", "NS", "namespace of the ROS 2 topics rt/NS/obstacle_scan..., default ugv1", false},
         {"discovery-server", "LIST", "IP:PORT[;IP:PORT...] of Fast DDS discovery servers, default multicast discovery",
@@ -52,24 +52,37 @@ inline ipc::dds::SecurityConfig securityFrom(const Args& args)
     return ipc::dds::securityFromFolder(dir, args.get("identity", dir.substr(dir.find_last_of('/') + 1)));
 }
 
+/// The domain without --domain: $UGV_DDS_DOMAIN, else ROS 2's $ROS_DOMAIN_ID, else 0.
+inline Result<double, Error> environmentDomain()
+{
+    for (const char* var : {"UGV_DDS_DOMAIN", "ROS_DOMAIN_ID"}) {
+        const char* env = std::getenv(var); // NOLINT(concurrency-mt-unsafe): init, before threads
+        if (env == nullptr || *env == '\0') {
+            continue;
+        }
+        char* end = nullptr;
+        errno = 0;
+        const long v = std::strtol(env, &end, 10);
+        if (errno != 0 || *end != '\0' || v < 0 || v > kMaxDomainId) {
+            return Unexpected(Error{std::string("environment ") + var, "bad domain id '" + std::string(env) + "'",
+                                    "set a whole number in 0..232, or unset it"});
+        }
+        return static_cast<double>(v);
+    }
+    return 0.0;
+}
+
 /// The bus settings of the command line; errors name the option (or UGV_DDS_DOMAIN) and how to fix it.
 inline Result<ipc::dds::BusConfig, Error> configFrom(const Args& args, const std::string& command,
                                                      const std::string& participant)
 {
     ipc::dds::BusConfig config;
     config.participantName = participant;
-    double fallback = 0.0;
-    if (const char* env = std::getenv("UGV_DDS_DOMAIN"); env != nullptr && *env != '\0') {
-        char* end = nullptr;
-        errno = 0;
-        const long v = std::strtol(env, &end, 10);
-        if (errno != 0 || *end != '\0' || v < 0 || v > kMaxDomainId) {
-            return Unexpected(Error{"environment UGV_DDS_DOMAIN", "bad domain id '" + std::string(env) + "'",
-                                    "set a whole number in 0..232, or unset it (domain 0)"});
-        }
-        fallback = static_cast<double>(v);
+    const auto fallback = environmentDomain();
+    if (!fallback) {
+        return Unexpected(fallback.error());
     }
-    const auto domain = args.number("domain", fallback, 0, kMaxDomainId);
+    const auto domain = args.number("domain", *fallback, 0, kMaxDomainId);
     if (!domain) {
         return Unexpected(domain.error());
     }

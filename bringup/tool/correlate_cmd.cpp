@@ -155,8 +155,11 @@ void onSignal(int /*signal*/)
 int correlateFromDds(const Args& args, correlator::Mode mode, double period, double lateWindow, std::ofstream& out)
 {
     const auto duration = args.number("duration", 0.0, 0.0, 1e7);
-    const auto domain = args.number(
-        "domain", std::getenv("UGV_DDS_DOMAIN") != nullptr ? std::atof(std::getenv("UGV_DDS_DOMAIN")) : 0.0, 0, 232);
+    const auto fallback = bus::environmentDomain();
+    if (!fallback) {
+        return reportUsageError(kCommand, fallback.error());
+    }
+    const auto domain = args.number("domain", *fallback, 0, bus::kMaxDomainId);
     const auto reorder = args.number("reorder-ms", 2000.0, 0.0, 60000.0);
     if (!duration || !domain || !reorder) {
         return reportUsageError(kCommand, !duration ? duration.error() : !domain ? domain.error() : reorder.error());
@@ -253,7 +256,7 @@ int runCorrelate(int argc, char** argv)
           false},
          {"map", "MAP.png", "draw the last snapshot: error ellipses, ids, confirmation colours, UGVs", false},
          {"duration", "S", "--from-dds: stop after S seconds (default: at Ctrl-C)", false},
-         {"domain", "N", "--from-dds: DDS domain (default $UGV_DDS_DOMAIN, else 0)", false},
+         {"domain", "N", "--from-dds: DDS domain (default $UGV_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0)", false},
          {"partition", "P", "--from-dds: DDS partition of the team", false},
          {"discovery-server", "LIST", "--from-dds: IP:PORT[;IP:PORT] of Fast DDS discovery servers", false},
          {"no-shm", "", "--from-dds: UDP only, no Fast DDS shared memory", false},

@@ -38,7 +38,8 @@ struct TopicSpec {
 // Why these QoS (ipc/README.md): sensor-like streams are best effort, keep last 1 (a late sample is worse than
 // none; a consumer wants the newest); the correlator's inputs must all arrive and be replayed to a late or
 // restarted ground station (reliable, transient local, keep all); states (health, the correlated list) reach a
-// late joiner as their latest value (transient local, keep last 1).
+// late joiner as their latest value (transient local, keep last 1). The ROS 2 writers' reliability is
+// BusConfig::rosReliable (reliable matches every reader); the table's best effort is their readers'.
 constexpr std::array<TopicSpec, kTopicCount> kTopics{{
     {"sectors", "ugvsense/sectors", false, false, false, false, 1},
     {"health", "ugvsense/health", false, true, true, false, 1},
@@ -404,8 +405,10 @@ Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
         return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the topic", "a bug"});
     }
     fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
-    applyCommon(q, s);
-    if (s.reliable) {
+    TopicSpec chosen = s;
+    chosen.reliable = s.ros ? config_.rosReliable : s.reliable;
+    applyCommon(q, chosen);
+    if (chosen.reliable) {
         q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100'000'000);
         q.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0, 100'000'000);
     }

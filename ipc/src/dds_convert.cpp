@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -155,7 +156,7 @@ void toLaserScan(const ObstacleSectors& sectors, std::int64_t captureRealNs, con
 }
 
 void toNegativeCloud(const ObstacleSectors& sectors, std::int64_t captureRealNs, const std::string& frameId,
-                     ros::PointCloud2_& out)
+                     float minDepthM, ros::PointCloud2_& out)
 {
     out.header().stamp(rosTime(captureRealNs));
     out.header().frame_id(frameId);
@@ -181,7 +182,8 @@ void toNegativeCloud(const ObstacleSectors& sectors, std::int64_t captureRealNs,
             continue;
         }
         const float b = centreRad(s);
-        const float xyz[3] = {s.rangeM * std::cos(b), s.rangeM * std::sin(b), -std::fabs(s.heightM)};
+        const float xyz[3] = {s.rangeM * std::cos(b), s.rangeM * std::sin(b),
+                              -std::max(std::fabs(s.heightM), minDepthM)};
         const std::size_t at = data.size();
         data.resize(at + sizeof(xyz));
         std::memcpy(data.data() + at, xyz, sizeof(xyz)); // little-endian host (x86-64, aarch64)

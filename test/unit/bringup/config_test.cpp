@@ -493,6 +493,27 @@ TEST(Config, ConfigPathPrecedence)
     EXPECT_EQ(configPath(nullptr), "/etc/ugvsense/config.yaml");
 }
 
+TEST(Config, RosDomainIdIsTheDomainWhenTheFileGivesNone)
+{
+    ::setenv("ROS_DOMAIN_ID", "37", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test
+    const auto fromRos = parseConfig(kValidMinimal, "t.yaml", "/d");
+    const auto fromFile = parseConfig(std::string(kValidMinimal) + "dds:\n  domain_id: 5\n", "t.yaml", "/d");
+    ::setenv("ROS_DOMAIN_ID", "233", 1); // NOLINT(concurrency-mt-unsafe)
+    const auto bad = parseConfig(kValidMinimal, "t.yaml", "/d");
+    ::unsetenv("ROS_DOMAIN_ID"); // NOLINT(concurrency-mt-unsafe)
+    const auto unset = parseConfig(kValidMinimal, "t.yaml", "/d");
+
+    ASSERT_TRUE(fromRos.has_value()) << joined(fromRos.error());
+    EXPECT_EQ(fromRos->dds.domainId, 37);
+    ASSERT_TRUE(fromFile.has_value()) << joined(fromFile.error());
+    EXPECT_EQ(fromFile->dds.domainId, 5); // dds.domain_id wins
+    ASSERT_FALSE(bad.has_value());
+    EXPECT_NE(joined(bad.error()).find("$ROS_DOMAIN_ID: '233' is not a DDS domain id"), std::string::npos)
+        << joined(bad.error());
+    ASSERT_TRUE(unset.has_value());
+    EXPECT_EQ(unset->dds.domainId, 0);
+}
+
 TEST(Config, CalibrationEnvironmentOverride)
 {
     ::setenv("UGV_CALIBRATION", "/override.yaml", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test

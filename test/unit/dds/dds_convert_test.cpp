@@ -97,7 +97,7 @@ TEST(DdsConvert, NegativeCloudHasOnePointBelowTheGroundPerNegativeSector)
     const ObstacleSectors s = fourSectors();
     ros::PointCloud2_ sut;
 
-    toNegativeCloud(s, 2'000'000'001, "ugv1/base", sut);
+    toNegativeCloud(s, 2'000'000'001, "ugv1/base", 0.1F, sut);
 
     ASSERT_EQ(sut.fields().size(), 3U);
     const char* names[] = {"x", "y", "z"};
@@ -124,13 +124,27 @@ TEST(DdsConvert, NegativeCloudHasOnePointBelowTheGroundPerNegativeSector)
     EXPECT_EQ(check(sut), nullptr);
 }
 
+TEST(DdsConvert, ADropOfUnmeasuredDepthIsPublishedBelowTheGroundNeverOnIt)
+{
+    ObstacleSectors s = fourSectors();
+    s.sectors[3].heightM = 0.0F; // the bottom was not seen
+    ros::PointCloud2_ sut;
+
+    toNegativeCloud(s, 0, "f", 0.12F, sut);
+
+    ASSERT_EQ(sut.data().size(), 12U);
+    float xyz[3];
+    std::memcpy(xyz, sut.data().data(), sizeof(xyz));
+    EXPECT_FLOAT_EQ(xyz[2], -0.12F); // the least depth that counts as a drop, not -0
+}
+
 TEST(DdsConvert, NegativeCloudIsEmptyWithoutNegativeObstacles)
 {
     ObstacleSectors s = fourSectors();
     s.sectors[3].kind = ObstacleKind::Positive;
     ros::PointCloud2_ sut;
 
-    toNegativeCloud(s, 0, "f", sut);
+    toNegativeCloud(s, 0, "f", 0.1F, sut);
 
     EXPECT_EQ(sut.width(), 0U);
     EXPECT_EQ(sut.row_step(), 0U);
@@ -386,7 +400,7 @@ TEST(DdsCheck, PoseHealthListScanAndCloudRefuseBrokenFields)
     EXPECT_EQ(check(scan), nullptr);
 
     ros::PointCloud2_ cloud;
-    toNegativeCloud(fourSectors(), 0, "f", cloud);
+    toNegativeCloud(fourSectors(), 0, "f", 0.1F, cloud);
     using P = ros::PointCloud2_;
     expectRefused<P>(cloud, "width beyond the data", [](P& c) { c.width(2); });
     expectRefused<P>(cloud, "point_step 0", [](P& c) { c.point_step(0); });

@@ -102,6 +102,7 @@ struct DdsConfig {
         "ugvsense_ground";       ///< frame of the LaserScan and PointCloud2 (on the ground below the camera)
     std::string discoveryServer; ///< "" = multicast discovery; "IP:PORT[;IP:PORT]" = Fast DDS discovery servers
     bool sharedMemory = true;    ///< Fast DDS shared memory between processes of this host (besides UDP)
+    bool rosReliable = true;     ///< ROS 2 topics written reliable (every reader matches) or best effort
     double poseMaxAgeMs = 600.0; ///< [ms] a pose further than this from the capture time is flagged stale
     DdsSecurityConfig security;
 };

@@ -15,8 +15,9 @@
 ///   ugvsense/ooi/confirmations     ConfirmationState          reliable, transient local, keep all
 ///   ugvsense/ooi/pose_corrections  PoseCorrection             reliable, transient local, keep all
 ///   ugvsense/ooi/correlated        CorrelatedOoiList          reliable, transient local, keep last 1
-///   rt/<ns>/obstacle_scan          sensor_msgs/LaserScan      best effort, volatile, keep last 1 (ROS 2)
-///   rt/<ns>/negative_obstacles     sensor_msgs/PointCloud2    best effort, volatile, keep last 1 (ROS 2)
+///   rt/<ns>/obstacle_scan          sensor_msgs/LaserScan      reliable (or best effort: rosReliable), volatile,
+///                                                             keep last 1 (ROS 2)
+///   rt/<ns>/negative_obstacles     sensor_msgs/PointCloud2    the same (ROS 2)
 ///
 /// Our topics live in the configured partitions (a team, a test); the ROS 2 ones in the default partition, which is
 /// the only one a ROS 2 node reads. Reliable writers send a heartbeat every 100 ms (Fast DDS's default is 3 s),
@@ -104,7 +105,11 @@ struct BusConfig {
     /// `fastdds discovery -i 0 -l IP -p PORT`), for meshes without multicast. Server i has the default prefix of id i.
     std::string discoveryServers;
     bool sharedMemory = true; ///< also Fast DDS's shared-memory transport between processes of one host
-    SecurityConfig security;  ///< off: an open bus
+    /// ROS 2 topics: written reliable, keep last 1 (readers of either reliability match: RViz's and `ros2 topic
+    /// echo`'s reliable default, Nav2's best-effort sensor QoS) or best effort (only best-effort readers match).
+    /// Our readers of them are best effort, which matches writers of either kind.
+    bool rosReliable = true;
+    SecurityConfig security; ///< off: an open bus
 };
 
 /// Checks the ranges and the discovery server list (before any DDS entity exists).

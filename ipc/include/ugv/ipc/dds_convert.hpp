@@ -45,9 +45,11 @@ bool fromDds(const msg::ObstacleSectors& in, ObstacleSectors& out);
 void toLaserScan(const ObstacleSectors& sectors, std::int64_t captureRealNs, const std::string& frameId,
                  float rangeMinM, float rangeMaxM, float periodS, ros::LaserScan_& out);
 /// The negative obstacles as a sensor_msgs/PointCloud2 (x, y, z float32) in `frameId`: one point per Negative
-/// sector at its range and centre bearing, z = -depth (below the ground). Empty cloud when there is none.
+/// sector at its range and centre bearing, z = -depth, never shallower than `minDepthM` (the least depth that counts
+/// as a drop: a drop whose bottom was not seen has depth 0, and a point on the ground plane would flicker in and out
+/// of a costmap's height band with any TF offset). Empty cloud when there is none.
 void toNegativeCloud(const ObstacleSectors& sectors, std::int64_t captureRealNs, const std::string& frameId,
-                     ros::PointCloud2_& out);
+                     float minDepthM, ros::PointCloud2_& out);
 
 /// Why a received sample was refused (static strings), or nullptr when it is fine.
 const char* check(const msg::ObstacleSectors& s) noexcept;
