@@ -17,6 +17,7 @@
 
 #include "sim/ground.hpp"
 #include "sim/noise.hpp"
+#include "ugv/platform/angles.hpp"
 
 namespace ugv::sim {
 namespace {
@@ -27,8 +28,6 @@ using detail::wireCoverage;
 using Eigen::Vector3d;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kTinyDir = 1e-12;     // direction components below this count as parallel
 constexpr double kBehindEpsM = 1e-6;   // [m] restart distance behind a partially covering fence
 constexpr int kFenceLayers = 3;        // fences a ray may see through

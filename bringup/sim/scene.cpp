@@ -1,5 +1,6 @@
 #include "sim/scene.hpp"
 
+#include "ugv/platform/angles.hpp"
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -8,8 +9,6 @@
 namespace ugv::sim {
 namespace {
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kTableTopM = 0.75;         // [m]
 constexpr double kBarrierDepthM = 0.2;      // [m]
 constexpr double kAcrossLengthM = 40.0;     // [m] curb and trench length across the view

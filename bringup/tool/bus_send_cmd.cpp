@@ -32,6 +32,7 @@
 #include "ugv/correlator/geodesy.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/ipc/dds_convert.hpp"
+#include "ugv/platform/angles.hpp"
 
 namespace ugv::tool {
 namespace {
@@ -60,7 +61,6 @@ constexpr double kPoseSigmaM = 0.2;   ///< position standard deviation of the co
 constexpr double kPoseSigmaDeg = 1.0; ///< heading standard deviation [deg]
 constexpr double kDefaultPoseRateHz = 10.0;
 constexpr double kDefaultPoseDurationS = 10.0;
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 int fail(const Error& error)
 {

@@ -11,6 +11,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "ugv/platform/angles.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 
 namespace ugv::tool {
@@ -265,7 +266,6 @@ cv::Mat appendSectorBar(const cv::Mat& image, const ObstacleSectors& layout, con
 {
     cv::Mat canvas(image.rows + kBarHeightPx, image.cols, CV_8UC3, cv::Scalar(0, 0, 0));
     image.copyTo(canvas(cv::Rect(0, 0, image.cols, image.rows)));
-    constexpr double kDegToRad = std::numbers::pi / 180.0;
     for (int i = 0; i < layout.count && i < static_cast<int>(colours.size()); ++i) {
         const Sector& s = layout.sectors[static_cast<std::size_t>(i)];
         // Positive bearings are to the left: the larger bearing gives the smaller column.

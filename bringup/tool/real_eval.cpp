@@ -16,13 +16,13 @@
 
 #include "detection.hpp"
 #include "pair_files.hpp"
+#include "ugv/platform/angles.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
 
 namespace ugv::tool {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kKittiScale = 256.0;     ///< KITTI GT: disparity = value / 256
 constexpr int kBaselineDisparities = 128; ///< the issue's plain pipeline: StereoSGBM, 128 disparities, block 5
 constexpr int kBaselineBlock = 5;

@@ -15,15 +15,13 @@
 #include <Eigen/Core>
 
 #include "ugv/correlator/geodesy.hpp"
+#include "ugv/platform/angles.hpp"
 
 namespace ugv::correlator {
 namespace {
 
 using Eigen::Vector2d;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
-constexpr double kRadToDeg = 180.0 / kPi;
 constexpr double kFullTurnDeg = 360.0;
 constexpr double kHalfTurnDeg = 180.0;
 constexpr double kQuarterTurnDeg = 90.0;

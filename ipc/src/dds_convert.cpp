@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include "ugv/platform/angles.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -10,8 +11,6 @@
 namespace ugv::ipc::dds {
 
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 std::int64_t clockNs(clockid_t clock) noexcept
 {

@@ -6,12 +6,12 @@
 #include <numbers>
 #include <string>
 
+#include "ugv/platform/angles.hpp"
 #include <opencv2/core/hal/intrin.hpp>
 
 namespace ugv::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr int kMaxWindowRadius = 15; // int16 window counts: (2 r + 1)^2 <= 961, far below 32767
 constexpr int kScoreMax = 255;
 constexpr int kHueRange = 180; // OpenCV 8-bit hue 0..179

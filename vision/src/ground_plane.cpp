@@ -1,13 +1,11 @@
 #include "ugv/vision/ground_plane.hpp"
 
+#include "ugv/platform/angles.hpp"
 #include <cmath>
 #include <numbers>
 
 namespace ugv::vision {
 namespace {
-
-constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 } // namespace
 

@@ -1,5 +1,6 @@
 #include "ugv/vision/sector_builder.hpp"
 
+#include "ugv/platform/angles.hpp"
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,7 +12,6 @@
 namespace ugv::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr int kKinds = 2; // 0 positive, 1 negative
 constexpr float kDisparityScale = 16.0F;
 constexpr int kMaxProfileRows = 2048; ///< analysed rows the row profile's noise estimate looks at

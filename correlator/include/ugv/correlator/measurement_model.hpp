@@ -13,9 +13,11 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "ugv/platform/angles.hpp"
+
 namespace ugv::correlator {
 
-inline constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+inline constexpr double kRadPerDeg = kDegToRad; ///< the correlator's name of ugv::kDegToRad
 
 /// One observation as stored: the UGV's reported pose and what it measured.
 struct RangeBearing {
