@@ -55,23 +55,16 @@ struct TwoGroups {
 /// @return false when the farthest pair of means is closer than kSplitDistanceM (nothing to split).
 bool twoGroups(const std::vector<Eigen::Vector2d>& means, const std::vector<double>& weights, TwoGroups& g)
 {
-    // The farthest pair, the first found in index order. A repeated point (every track with no samples left has
-    // its mean at the origin) makes no pair farther than its first occurrence did, so each point is paired once.
-    std::vector<std::size_t> distinct;
-    for (std::size_t i = 0; i < means.size(); ++i) {
-        if (std::none_of(distinct.begin(), distinct.end(), [&](std::size_t k) { return means[k] == means[i]; })) {
-            distinct.push_back(i);
-        }
-    }
+    // The farthest pair, the first found in index order.
     std::size_t a = 0;
     std::size_t b = 0;
-    double farthest = (means[a] - means[b]).norm();
-    for (std::size_t i = 0; i < distinct.size(); ++i) {
-        for (std::size_t k = i + 1; k < distinct.size(); ++k) {
-            const double d = (means[distinct[i]] - means[distinct[k]]).norm();
+    double farthest = 0.0;
+    for (std::size_t i = 0; i < means.size(); ++i) {
+        for (std::size_t k = i + 1; k < means.size(); ++k) {
+            const double d = (means[i] - means[k]).norm();
             if (d > farthest) {
-                a = distinct[i];
-                b = distinct[k];
+                a = i;
+                b = k;
                 farthest = d;
             }
         }
