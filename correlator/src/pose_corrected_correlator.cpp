@@ -9,7 +9,8 @@
 namespace ugv::correlator {
 
 PoseCorrectedCorrelator::PoseCorrectedCorrelator(const PoseCorrectedConfig& config)
-    : config_(config), poses_(config), statics_(config), mobiles_(config), uav_(config), solver_(config)
+    : config_(config), poses_(config), statics_(config), mobiles_(config), uav_(config), anchors_(config),
+      solver_(config)
 {
 }
 
@@ -17,7 +18,7 @@ Result<void, Error> PoseCorrectedCorrelator::add(const Message& message)
 {
     // UAV fixes of one instant are assigned together: the first message of a later instant ends them.
     if (uav_.pendingBefore(std::visit([](const auto& m) { return m.t; }, message))) {
-        uav_.flush(*frame_, mobiles_, ids_);
+        flushUav();
     }
     if (const auto* o = std::get_if<Observation>(&message)) {
         now_ = std::max(now_, o->t);
@@ -30,7 +31,7 @@ Result<void, Error> PoseCorrectedCorrelator::add(const Message& message)
         if (!frame_) {
             frame_.emplace(u->lat, u->lon);
         }
-        uav_.add(*u, *frame_, mobiles_, ids_);
+        uav_.add(*u, *frame_, mobiles_, ids_, anchors_);
     } else if (const auto* c = std::get_if<Confirm>(&message)) {
         now_ = std::max(now_, c->t);
         return confirm(*c);
@@ -56,6 +57,7 @@ void PoseCorrectedCorrelator::addObservation(const Observation& o)
         Eigen::Matrix2d cov;
         poses_.project(ugv, sample, p, &cov);
         mobiles_.add(o, p, cov, ids_);
+        anchors_.observe(ugv, o.cls, sample);
     } else {
         statics_.add(o, ugv, sample, poses_, ids_);
     }
@@ -83,8 +85,10 @@ void PoseCorrectedCorrelator::rebuildStatics()
 void PoseCorrectedCorrelator::solve()
 {
     // Samples beyond the horizon fold into their object's prior first.
-    statics_.foldBeyondHorizon(poses_.window(now_ - config_.horizonS));
-    if (!solver_.estimate(statics_, poses_)) {
+    const int oldestWindow = poses_.window(now_ - config_.horizonS);
+    statics_.foldBeyondHorizon(oldestWindow);
+    anchors_.dropBefore(oldestWindow, poses_);
+    if (!solver_.estimate(statics_, poses_, anchors_)) {
         return;
     }
     rebuildStatics();
@@ -93,10 +97,16 @@ void PoseCorrectedCorrelator::solve()
     rebuildStatics();
 }
 
+void PoseCorrectedCorrelator::flushUav()
+{
+    uav_.flush(*frame_, mobiles_, ids_, anchors_);
+    anchors_.resolve(poses_);
+}
+
 void PoseCorrectedCorrelator::advance(double t)
 {
     if (frame_) { // without a frame nothing was added: no fix is pending
-        uav_.flush(*frame_, mobiles_, ids_);
+        flushUav();
     }
     statics_.dropTentative(t, ids_);
     mobiles_.timeOut(t);

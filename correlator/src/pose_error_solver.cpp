@@ -235,6 +235,47 @@ void addPoseTerms(const UgvPoseErrors& poses, const Layout& l, const PoseCorrect
     }
 }
 
+/// The UAV's anchors: each says where its UGV's pose puts an absolutely known point, so each is a term on that UGV's
+/// heading bias and its window's offset alone (no object unknown). Its noise: the measurement's, and the anchor's
+/// error scaled by the anchors that share it (they count once together). An anchor outside its gate under the
+/// estimate of the moment (the gate of UavAnchors::resolve) is left out: it was made while its UGV's pose was
+/// known worse, and it is not the object it then seemed.
+void addAnchorTerms(const UavAnchors& anchors, const UgvPoseErrors& poses, const Layout& l,
+                    const PoseCorrectedConfig& config, NormalEquations& eq)
+{
+    for (const UavAnchors::Anchor& a : anchors.anchors()) {
+        const auto u = static_cast<std::size_t>(a.ugv);
+        const int w = poses.window(a.sample.t);
+        Eigen::Vector2d dPos;
+        double dHeading = 0.0;
+        if (l.ugvBase[u] < 0 || w < l.firstWindow[u] || w > l.lastWindow[u] ||
+            poses.explicitCorrection(a.ugv, a.sample.t, dPos, dHeading)) {
+            continue; // its offset is not solved here, or the map builder's correction fixes the pose
+        }
+        Eigen::Vector2d p;
+        Eigen::Matrix2d measurementCov;
+        Eigen::Vector2d ray;
+        poses.project(a.ugv, a.sample, p, nullptr, &measurementCov, &ray);
+        const Eigen::Vector2d r = p - a.position;
+        const Eigen::Matrix2d own = a.sharedVariance * Eigen::Matrix2d::Identity();
+        if (mahalanobis2(r, measurementCov + poses.priorPoseCovariance(a.sample, ray) + own) >= config.gateChi2) {
+            continue;
+        }
+        const Eigen::Matrix2d weight = (measurementCov + a.shares * own).inverse();
+        const Eigen::Vector2d jh = a.sample.rangeM * acrossOf(ray); // d p / d heading
+        const int th = l.ugvBase[u];
+        const int ow = th + 1 + 2 * (w - l.firstWindow[u]);
+        const Eigen::Vector2d wj = weight * jh;
+        const Eigen::Matrix<double, 1, 1> jj(jh.dot(wj));
+        addBlock(eq.h, th, th, jj);
+        addBlock(eq.h, th, ow, wj.transpose());
+        addBlock(eq.h, ow, th, wj);
+        addBlock(eq.h, ow, ow, weight);
+        eq.g(th) += wj.dot(r);
+        eq.g.segment<2>(ow) += weight * r;
+    }
+}
+
 void applyStep(const Eigen::VectorXd& delta, const Layout& l, StaticMap& map, UgvPoseErrors& poses)
 {
     for (std::size_t u = 0; u < poses.size(); ++u) {
@@ -307,7 +348,7 @@ bool samePattern(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix
 
 PoseErrorSolver::PoseErrorSolver(const PoseCorrectedConfig& config) : config_(config) {}
 
-bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses) const
+bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses, const UavAnchors& anchors) const
 {
     const Layout l = layoutOf(map, poses, config_);
     if (l.n == 0) {
@@ -324,6 +365,7 @@ bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses) const
         NormalEquations eq{{}, Eigen::VectorXd::Zero(l.n)};
         addObservationTerms(map, poses, l, config_, eq);
         addPoseTerms(poses, l, config_, eq);
+        addAnchorTerms(anchors, poses, l, config_, eq);
         Eigen::SparseMatrix<double> hm(l.n, l.n);
         hm.setFromTriplets(eq.h.begin(), eq.h.end());
         hm.makeCompressed();

@@ -22,10 +22,11 @@ OoiClass classOf(const UavFix& fix) noexcept
 
 UavAssignment::UavAssignment(const PoseCorrectedConfig& config) : config_(config) {}
 
-void UavAssignment::add(const UavFix& fix, const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids)
+void UavAssignment::add(const UavFix& fix, const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids,
+                        UavAnchors& anchors)
 {
     if (!pending_.empty() && pending_.front().t != fix.t) {
-        flush(frame, tracker, ids);
+        flush(frame, tracker, ids, anchors);
     }
     pending_.push_back(fix);
 }
@@ -65,7 +66,7 @@ std::vector<double> UavAssignment::costs(const std::vector<Eigen::Vector2d>& fix
     return cost;
 }
 
-void UavAssignment::flush(const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids)
+void UavAssignment::flush(const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids, UavAnchors& anchors)
 {
     if (pending_.empty()) {
         return;
@@ -98,6 +99,7 @@ void UavAssignment::flush(const LocalFrame& frame, MobileTracker& tracker, Objec
             tracker.update(index, fixes[k], r, u.t);
         }
         tracker.markFixedByUav(index);
+        anchors.fix(index, classOf(u), u.t, fixes[k]);
     }
     pending_.clear();
 }

@@ -85,6 +85,13 @@ UgvPoseErrors::PoseSigmas UgvPoseErrors::remainingSigmas(const Ugv& u, bool corr
     return {heading, offset};
 }
 
+Eigen::Matrix2d UgvPoseErrors::priorPoseCovariance(const RangeBearing& s, const Eigen::Vector2d& ray) const
+{
+    const Eigen::Vector2d across = acrossOf(ray);
+    return std::pow(s.rangeM * priorHeadingSigma(), 2) * across * across.transpose() +
+           config_.offsetSigmaM * config_.offsetSigmaM * Eigen::Matrix2d::Identity();
+}
+
 void UgvPoseErrors::project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
                             Eigen::Matrix2d* measurementCov, Eigen::Vector2d* ray) const
 {

@@ -62,6 +62,57 @@ TEST(PoseCorrectedCorrelator, EstimatesAUgvsHeadingBiasFromSharedObjectsAndKeeps
     EXPECT_EQ(ofClass(s, OoiClass::Static).size(), posts.size());
 }
 
+/// Both UGVs report positions 2.5 m off in the same direction: the static objects alone cannot tell (everything moves
+/// together), and zero-mean priors would leave every object 2.5 m off. The UAV fixes a walker that ugv-1 sees too:
+/// those sightings are absolute anchors, and the fleet's common offset comes out.
+TEST(PoseCorrectedCorrelator, UavFixesOfAnObjectAUgvSeesTooMakeTheFleetsCommonOffsetObservable)
+{
+    const Scene scene;
+    PoseCorrectedCorrelator sut;
+    const Eigen::Vector2d offset(2.0, -1.5);
+    const Eigen::Vector2d posOne(-10, 0);
+    const Eigen::Vector2d posTwo(10, 0);
+    std::vector<Eigen::Vector2d> posts;
+    for (int i = 0; i < 6; ++i) {
+        posts.emplace_back(-25.0 + 10.0 * i, 12.0 + 3.0 * (i % 2));
+    }
+    const auto walker = [](double t) { // back and forth along 40 m at 1 m/s
+        const double phase = std::fmod(t, 80.0);
+        return Eigen::Vector2d(-20.0 + (phase < 40.0 ? phase : 80.0 - phase), 30.0);
+    };
+    constexpr double kEndS = 300.0;
+    for (int step = 0; 0.5 * step <= kEndS; ++step) {
+        const double t = 0.5 * step;
+        for (std::size_t i = 0; i < posts.size(); ++i) {
+            const std::string n = std::to_string(i);
+            ASSERT_TRUE(
+                sut.add(scene.see(t, "ugv-1", "a" + n, OoiClass::Static, posOne, posts[i], 0.0, offset)).has_value());
+            ASSERT_TRUE(
+                sut.add(scene.see(t, "ugv-2", "b" + n, OoiClass::Static, posTwo, posts[i], 0.0, offset)).has_value());
+        }
+        ASSERT_TRUE(sut.add(scene.see(t, "ugv-1", "m", OoiClass::Mobile, posOne, walker(t), 0.0, offset)).has_value());
+        if (step % 20 == 0) {
+            UavFix fix;
+            fix.t = t;
+            scene.latLon(walker(t), fix.lat, fix.lon);
+            ASSERT_TRUE(sut.add(fix).has_value());
+        }
+    }
+
+    const auto statics = ofClass(snapshotAt(sut, kEndS), OoiClass::Static);
+    ASSERT_EQ(statics.size(), posts.size());
+    for (const ObjectEstimate& o : statics) {
+        const Eigen::Vector2d at = scene.local(o);
+        const auto nearest = std::min_element(posts.begin(), posts.end(), [&](const auto& x, const auto& y) {
+            return (x - at).norm() < (y - at).norm();
+        });
+        EXPECT_LT((*nearest - at).norm(), 0.3) << o.id;
+    }
+    for (const char* ugv : {"ugv-1", "ugv-2"}) {
+        EXPECT_LT((sut.poseError(ugv, kEndS).value().offset + offset).norm(), 0.3) << ugv;
+    }
+}
+
 TEST(PoseCorrectedCorrelator, PoseCorrectionReprojectsStoredObservationsExactly)
 {
     const Scene scene;

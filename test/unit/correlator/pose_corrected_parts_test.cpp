@@ -1,14 +1,19 @@
 // Parts of mode pose-corrected on their own: the measurement model (rays, noise, information), ObjectIds (ids
-// in creation order, merges followed, erased ids gone), UgvPoseErrors' remaining pose uncertainty and StaticMap's
-// split/merge hysteresis. The other rules they carry out are tested through PoseCorrectedCorrelator in
-// pose_corrected_correlator_test.cpp.
+// in creation order, merges followed, erased ids gone), UgvPoseErrors' remaining pose uncertainty, StaticMap's
+// split/merge hysteresis, UavAnchors (UGV observations of UAV-fixed objects as absolute anchors) and the gate
+// PoseErrorSolver applies to them. The other rules
+// they carry out are tested through PoseCorrectedCorrelator in pose_corrected_correlator_test.cpp.
 
 #include "ugv/correlator/measurement_model.hpp"
 #include "ugv/correlator/object_ids.hpp"
+#include "ugv/correlator/pose_error_solver.hpp"
 #include "ugv/correlator/static_map.hpp"
+#include "ugv/correlator/uav_anchors.hpp"
 #include "ugv/correlator/ugv_pose_errors.hpp"
 
 #include <cmath>
+#include <string>
+#include <tuple>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -201,6 +206,150 @@ TEST(StaticMap, ASplitThatUndoesAMergeGivesTheAbsorbedObjectItsIdBack)
     EXPECT_EQ(ids.find(idA)->index, 0);
     EXPECT_LT((sut.objects()[0].mean - a).norm(), 0.1);
     EXPECT_LT((sut.objects()[1].mean - b).norm(), 0.1);
+}
+
+/// What a UGV at `from` (reported heading north, no pose error) measures of an object at `object` at time t.
+RangeBearing seen(double t, const Eigen::Vector2d& from, const Eigen::Vector2d& object)
+{
+    const Eigen::Vector2d d = object - from;
+    return RangeBearing{t, from, 0.0, d.norm(), std::atan2(d.x(), d.y())};
+}
+
+/// An object walking east at 1 m/s from (0, 20), fixed by the UAV at t = 0 and 10, seen by a UGV at 4 s and 6 s.
+TEST(UavAnchors, AnObservationBetweenTwoFixesIsAnchoredWhereTheyPutTheObjectThenAndThePairCountsOnce)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    const int ugv = poses.index("ugv-1");
+    UavAnchors sut(config);
+    const auto walker = [](double t) { return Eigen::Vector2d(t, 20.0); };
+    sut.fix(0, OoiClass::Mobile, 0.0, walker(0.0));
+    sut.observe(ugv, OoiClass::Mobile, seen(4.0, {0, 0}, walker(4.0)));
+    sut.observe(ugv, OoiClass::Mobile, seen(6.0, {0, 0}, walker(6.0)));
+    sut.observe(ugv, OoiClass::Mobile, seen(11.0, {0, 0}, walker(11.0)));
+    sut.resolve(poses);
+    ASSERT_TRUE(sut.anchors().empty()) << "no fix after them yet";
+    ASSERT_EQ(sut.held(), 3U);
+
+    sut.fix(0, OoiClass::Mobile, 10.0, walker(10.0));
+    sut.resolve(poses);
+
+    ASSERT_EQ(sut.anchors().size(), 2U);
+    EXPECT_EQ(sut.held(), 1U) << "the observation after the last fix still waits";
+    const double uav2 = config.uavSigmaM * config.uavSigmaM;
+    for (const UavAnchors::Anchor& a : sut.anchors()) {
+        const double tau = a.sample.t / 10.0;
+        EXPECT_EQ(a.ugv, ugv);
+        EXPECT_LT((a.position - walker(a.sample.t)).norm(), 1e-9);
+        EXPECT_NEAR(a.sharedVariance, uav2 * ((1.0 - tau) * (1.0 - tau) + tau * tau), 1e-9) << "a straight walk";
+        EXPECT_EQ(a.shares, 2.0);
+    }
+}
+
+/// Fixed 8 m apart after 10 s at a walking speed of 1 m/s (its earlier fixes): it turned, so the chord's point
+/// may be off by up to half the lens of where it can be; a straight walk between the fixes adds nothing.
+TEST(UavAnchors, ATurnBetweenTheFixesWidensTheAnchorsVariance)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    const int ugv = poses.index("ugv-1");
+    UavAnchors sut(config);
+    sut.fix(0, OoiClass::Mobile, 0.0, {0.0, 20.0});
+    sut.fix(0, OoiClass::Mobile, 10.0, {10.0, 20.0});
+    sut.observe(ugv, OoiClass::Mobile, seen(15.0, {0, 0}, {13.0, 20.0}));
+    sut.fix(0, OoiClass::Mobile, 20.0, {12.0, 20.0}); // walked to 14 and back to 12
+    sut.resolve(poses);
+
+    ASSERT_EQ(sut.anchors().size(), 1U);
+    const UavAnchors::Anchor& a = sut.anchors().front();
+    EXPECT_LT((a.position - Eigen::Vector2d(11.0, 20.0)).norm(), 1e-9);
+    const double uav2 = config.uavSigmaM * config.uavSigmaM;
+    const double stray2 = (10.0 * 10.0 - 2.0 * 2.0) / 4.0; // half the lens: path 10 m, chord 2 m
+    EXPECT_NEAR(a.sharedVariance, uav2 * 0.5 + stray2, 1e-9);
+}
+
+TEST(UavAnchors, AnObservationWithinTheGateOfTwoFixedObjectsOrOfNoneOrOfAnotherClassIsNoAnchor)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    const int ugv = poses.index("ugv-1");
+    UavAnchors sut(config);
+    for (const double t : {0.0, 10.0}) {
+        sut.fix(0, OoiClass::Mobile, t, {0.0, 20.0});
+        sut.fix(1, OoiClass::Mobile, t, {2.0, 20.0});  // beside object 0: either could be the one seen
+        sut.fix(2, OoiClass::Mobile, t, {60.0, 20.0}); // alone
+        sut.fix(3, OoiClass::NonCombatant, t, {60.0, -20.0});
+    }
+    sut.observe(ugv, OoiClass::Mobile, seen(5.0, {0, 0}, {1.0, 20.0}));      // objects 0 and 1
+    sut.observe(ugv, OoiClass::Mobile, seen(5.0, {40, 0}, {40.0, 20.0}));    // none: 20 m from object 2
+    sut.observe(ugv, OoiClass::Mobile, seen(5.0, {60, -40}, {60.0, -20.0})); // a non-combatant stands there
+    sut.observe(ugv, OoiClass::Mobile, seen(5.0, {60, 0}, {60.5, 20.0}));    // object 2 alone
+
+    sut.resolve(poses);
+
+    ASSERT_EQ(sut.anchors().size(), 1U);
+    EXPECT_LT((sut.anchors().front().position - Eigen::Vector2d(60.0, 20.0)).norm(), 1e-9);
+    EXPECT_EQ(sut.held(), 0U);
+}
+
+TEST(UavAnchors, WithoutFixesAnObservationIsHeldNoLongerThanAnUnseenMobileLives)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    const int ugv = poses.index("ugv-1");
+    UavAnchors sut(config);
+    constexpr int kSeconds = 600;
+
+    for (int i = 0; i <= 2 * kSeconds; ++i) {
+        sut.observe(ugv, OoiClass::Mobile, seen(0.5 * i, {0, 0}, {0.0, 20.0}));
+        sut.resolve(poses);
+    }
+
+    EXPECT_LE(sut.held(), static_cast<std::size_t>(2.0 * config.mobileTimeoutS) + 1);
+    EXPECT_TRUE(sut.anchors().empty());
+}
+
+/// ugv-1 saw a walker at (0, 20) while its offset was estimated 12 m east, so the sighting matched the UAV's fix of
+/// an object at (12, 20). The estimate put right (no error: both UGVs agree on four posts), the anchor lies far
+/// outside its gate and must not drag the fleet 12 m east.
+TEST(PoseErrorSolver, AnAnchorOutsideItsGateUnderTheCurrentEstimateIsLeftOut)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    ObjectIds ids;
+    StaticMap map(config);
+    UavAnchors anchors(config);
+    const int one = poses.index("ugv-1");
+    const int two = poses.index("ugv-2");
+    const Eigen::Vector2d posOne(-10, 0);
+    const Eigen::Vector2d posTwo(10, 0);
+    for (int i = 0; i < 100; ++i) {
+        for (int k = 0; k < 4; ++k) {
+            const Eigen::Vector2d post(-15.0 + 10.0 * k, 15.0);
+            for (const auto& [ugv, from, name] : {std::tuple{one, posOne, "ugv-1"}, std::tuple{two, posTwo, "ugv-2"}}) {
+                Observation o;
+                o.t = 0.5 * i;
+                o.ugv = name;
+                o.track = std::to_string(k);
+                o.cls = OoiClass::Static;
+                map.add(o, ugv, seen(o.t, from, post), poses, ids);
+            }
+        }
+    }
+    poses.ugv(static_cast<std::size_t>(one)).offsets = {Eigen::Vector2d(12.0, 0.0)}; // the wrong estimate of then
+    for (const double t : {0.0, 10.0}) {
+        anchors.fix(0, OoiClass::Mobile, t, {12.0, 20.0});
+    }
+    anchors.observe(one, OoiClass::Mobile, seen(5.0, {0, 0}, {0.0, 20.0}));
+    anchors.resolve(poses);
+    ASSERT_EQ(anchors.anchors().size(), 1U);
+    poses.ugv(static_cast<std::size_t>(one)).offsets.clear();
+    const PoseErrorSolver sut(config);
+
+    ASSERT_TRUE(sut.estimate(map, poses, anchors));
+
+    EXPECT_LT(poses.offsetAt(one, 5.0).norm(), 0.2);
+    EXPECT_LT(poses.offsetAt(two, 5.0).norm(), 0.2);
 }
 
 } // namespace

@@ -12,7 +12,8 @@
 ///   never below the configured model;
 /// - estimates, every solvePeriodS, each UGV's heading bias (constant) and position offset (per offsetWindowS
 ///   window, a random walk between windows) jointly with the static objects, by sparse Gauss-Newton least
-///   squares with Eigen (zero-mean priors fix the gauge: the fleet on average is unbiased);
+///   squares with Eigen; the UAV's fixes of mobile objects that UGVs observe too are absolute anchors (UavAnchors)
+///   that make the fleet's common offset observable, and zero-mean priors fix what no anchor reaches;
 /// - tracks mobile objects with a constant-velocity Kalman filter (continuous white acceleration), predicted
 ///   through gaps, published after minMobileObservations while the prediction's sigma stays below 2.5 m; once
 ///   the object's history shows a line walked back and forth, it is predicted along that line (turning at its
@@ -26,8 +27,8 @@
 ///
 /// The parts, each in its own file: UgvPoseErrors (the pose model and the projection of an observation),
 /// StaticMap (static objects, association, split/merge, tentative drop), PoseErrorSolver (Gauss-Newton and
-/// noise learning), MobileTracker (Kalman and line-walking mobiles), UavAssignment (the fixes of an instant) and
-/// ObjectIds; this class composes them and orders their steps.
+/// noise learning), MobileTracker (Kalman and line-walking mobiles), UavAssignment (the fixes of an instant),
+/// UavAnchors (UGV observations of UAV-fixed objects) and ObjectIds; this class composes them and orders their steps.
 ///
 /// Thread-safety: thread-bound. RT-safe: no (the lowest-priority task).
 
@@ -44,6 +45,7 @@
 #include "ugv/correlator/pose_corrected_config.hpp"
 #include "ugv/correlator/pose_error_solver.hpp"
 #include "ugv/correlator/static_map.hpp"
+#include "ugv/correlator/uav_anchors.hpp"
 #include "ugv/correlator/uav_assignment.hpp"
 #include "ugv/correlator/ugv_pose_errors.hpp"
 #include "ugv/platform/error.hpp"
@@ -57,13 +59,17 @@ public:
 
     /// Applies one message (time-ordered). Errors (the message is skipped): a confirm of an unknown id.
     Result<void, Error> add(const Message& message);
-    /// What the passing of time alone changes, up to `t`: the UAV fixes still pending are assigned, static objects
-    /// still tentative tentativeTimeoutS after their first observation are dropped, mobile objects unseen for
-    /// mobileTimeoutS are dropped. Call it before snapshot(t) (CorrelatorFeed does at every period boundary).
+    /// What the passing of time alone changes, up to `t`: the UAV fixes still pending are assigned (and the UGV
+    /// sightings they bracket become anchors), static objects still tentative tentativeTimeoutS after their first
+    /// observation are dropped, mobile objects unseen for mobileTimeoutS are dropped. Call it before snapshot(t)
+    /// (CorrelatorFeed does at every period boundary).
     void advance(double t);
     /// The objects and alerts at time `t`, as advance(t) left them; changes nothing.
     [[nodiscard]] Snapshot snapshot(double t) const;
-    [[nodiscard]] std::size_t storedPoints() const noexcept { return statics_.storedPoints(); }
+    [[nodiscard]] std::size_t storedPoints() const noexcept
+    {
+        return statics_.storedPoints() + anchors_.storedPoints();
+    }
 
     /// The current estimate of a UGV's heading bias [deg] and offset at time t [m] (tests, diagnostics).
     struct PoseError {
@@ -87,6 +93,8 @@ private:
     void rebuildStatics();
     /// Every solvePeriodS of mission time: the pose errors and the static map estimated jointly, the noise learnt.
     void solve();
+    /// Assigns the UAV fixes held; the observations they now bracket become anchors.
+    void flushUav();
 
     PoseCorrectedConfig config_;
     std::optional<LocalFrame> frame_;
@@ -95,6 +103,7 @@ private:
     StaticMap statics_;
     MobileTracker mobiles_;
     UavAssignment uav_;
+    UavAnchors anchors_;
     PoseErrorSolver solver_;
     double now_ = 0.0;
     double lastSolveT_ = 0.0;

@@ -6,7 +6,8 @@
 /// (an optimal assignment of their statistical distances), so that one object's fix cannot take the track of
 /// another it passes close to. A fix outside every gate may still go to an object it could have walked to since
 /// its last estimate (a turn between two fixes of an object that only the UAV sees), at a cost above every gated
-/// pair; a fix cheapest alone is a new object.
+/// pair; a fix cheapest alone is a new object. Each assigned fix also goes to UavAnchors (the object's absolute
+/// position at that instant).
 ///
 /// Thread-safety: thread-bound. RT-safe: no (allocates).
 
@@ -20,6 +21,7 @@
 #include "ugv/correlator/mobile_tracker.hpp"
 #include "ugv/correlator/object_ids.hpp"
 #include "ugv/correlator/pose_corrected_config.hpp"
+#include "ugv/correlator/uav_anchors.hpp"
 
 namespace ugv::correlator {
 
@@ -28,11 +30,11 @@ public:
     explicit UavAssignment(const PoseCorrectedConfig& config);
 
     /// Holds `fix` with the others of its instant; a fix of a later instant first assigns those.
-    void add(const UavFix& fix, const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids);
+    void add(const UavFix& fix, const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids, UavAnchors& anchors);
     /// Fixes of an instant before `t` are held (a message at `t` ends their instant).
     [[nodiscard]] bool pendingBefore(double t) const noexcept { return !pending_.empty() && t > pending_.front().t; }
     /// Assigns the fixes held (none: nothing happens).
-    void flush(const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids);
+    void flush(const LocalFrame& frame, MobileTracker& tracker, ObjectIds& ids, UavAnchors& anchors);
 
 private:
     /// The cost of each pending fix (rows) for a new object of its own (the first pending_.size() columns) and for

@@ -66,6 +66,10 @@ public:
     /// from the UGV towards it under that model.
     void project(int ugv, const RangeBearing& s, Eigen::Vector2d& p, Eigen::Matrix2d* cov,
                  Eigen::Matrix2d* measurementCov = nullptr, Eigen::Vector2d* ray = nullptr) const;
+    /// The covariance the prior pose errors (heading bias and offset, before any estimate) add to the position of
+    /// `s` seen along `ray`: the absolute pose uncertainty, which the solves (they measure the UGVs' errors against
+    /// each other) do not reduce without an absolute reference.
+    [[nodiscard]] Eigen::Matrix2d priorPoseCovariance(const RangeBearing& s, const Eigen::Vector2d& ray) const;
 
 private:
     struct PoseSigmas {
