@@ -22,6 +22,7 @@ packages=(
     libgeographiclib-dev   # WGS84 <-> local tangent plane (correlator)
     nlohmann-json3-dev     # JSON lines of the correlator's offline tools
     libfastrtps-dev fastddsgen fastdds-tools default-jre-headless   # DDS: Fast DDS 2.9, IDL generator (Java), discovery server
+    cyclonedds-dev cyclonedds-tools   # a second DDS (Cyclone 0.10, idlc): the interop test, test/interop
     iproute2 nftables      # the multi-host test: network namespaces and packet loss
     openssl                # DDS Security: bringup/security/make_security.sh (CA, certificates, signed XML)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks

@@ -14,7 +14,8 @@
 # Permissions of a team participant NAME (a vehicle, the ground station, a UAV relay, an operator console): write
 # our topics ugvsense/* only in the partition PARTITION.NAME (so it can write only in its own name: the receiver
 # checks that a sample's sender is the writer's partition), read them in PARTITION.* (everyone's), write the ROS 2
-# topics rt/NS/* of its own namespace (NS = NAME without its - : ugv-1 -> ugv1) and read rt/*.
+# topics rt/NS/* of its own namespace (NS = NAME without its - : ugv-1 -> ugv1) and ros_discovery_info (ROS 2 tools
+# list it as a node), and read rt/*.
 # Permissions of a ROS 2 node (--ros NAME): every ROS 2 topic (rt/*, rq/*, rr/*, ros_discovery_info) in the
 # default partition, none of ours: give its folder to the node as its SROS2 enclave.
 # A CA already in OUT is reused (add a vehicle later); an existing participant folder is replaced.
@@ -96,7 +97,7 @@ rules() { # NAME ROS: the allow rule's publish/subscribe elements
     cat <<XML
         <publish><topics><topic>ugvsense/*</topic></topics><partitions><partition>$partition.$name</partition></partitions></publish>
         <subscribe><topics><topic>ugvsense/*</topic></topics><partitions><partition>$partition.*</partition></partitions></subscribe>
-        <publish><topics><topic>rt/$ns/*</topic></topics></publish>
+        <publish><topics><topic>rt/$ns/*</topic><topic>ros_discovery_info</topic></topics></publish>
         <subscribe><topics><topic>rt/*</topic></topics></subscribe>
 XML
 }

@@ -2,6 +2,7 @@
 
 #include <cctype>
 
+#include "frame_pipeline.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 
 namespace ugv::service {
@@ -53,22 +54,26 @@ Result<std::unique_ptr<DdsBridge>, Error> DdsBridge::create(ipc::dds::Bus& bus, 
     b->vehicle_ = config.vehicleId;
     b->frameId_ = rosNamespace(config) + "/" + config.dds.frameId;
     b->minDepthM_ = static_cast<float>(config.obstacles.minDepthM);
+    b->clearRangeM_ = detectorConfigFrom(config).sectors.clearRangeM;
     b->periodS_ = static_cast<float>(static_cast<double>(period.count()) * 1e-9);
     b->poseMaxAgeNs_ = static_cast<std::int64_t>(config.dds.poseMaxAgeMs * 1e6);
     auto sectors = bus.writer<msg::ObstacleSectors>();
     auto scan = bus.writer<ipc::dds::ros::LaserScan_>();
+    auto clearScan = bus.writer<ipc::dds::ros::LaserScan_>(ipc::dds::TopicId::RosClearScan);
     auto negatives = bus.writer<ipc::dds::ros::PointCloud2_>();
     auto health = bus.writer<msg::ServiceHealth>();
     auto pose = bus.reader<msg::VehiclePose>();
-    if (!sectors || !scan || !negatives || !health || !pose) {
+    if (!sectors || !scan || !clearScan || !negatives || !health || !pose) {
         return Unexpected(!sectors     ? sectors.error()
                           : !scan      ? scan.error()
+                          : !clearScan ? clearScan.error()
                           : !negatives ? negatives.error()
                           : !health    ? health.error()
                                        : pose.error());
     }
     b->sectorsOut_ = *sectors;
     b->scanOut_ = *scan;
+    b->clearScanOut_ = *clearScan;
     b->negativesOut_ = *negatives;
     b->healthOut_ = *health;
     b->poseIn_ = *pose;
@@ -99,8 +104,9 @@ void DdsBridge::onFrame(const BusFrame& frame) noexcept
         }
         const bool ok = sectorsOut_.write(sectors_);
         ipc::dds::toLaserScan(frame.message.sectors, captureReal, frameId_, 0.0F, rangeMaxM_, periodS_, scan_);
+        ipc::dds::toLaserScan(frame.message.sectors, captureReal, frameId_, 0.0F, clearRangeM_, periodS_, clearScan_);
         ipc::dds::toNegativeCloud(frame.message.sectors, captureReal, frameId_, minDepthM_, cloud_);
-        const bool rosOk = scanOut_.write(scan_) && negativesOut_.write(cloud_);
+        const bool rosOk = scanOut_.write(scan_) && clearScanOut_.write(clearScan_) && negativesOut_.write(cloud_);
         if (!ok || !rosOk) {
             writeFailures_.fetch_add(1, std::memory_order_relaxed);
         }

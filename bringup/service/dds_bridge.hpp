@@ -2,8 +2,9 @@
 
 /// @file
 /// The service on the DDS bus, run by its low-priority "bus" task (Service's BusSink):
-///   out: ugvsense/sectors (with the pose at capture and the ground estimate), rt/<ns>/obstacle_scan (LaserScan),
-///        rt/<ns>/negative_obstacles (PointCloud2), ugvsense/health once a second;
+///   out: ugvsense/sectors (with the pose at capture and the ground estimate), rt/<ns>/obstacle_scan (LaserScan,
+///        range_max 50 m: for marking), rt/<ns>/clear_scan (LaserScan, range_max the clear range: for clearing no
+///        farther than Clear promises), rt/<ns>/negative_obstacles (PointCloud2), ugvsense/health once a second;
 ///   in:  ugvsense/pose of this vehicle (others' poses are ignored; malformed ones refused and counted; on a secured
 ///        bus a pose naming this vehicle that another participant wrote is refused and counted too).
 ///
@@ -48,11 +49,13 @@ private:
     std::string vehicle_;
     std::string frameId_;
     float rangeMaxM_ = 50.0F;
+    float clearRangeM_ = 5.0F; ///< how far a Clear sector promises free ground (the detector's clearRangeM)
     float periodS_ = 0.0F;
     float minDepthM_ = 0.1F; ///< a drop's point is at least this far below the ground (obstacles.min_depth_m)
     std::int64_t poseMaxAgeNs_ = 0;
     ipc::dds::Writer<ipc::dds::msg::ObstacleSectors> sectorsOut_;
     ipc::dds::Writer<ipc::dds::ros::LaserScan_> scanOut_;
+    ipc::dds::Writer<ipc::dds::ros::LaserScan_> clearScanOut_;
     ipc::dds::Writer<ipc::dds::ros::PointCloud2_> negativesOut_;
     ipc::dds::Writer<ipc::dds::msg::ServiceHealth> healthOut_;
     ipc::dds::Reader<ipc::dds::msg::VehiclePose> poseIn_;
@@ -60,6 +63,7 @@ private:
     PoseHistory poses_;
     ipc::dds::msg::ObstacleSectors sectors_;
     ipc::dds::ros::LaserScan_ scan_;
+    ipc::dds::ros::LaserScan_ clearScan_;
     ipc::dds::ros::PointCloud2_ cloud_;
     ipc::dds::msg::ServiceHealth health_;
     ipc::dds::msg::VehiclePose pose_;

@@ -92,7 +92,7 @@ std::string formatBusReport(const RunResult& r)
     if (r.bus) {
         std::snprintf(
             line, sizeof(line),
-            "dds: %llu frame(s) sent (sectors, LaserScan, PointCloud2), %llu write failure(s); poses %llu "
+            "dds: %llu frame(s) sent (sectors, two LaserScans, PointCloud2), %llu write failure(s); poses %llu "
             "used, %llu of other vehicles, %llu refused, %llu in this vehicle's name by another participant; %llu "
             "frame(s) with a stale or no pose\n",
             static_cast<unsigned long long>(r.bus->framesSent), static_cast<unsigned long long>(r.bus->writeFailures),
@@ -171,15 +171,12 @@ Result<RunResult, Error> runCorrelatorOnly(const bringup::ServiceConfig& config,
 
 Result<bringup::ServiceConfig, Error> withEnvironment(bringup::ServiceConfig config)
 {
-    // NOLINTNEXTLINE(concurrency-mt-unsafe): init, before threads
-    if (const char* domain = std::getenv("UGV_DDS_DOMAIN"); domain != nullptr && *domain != '\0') {
-        char* end = nullptr;
-        const long id = std::strtol(domain, &end, 10);
-        if (*end != '\0' || id < 0 || id > 232) {
-            return Unexpected(Error{"$UGV_DDS_DOMAIN", std::string("'") + domain + "' is not a DDS domain id",
-                                    "give 0..232 or unset it"});
-        }
-        config.dds.domainId = static_cast<int>(id);
+    const auto domain = ipc::dds::domainFromEnvironment("UGV_DDS_DOMAIN");
+    if (!domain) {
+        return Unexpected(domain.error());
+    }
+    if (domain->has_value()) {
+        config.dds.domainId = **domain;
     }
     return config;
 }
@@ -288,6 +285,13 @@ Result<RunResult, Error> runService(const RunOptions& options)
             return Unexpected(created.error());
         }
         correlatorTask = std::move(*created);
+    }
+    if (bus) {
+        // ROS 2 tools list the service as the node /<namespace>/ugvsense (ros_discovery_info). A bus that refuses it
+        // (a secured bus whose permissions predate it) costs only that.
+        if (auto shown = bus->announceRosNode("ugvsense"); !shown) {
+            UGV_LOG(Ipc, Warn) << "not visible to ROS 2 tools: " << shown.error().message();
+        }
     }
     auto service = Service::create(config, *calibration, std::move(*camera), serviceOptions);
     if (!service) {

@@ -10,6 +10,8 @@
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "ugv/platform/sectors_json.hpp"
+
 namespace ugv::sim {
 namespace {
 
@@ -44,47 +46,6 @@ Result<void, Error> writePng(const std::filesystem::path& path, const cv::Mat& i
         return Unexpected(fileError(path, std::string("cannot write PNG: ") + e.what()));
     }
     return {};
-}
-
-const char* kindName(ObstacleKind k)
-{
-    switch (k) {
-    case ObstacleKind::Positive:
-        return "positive";
-    case ObstacleKind::Negative:
-        return "negative";
-    case ObstacleKind::None:
-        break;
-    }
-    return "none";
-}
-
-const char* stateName(SectorState s)
-{
-    switch (s) {
-    case SectorState::Clear:
-        return "clear";
-    case SectorState::Obstacle:
-        return "obstacle";
-    case SectorState::Unknown:
-        break;
-    }
-    return "unknown";
-}
-
-const char* className(DangerClass c)
-{
-    switch (c) {
-    case DangerClass::Green:
-        return "green";
-    case DangerClass::Blue:
-        return "blue";
-    case DangerClass::Red:
-        return "red";
-    case DangerClass::Unknown:
-        break;
-    }
-    return "unknown";
 }
 
 } // namespace
@@ -128,24 +89,8 @@ Result<void, Error> writeCalibration(const Rig& rig, const std::filesystem::path
 
 std::string sectorsJson(const ObstacleSectors& sectors)
 {
-    std::ostringstream json;
-    json.precision(6);
-    json << "{\n  \"count\": " << sectors.count << ",\n  \"sectors\": [\n";
-    for (int i = 0; i < sectors.count; ++i) {
-        const Sector& s = sectors.sectors[static_cast<std::size_t>(i)];
-        json << "    {\"bearing_min_deg\": " << s.bearingMinDeg << ", \"bearing_max_deg\": " << s.bearingMaxDeg
-             << ", \"range_m\": ";
-        if (std::isfinite(s.rangeM)) {
-            json << s.rangeM;
-        } else {
-            json << "null";
-        }
-        json << ", \"kind\": \"" << kindName(s.kind) << "\", \"state\": \"" << stateName(s.state) << "\", \"class\": \""
-             << className(s.danger) << "\", \"height_m\": " << s.heightM << "}"
-             << (i + 1 < sectors.count ? ",\n" : "\n");
-    }
-    json << "  ]\n}\n";
-    return json.str();
+    return "{\n  \"count\": " + std::to_string(sectors.count) + ",\n  \"sectors\": " + sectorsJsonArray(sectors, 4) +
+           "\n}\n";
 }
 
 Result<void, Error> writeSample(const RenderResult& sample, const Rig& rig, const std::filesystem::path& dir,

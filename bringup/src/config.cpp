@@ -575,18 +575,16 @@ void applyRosDomainId(const YAML::Node& root, ServiceConfig& config, ConfigError
     if (const YAML::Node dds = root["dds"]; dds.IsDefined() && dds.IsMap() && dds["domain_id"].IsDefined()) {
         return;
     }
-    const char* env = std::getenv("ROS_DOMAIN_ID"); // NOLINT(concurrency-mt-unsafe): init, before threads
-    if (env == nullptr || *env == '\0') {
+    const auto domain = ipc::dds::domainFromEnvironment("ROS_DOMAIN_ID");
+    if (!domain) {
+        Error e = domain.error();
+        e.fix += " (or set dds.domain_id, which wins over it)";
+        errors.push_back(std::move(e));
         return;
     }
-    char* end = nullptr;
-    const long id = std::strtol(env, &end, 10);
-    if (*end != '\0' || id < 0 || id > 232) {
-        errors.push_back(Error{"$ROS_DOMAIN_ID", std::string("'") + env + "' is not a DDS domain id",
-                               "give 0..232, unset it, or set dds.domain_id (which wins over it)"});
-        return;
+    if (domain->has_value()) {
+        config.dds.domainId = **domain;
     }
-    config.dds.domainId = static_cast<int>(id);
 }
 
 } // namespace

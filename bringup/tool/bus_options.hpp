@@ -6,7 +6,6 @@
 /// are the only users. Init-time only (allocates).
 
 #include <atomic>
-#include <cerrno>
 #include <csignal>
 #include <cstdlib>
 #include <string>
@@ -56,18 +55,13 @@ inline ipc::dds::SecurityConfig securityFrom(const Args& args)
 inline Result<double, Error> environmentDomain()
 {
     for (const char* var : {"UGV_DDS_DOMAIN", "ROS_DOMAIN_ID"}) {
-        const char* env = std::getenv(var); // NOLINT(concurrency-mt-unsafe): init, before threads
-        if (env == nullptr || *env == '\0') {
-            continue;
+        const auto domain = ipc::dds::domainFromEnvironment(var);
+        if (!domain) {
+            return Unexpected(domain.error());
         }
-        char* end = nullptr;
-        errno = 0;
-        const long v = std::strtol(env, &end, 10);
-        if (errno != 0 || *end != '\0' || v < 0 || v > kMaxDomainId) {
-            return Unexpected(Error{std::string("environment ") + var, "bad domain id '" + std::string(env) + "'",
-                                    "set a whole number in 0..232, or unset it"});
+        if (domain->has_value()) {
+            return static_cast<double>(**domain);
         }
-        return static_cast<double>(v);
     }
     return 0.0;
 }

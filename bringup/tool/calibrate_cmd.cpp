@@ -20,6 +20,7 @@
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/camera_factory.hpp"
 #include "ugv/bringup/config.hpp"
+#include "ugv/platform/sectors_json.hpp" // jsonNumber
 #include "ugv/vision/stereo_calibrator.hpp"
 
 namespace ugv::tool {
@@ -59,13 +60,6 @@ std::string jsonString(const std::string& text)
         }
     }
     return out + "\"";
-}
-
-std::string jsonNumber(double value)
-{
-    char text[32];
-    std::snprintf(text, sizeof(text), "%.6g", value);
-    return text;
 }
 
 bool writeJson(const std::string& path, const vision::CalibrationReport& report)

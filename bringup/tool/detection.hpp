@@ -15,6 +15,7 @@
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
+#include "ugv/platform/sectors_json.hpp" // stateName, kindName, className, jsonNumber, sectorsJsonArray
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
@@ -77,16 +78,5 @@ cv::Mat makeOverlay(const cv::Mat& colourLeft, vision::Rectifier& fullRectifier,
 /// Appends a bar of kBarHeightPx rows below `canvas` with one colour per sector over the columns of its bearings.
 cv::Mat appendSectorBar(const cv::Mat& canvas, const ObstacleSectors& layout, const std::vector<cv::Scalar>& colours,
                         const vision::RectifiedProjection& p);
-
-const char* stateName(SectorState state);
-const char* kindName(ObstacleKind kind);
-const char* className(DangerClass danger);
-
-/// The sectors as a JSON array (one object per line, `indent` spaces): bearing_min_deg, bearing_max_deg,
-/// range_m (null when +inf), kind, state, class, height_m, confidence.
-std::string sectorsJsonArray(const ObstacleSectors& sectors, int indent);
-
-/// "%.6g" of a finite number, "null" otherwise.
-std::string jsonNumber(double value);
 
 } // namespace ugv::tool

@@ -29,6 +29,7 @@ namespace {
 namespace dds = ipc::dds;
 namespace msg = ipc::dds::msg;
 namespace ros = ipc::dds::ros;
+namespace graph = ipc::dds::graph;
 using nlohmann::ordered_json;
 
 constexpr const char* kCommand = "listen";
@@ -300,17 +301,49 @@ ordered_json toJson(const ros::PointCloud2_& s)
             {"points", decodedPoints(s)}};
 }
 
+std::string hex(const graph::Gid_& gid)
+{
+    static constexpr char kHex[] = "0123456789abcdef";
+    std::string out;
+    for (std::uint8_t b : gid.data()) {
+        out.push_back(kHex[b >> 4]);
+        out.push_back(kHex[b & 0xF]);
+    }
+    return out;
+}
+
+ordered_json toJson(const graph::ParticipantEntitiesInfo_& s)
+{
+    ordered_json nodes = ordered_json::array();
+    for (const graph::NodeEntitiesInfo_& n : s.node_entities_info_seq()) {
+        ordered_json readers = ordered_json::array();
+        ordered_json writers = ordered_json::array();
+        for (const graph::Gid_& g : n.reader_gid_seq()) {
+            readers.push_back(hex(g));
+        }
+        for (const graph::Gid_& g : n.writer_gid_seq()) {
+            writers.push_back(hex(g));
+        }
+        nodes.push_back({{"node_namespace", str(n.node_namespace())},
+                         {"node_name", str(n.node_name())},
+                         {"reader_gids", readers},
+                         {"writer_gids", writers}});
+    }
+    return {{"gid", hex(s.gid())}, {"nodes", nodes}};
+}
+
 struct ListenOptions {
     std::uint64_t count = 0; ///< 0: no limit
     double timeoutS = 0.0;   ///< 0: none
 };
 
-/// Prints the samples of topic T until --count, --timeout or a signal. The exit code of the command.
+/// Prints the samples of T on its topic (or `id`, a topic of the same type) until --count, --timeout or a signal.
+/// The exit code of the command.
 template <class T>
-int listenTo(dds::Bus& bus, const ListenOptions& o)
+int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::TopicOf<T>::id)
 {
-    const std::string topic = dds::topicName(dds::TopicOf<T>::id, bus.config());
-    auto reader = bus.reader<T>();
+    const std::string topic = dds::topicName(id, bus.config());
+    auto reader = bus.reader<T>(id);
     if (!reader) {
         return fail(reader.error());
     }
@@ -398,7 +431,9 @@ int runListen(int argc, char** argv)
         "  go to stderr as 'refused: <reason>' and are counted; the summary goes to stderr.\n"
         "  Stops after --count samples, after --timeout seconds, or on Ctrl-C.\n\n"
         "  TOPIC: sectors, health, pose, observations, uav, confirmations, pose_corrections, correlated, scan,\n"
-        "  negatives, or a wire name (ugvsense/ooi/observations, rt/NS/obstacle_scan, ...)",
+        "  negatives, clear_scan (the scan for clearing: range_max is the clear range), ros_discovery (ROS 2's\n"
+        "  graph: which nodes each participant holds), or a wire name\n"
+        "  (ugvsense/ooi/observations, rt/NS/obstacle_scan, ros_discovery_info, ...)",
         specs);
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError(kCommand, parsed.error());
@@ -468,6 +503,10 @@ int runListen(int argc, char** argv)
         return listenTo<ros::LaserScan_>(b, o);
     case dds::TopicId::RosNegatives:
         return listenTo<ros::PointCloud2_>(b, o);
+    case dds::TopicId::RosGraph:
+        return listenTo<graph::ParticipantEntitiesInfo_>(b, o);
+    case dds::TopicId::RosClearScan:
+        return listenTo<ros::LaserScan_>(b, o, id);
     }
     return fail(Error{where, "topic without a listener", "a bug: add it to runListen"});
 }

@@ -374,9 +374,9 @@ int writeCourseRecording(const sim::Course& course, std::size_t count, double fp
             const Sector& sector = sectors.sectors[static_cast<std::size_t>(i)];
             truth << k << ',' << static_cast<double>(k) / fps << ',' << pose.x << ',' << pose.y << ',' << pose.yawDeg
                   << ',' << i << ',' << sector.bearingMinDeg << ',' << sector.bearingMaxDeg << ','
-                  << tool::stateName(sector.state) << ',' << tool::kindName(sector.kind) << ','
+                  << stateName(sector.state) << ',' << kindName(sector.kind) << ','
                   << (std::isfinite(sector.rangeM) ? std::to_string(sector.rangeM) : std::string("inf")) << ','
-                  << tool::className(sector.danger) << '\n';
+                  << className(sector.danger) << '\n';
         }
     }
     truth.flush();

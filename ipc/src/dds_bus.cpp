@@ -1,10 +1,15 @@
 #include "ugv/ipc/dds_bus.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <mutex>
 #include <unordered_map>
+#include <vector>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -27,12 +32,13 @@ namespace {
 
 struct TopicSpec {
     const char* shortName;
-    const char* suffix; ///< our topics: the whole name; ROS 2 ones: after rt/<ns>/
-    bool ros;
-    bool reliable;
+    const char* suffix; ///< our topics and ROS 2's graph: the whole name; ROS 2 ones: after rt/<ns>/
+    bool ros;           ///< in the default partition (the only one ROS 2 reads)
+    bool reliable;      ///< for ROS 2 topics: BusConfig::rosReliable chooses
     bool transientLocal;
     bool keepAll;
-    int depth; ///< keep-last depth
+    int depth;          ///< keep-last depth
+    bool graph = false; ///< ROS 2's own graph topic: not namespaced, its QoS fixed by rmw
 };
 
 // Why these QoS (ipc/README.md): sensor-like streams are best effort, keep last 1 (a late sample is worse than
@@ -51,6 +57,8 @@ constexpr std::array<TopicSpec, kTopicCount> kTopics{{
     {"correlated", "ugvsense/ooi/correlated", false, true, true, false, 1},
     {"scan", "obstacle_scan", true, false, false, false, 1},
     {"negatives", "negative_obstacles", true, false, false, false, 1},
+    {"ros_discovery", "ros_discovery_info", true, true, true, false, 1, true},
+    {"clear_scan", "clear_scan", true, false, false, false, 1},
 }};
 
 /// Keep-all histories are bounded too: a writer whose readers do not acknowledge blocks (up to its
@@ -118,6 +126,10 @@ Result<fdds::DomainParticipantQos, Error> participantQos(const BusConfig& config
 {
     fdds::DomainParticipantQos pq = fdds::PARTICIPANT_QOS_DEFAULT;
     pq.name(config.participantName);
+    // A ROS 2 participant's user data names its security enclave (rmw_fastrtps: "enclave=/;"); ROS 2 tools show a
+    // participant's nodes with it.
+    const std::string enclave = "enclave=/;";
+    pq.user_data().data_vec(std::vector<rtps::octet>(enclave.begin(), enclave.end()));
     pq.transport().use_builtin_transports = false;
     if (config.sharedMemory) {
         pq.transport().user_transports.push_back(
@@ -301,6 +313,22 @@ Result<void, Error> validate(const BusConfig& config, const std::string& where)
     return checkDiscoveryServers(config.discoveryServers, where + " discovery_server");
 }
 
+Result<std::optional<int>, Error> domainFromEnvironment(const char* variable)
+{
+    const char* env = std::getenv(variable); // NOLINT(concurrency-mt-unsafe): init, before threads
+    if (env == nullptr || *env == '\0') {
+        return std::optional<int>();
+    }
+    char* end = nullptr;
+    errno = 0;
+    const long id = std::strtol(env, &end, 10);
+    if (errno != 0 || end == env || *end != '\0' || id < 0 || id > 232) {
+        return Unexpected(Error{std::string("$") + variable, std::string("'") + env + "' is not a DDS domain id",
+                                "give a whole number in 0..232, or unset it"});
+    }
+    return std::optional<int>(static_cast<int>(id));
+}
+
 Result<void, Error> checkDiscoveryServers(const std::string& list, const std::string& where)
 {
     if (list.empty()) {
@@ -313,7 +341,7 @@ Result<void, Error> checkDiscoveryServers(const std::string& list, const std::st
 std::string topicName(TopicId id, const BusConfig& config)
 {
     const TopicSpec& s = spec(id);
-    return s.ros ? "rt/" + config.rosNamespace + "/" + s.suffix : std::string(s.suffix);
+    return s.ros && !s.graph ? "rt/" + config.rosNamespace + "/" + s.suffix : std::string(s.suffix);
 }
 
 const char* shortName(TopicId id) noexcept
@@ -384,6 +412,11 @@ std::string Bus::writerIdentity(const fdds::SampleInfo& info) const
     return identities_ == nullptr ? std::string() : identities_->identity(info.sample_identity.writer_guid());
 }
 
+Error Bus::wrongType(TopicId id) const
+{
+    return Error{"dds topic " + topicName(id, config_), "a writer or reader of another type", "a bug"};
+}
+
 fdds::Topic* Bus::topic(TopicId id, MakeType make)
 {
     fdds::Topic*& t = topics_[static_cast<std::size_t>(id)];
@@ -406,7 +439,7 @@ Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
     }
     fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
     TopicSpec chosen = s;
-    chosen.reliable = s.ros ? config_.rosReliable : s.reliable;
+    chosen.reliable = s.ros && !s.graph ? config_.rosReliable : s.reliable;
     applyCommon(q, chosen);
     if (chosen.reliable) {
         q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100'000'000);
@@ -439,6 +472,57 @@ Result<fdds::DataReader*, Error> Bus::makeReader(TopicId id, MakeType make)
                                                          : "a bug"});
     }
     return r;
+}
+
+graph::Gid_ rosGid(const rtps::GUID_t& guid)
+{
+    graph::Gid_ gid;
+    gid.data().fill(0);
+    std::copy(std::begin(guid.guidPrefix.value), std::end(guid.guidPrefix.value), gid.data().begin());
+    std::copy(std::begin(guid.entityId.value), std::end(guid.entityId.value),
+              gid.data().begin() + sizeof(guid.guidPrefix.value));
+    return gid;
+}
+
+Result<void, Error> Bus::announceRosNode(const std::string& nodeName)
+{
+    const std::string where = "dds topic ros_discovery_info";
+    if (nodeName.empty() || nodeName.size() > 255 || std::isdigit(static_cast<unsigned char>(nodeName.front())) ||
+        nodeName.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") !=
+            std::string::npos) {
+        return Unexpected(Error{where, "'" + nodeName + "' is not a ROS 2 node name",
+                                "letters, digits and _, not starting with a digit, e.g. ugvsense"});
+    }
+    if (graphOut_ == nullptr) {
+        auto w = makeWriter(TopicId::RosGraph,
+                            []() -> fdds::TopicDataType* { return new graph::ParticipantEntitiesInfo_PubSubType(); });
+        if (!w) {
+            return Unexpected(w.error());
+        }
+        graphOut_ = *w;
+    }
+    graph::NodeEntitiesInfo_ node;
+    node.node_namespace("/" + config_.rosNamespace);
+    node.node_name(nodeName);
+    std::vector<fdds::DataWriter*> writers;
+    std::vector<fdds::DataReader*> readers;
+    rosPublisher_->get_datawriters(writers);
+    rosSubscriber_->get_datareaders(readers);
+    for (const fdds::DataWriter* w : writers) {
+        if (w != graphOut_) {
+            node.writer_gid_seq().push_back(rosGid(w->guid()));
+        }
+    }
+    for (const fdds::DataReader* r : readers) {
+        node.reader_gid_seq().push_back(rosGid(r->guid()));
+    }
+    graph::ParticipantEntitiesInfo_ info;
+    info.gid(rosGid(participant_->guid()));
+    info.node_entities_info_seq().push_back(std::move(node));
+    if (!graphOut_->write(&info)) {
+        return Unexpected(Error{where, "the sample was refused", "a bug, or see the Fast DDS messages above"});
+    }
+    return {};
 }
 
 } // namespace ugv::ipc::dds

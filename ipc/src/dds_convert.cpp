@@ -142,7 +142,8 @@ void toLaserScan(const ObstacleSectors& sectors, std::int64_t captureRealNs, con
         const Sector& s = sectors.sectors[i];
         switch (s.state) {
         case SectorState::Obstacle:
-            out.ranges()[i] = s.rangeM;
+            // beyond range_max: nothing within it (+inf); a range that is no number stays NaN (unknown), never clear
+            out.ranges()[i] = s.rangeM >= rangeMaxM ? std::numeric_limits<float>::infinity() : s.rangeM;
             break;
         case SectorState::Clear:
             out.ranges()[i] = std::numeric_limits<float>::infinity();
@@ -346,6 +347,16 @@ const char* check(const ros::PointCloud2_& s) noexcept
     }
     if (static_cast<std::uint64_t>(s.row_step()) != static_cast<std::uint64_t>(s.width()) * s.point_step()) {
         return "row_step is not width x point_step";
+    }
+    return nullptr;
+}
+
+const char* check(const graph::ParticipantEntitiesInfo_& s) noexcept
+{
+    for (const graph::NodeEntitiesInfo_& node : s.node_entities_info_seq()) {
+        if (node.node_name().size() == 0) {
+            return "a node without a name";
+        }
     }
     return nullptr;
 }

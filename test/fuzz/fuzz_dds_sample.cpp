@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     --size;
     const auto none = [](const auto&) {};
     const auto toMessage = [](const auto& s) { (void)ugv::bringup::fromDds(s); };
-    switch (which % 10U) {
+    switch (which % 11U) {
     case 0:
         decode<udds::msg::ObstacleSectors>(data, size, [](const udds::msg::ObstacleSectors& s) {
             ugv::ObstacleSectors out;
@@ -72,8 +72,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case 8:
         decode<udds::ros::LaserScan_>(data, size, none);
         break;
-    default:
+    case 9:
         decode<udds::ros::PointCloud2_>(data, size, none);
+        break;
+    default:
+        decode<udds::graph::ParticipantEntitiesInfo_>(data, size, none); // `ugvsense listen ros_discovery`
         break;
     }
     return 0;

@@ -2,7 +2,9 @@
 # The vehicle service on the DDS bus (issue 6): ugvsensed replays a simulator course while `ugvsense bus-send
 # --poses` plays the localisation (10 Hz); `ugvsense listen` checks what a consumer on another process sees:
 # ugvsense/sectors with the pose interpolated at the capture time (valid, not stale), the ROS 2 LaserScan (one ray
-# per sector: +inf clear, NaN unknown) and PointCloud2, and the health record (transient local: a late listener
+# per sector: +inf clear, NaN unknown), the clearing LaserScan (range_max the clear range, 5 m: no finite ray at or
+# beyond it) and PointCloud2, ROS 2's graph (the node /ugv1/ugvsense and its three writers
+# on ros_discovery_info, what `ros2 node list` reads), and the health record (transient local: a late listener
 # gets it). Then the poses stop: the sectors' poses turn stale. The service ends cleanly with its bus report.
 # Usage: service_bus_test.sh UGVSENSE UGVSENSED WORKDIR DOMAIN
 set -u
@@ -28,9 +30,18 @@ grep -q '"sectors":\[{' "$work/sectors.out" || fail "sectors samples without sec
 grep -q '"frame_id":"ugv1/ugvsense_ground"' "$work/scan.out" || fail "LaserScan frame id"
 grep -q '"inf"' "$work/scan.out" || fail "no clear (+inf) ray in the LaserScan"
 grep -Eq '"ranges":\[[^]]*[0-9]\.[0-9]' "$work/scan.out" || fail "no obstacle range in the LaserScan"
+"$tool" listen clear_scan --count 3 --timeout 30 >"$work/clear.out" 2>"$work/clear.log" || fail "listen clear_scan"
+grep -q '"frame_id":"ugv1/ugvsense_ground"' "$work/clear.out" || fail "clearing LaserScan frame id"
+grep -Eq '"range_max":5(\.0)?[,}]' "$work/clear.out" || fail "the clearing LaserScan's range_max is not the clear range (5 m)"
+grep -q '"inf"' "$work/clear.out" || fail "no clear (+inf) ray in the clearing LaserScan"
+grep -o '"ranges":\[[^]]*\]' "$work/clear.out" | grep -Eq '[^0-9.]([5-9]|[1-9][0-9]+)\.[0-9]' &&
+    fail "a finite ray at or beyond the clear range in the clearing LaserScan"
 "$tool" listen negatives --count 1 --timeout 30 >"$work/cloud.out" 2>"$work/cloud.log" ||
     fail "listen negatives"
 grep -q '"point_step":12' "$work/cloud.out" || fail "PointCloud2 layout"
+"$tool" listen ros_discovery --count 1 --timeout 30 >"$work/graph.out" 2>"$work/graph.log" || fail "listen ros_discovery"
+grep -Eq '"node_namespace":"/ugv1","node_name":"ugvsense","reader_gids":\[\],"writer_gids":\["[0-9a-f]{48}","[0-9a-f]{48}","[0-9a-f]{48}"\]' \
+    "$work/graph.out" || fail "ros_discovery_info does not show the node /ugv1/ugvsense with its three ROS 2 writers"
 "$tool" listen health --count 1 --timeout 30 >"$work/health.out" 2>"$work/health.log" || fail "listen health"
 grep -Eq '"frames_processed":[1-9]' "$work/health.out" || fail "health without processed frames"
 wait "$poser"
@@ -42,4 +53,4 @@ kill -TERM "$svc"
 wait "$svc" || fail "the service exited with an error"
 svc=""
 grep -E "^dds: [1-9][0-9]* frame\(s\) sent.*poses [1-9]" "$work/service.log" || fail "no bus report with poses used"
-echo "OK: $fresh/20 sectors with a fresh pose, LaserScan, PointCloud2 and health seen; stale after the poses stopped"
+echo "OK: $fresh/20 sectors with a fresh pose, the two LaserScans, PointCloud2, the ROS 2 node and health seen; stale after the poses stopped"

@@ -28,4 +28,5 @@ check pose_corrections '"since_t":310.5,"until_t":390.25,"d_east_m":1.5'
 check correlated '"ugvs":\["ugv-1","ugv-2"\].*"alerts":\[\{"non_combatant_id":"ooi-3","object_id":"ooi-1","distance_m":4.5\}'
 check scan '"frame_id":"ugv1/camera_ground".*"ranges":\[1.5,"inf",3.5,4.25,5.125\],"intensities":\[10.0,'
 check "rt/$part/negative_obstacles" '"row_step":24,"data":"a0a1a2.*b7","is_dense":true'
+check ros_discovery '"gid":"101112131415161718191a1b1c1d1e1f2021222324252627","nodes":\[\{"node_namespace":"/ugv_roundtrip","node_name":"ugvsense_roundtrip","reader_gids":\["(5a){24}"\],"writer_gids":\["(a5){24}","(5a){24}"\]'
 echo "OK"

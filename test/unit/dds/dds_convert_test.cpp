@@ -75,6 +75,26 @@ TEST(DdsConvert, LaserScanHasOneRayPerSectorAtItsCentreBearing)
     EXPECT_EQ(check(sut), nullptr);
 }
 
+TEST(DdsConvert, TheClearingScanSaysFreeToItsRangeMaxAndNoFarther)
+{
+    // range_max = the clear range (4 m): the obstacle at 3.5 m and the hole at 4 m; Clear and every obstacle at or
+    // beyond range_max are +inf (nothing within range_max), so a consumer clears no farther than 4 m; an obstacle
+    // whose range is no number stays unknown, never clear.
+    ObstacleSectors s = fourSectors();
+    ros::LaserScan_ sut;
+
+    toLaserScan(s, 0, "f", 0.0F, 4.0F, 0.1F, sut);
+    EXPECT_FLOAT_EQ(sut.ranges()[0], 3.5F);
+    EXPECT_EQ(sut.ranges()[1], std::numeric_limits<float>::infinity());
+    EXPECT_TRUE(std::isnan(sut.ranges()[2]));
+    EXPECT_EQ(sut.ranges()[3], std::numeric_limits<float>::infinity());
+    EXPECT_EQ(check(sut), nullptr);
+
+    s.sectors[0].rangeM = std::numeric_limits<float>::quiet_NaN();
+    toLaserScan(s, 0, "f", 0.0F, 4.0F, 0.1F, sut);
+    EXPECT_TRUE(std::isnan(sut.ranges()[0]));
+}
+
 TEST(DdsConvert, LaserScanOfOneSectorOrNone)
 {
     ObstacleSectors one;

@@ -242,6 +242,25 @@ ros::PointCloud2_ cloud()
     return c;
 }
 
+graph::ParticipantEntitiesInfo_ graphInfo()
+{
+    graph::ParticipantEntitiesInfo_ info;
+    for (std::size_t i = 0; i < info.gid().data().size(); ++i) {
+        info.gid().data()[i] = static_cast<std::uint8_t>(0x10 + i);
+    }
+    graph::NodeEntitiesInfo_ node;
+    node.node_namespace("/ugv_roundtrip");
+    node.node_name("ugvsense_roundtrip");
+    graph::Gid_ reader;
+    reader.data().fill(0x5A);
+    graph::Gid_ writer;
+    writer.data().fill(0xA5);
+    node.reader_gid_seq().push_back(reader);
+    node.writer_gid_seq() = {writer, reader};
+    info.node_entities_info_seq().push_back(node);
+    return info;
+}
+
 /// The ROS 2 topics are in the default partition: a namespace of the test's own keeps them apart too.
 BusConfig testConfig(int domain, const std::string& partition)
 {
@@ -266,12 +285,14 @@ struct AllWriters {
     Writer<msg::CorrelatedOoiList> correlated;
     Writer<ros::LaserScan_> scan;
     Writer<ros::PointCloud2_> cloud;
+    Writer<graph::ParticipantEntitiesInfo_> graph;
+    Writer<ros::LaserScan_> clearScan;
 };
 
 template <class T>
-bool make(Bus& bus, Writer<T>& out)
+bool make(Bus& bus, Writer<T>& out, TopicId id = TopicOf<T>::id)
 {
-    auto w = bus.writer<T>();
+    auto w = bus.writer<T>(id);
     if (!w) {
         return false;
     }
@@ -298,11 +319,11 @@ int runWriter()
     Bus& b = **bus;
     if (!make(b, w.sectors) || !make(b, w.health) || !make(b, w.pose) || !make(b, w.observation) || !make(b, w.uav) ||
         !make(b, w.confirmation) || !make(b, w.correction) || !make(b, w.correlated) || !make(b, w.scan) ||
-        !make(b, w.cloud)) {
+        !make(b, w.cloud) || !make(b, w.graph) || !make(b, w.clearScan, TopicId::RosClearScan)) {
         return 3;
     }
     const auto samples = std::make_tuple(sectors(), health(), pose(), observation(), uav(), confirmation(),
-                                         correction(), correlated(), scan(), cloud());
+                                         correction(), correlated(), scan(), cloud(), graphInfo());
     const auto until = std::chrono::steady_clock::now() + kWriterLifetime;
     while (!g_writerStop.load() && std::chrono::steady_clock::now() < until) {
         w.sectors.write(std::get<0>(samples));
@@ -315,6 +336,8 @@ int runWriter()
         w.correlated.write(std::get<7>(samples));
         w.scan.write(std::get<8>(samples));
         w.cloud.write(std::get<9>(samples));
+        w.graph.write(std::get<10>(samples));
+        w.clearScan.write(std::get<8>(samples));
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     return 0;
@@ -351,8 +374,10 @@ TEST(DdsTwoProcess, EveryTypeRoundTripsWithAllFields)
     auto rCorrelated = b.reader<msg::CorrelatedOoiList>();
     auto rScan = b.reader<ros::LaserScan_>();
     auto rCloud = b.reader<ros::PointCloud2_>();
+    auto rGraph = b.reader<graph::ParticipantEntitiesInfo_>();
+    auto rClearScan = b.reader<ros::LaserScan_>(TopicId::RosClearScan);
     ASSERT_TRUE(rSectors && rHealth && rPose && rObservation && rUav && rConfirmation && rCorrection && rCorrelated &&
-                rScan && rCloud);
+                rScan && rCloud && rGraph && rClearScan);
 
     const std::string self = "/proc/self/exe";
     const std::string filter = "--gtest_filter=DdsTwoProcess.EveryTypeRoundTripsWithAllFields";
@@ -389,6 +414,8 @@ TEST(DdsTwoProcess, EveryTypeRoundTripsWithAllFields)
     msg::CorrelatedOoiList gotCorrelated;
     ros::LaserScan_ gotScan;
     ros::PointCloud2_ gotCloud;
+    graph::ParticipantEntitiesInfo_ gotGraph;
+    ros::LaserScan_ gotClearScan;
     bool got[kTopicCount] = {};
     const auto until = std::chrono::steady_clock::now() + kReceiveTimeout;
     bool all = false;
@@ -398,7 +425,8 @@ TEST(DdsTwoProcess, EveryTypeRoundTripsWithAllFields)
               poll(*rObservation, gotObservation, got[3]) & poll(*rUav, gotUav, got[4]) &
               poll(*rConfirmation, gotConfirmation, got[5]) & poll(*rCorrection, gotCorrection, got[6]) &
               poll(*rCorrelated, gotCorrelated, got[7]) & poll(*rScan, gotScan, got[8]) &
-              poll(*rCloud, gotCloud, got[9]);
+              poll(*rCloud, gotCloud, got[9]) & poll(*rGraph, gotGraph, got[10]) &
+              poll(*rClearScan, gotClearScan, got[11]);
     }
     ::kill(child, SIGTERM);
     int status = 0;
@@ -419,6 +447,8 @@ TEST(DdsTwoProcess, EveryTypeRoundTripsWithAllFields)
     EXPECT_TRUE(gotCorrelated == correlated());
     EXPECT_TRUE(gotScan == scan());
     EXPECT_TRUE(gotCloud == cloud());
+    EXPECT_TRUE(gotGraph == graphInfo());
+    EXPECT_TRUE(gotClearScan == scan());
     // The distinctive values are valid ones: the checks of the receivers accept them.
     EXPECT_EQ(check(gotSectors), nullptr);
     EXPECT_EQ(check(gotHealth), nullptr);

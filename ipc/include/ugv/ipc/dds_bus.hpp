@@ -18,6 +18,10 @@
 ///   rt/<ns>/obstacle_scan          sensor_msgs/LaserScan      reliable (or best effort: rosReliable), volatile,
 ///                                                             keep last 1 (ROS 2)
 ///   rt/<ns>/negative_obstacles     sensor_msgs/PointCloud2    the same (ROS 2)
+///   rt/<ns>/clear_scan             sensor_msgs/LaserScan      the same (ROS 2): range_max is the clear range, the
+///                                                             distance to which Clear promises free ground
+///   ros_discovery_info             rmw_dds_common/ParticipantEntitiesInfo  reliable, transient local, keep last 1
+///                                                             (ROS 2's graph: Bus::announceRosNode)
 ///
 /// Our topics live in the configured partitions (a team, a test); the ROS 2 ones in the default partition, which is
 /// the only one a ROS 2 node reads. Reliable writers send a heartbeat every 100 ms (Fast DDS's default is 3 s),
@@ -32,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +49,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include "rmw_dds_commonPubSubTypes.h"
 #include "ros2PubSubTypes.h"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
@@ -53,6 +59,7 @@ namespace ugv::ipc::dds {
 
 namespace msg = ::ugvsense::msg;
 namespace ros = ::sensor_msgs::msg::dds_;
+namespace graph = ::rmw_dds_common::msg::dds_;
 
 /// Longest vehicle, source or object name on the bus [characters]; the IDL bounds names at one more, so that a
 /// longer name arrives truncated to kMaxNameLength + 1 and is refused (ugvsense.idl, ipc::dds::check).
@@ -115,6 +122,10 @@ struct BusConfig {
 /// Checks the ranges and the discovery server list (before any DDS entity exists).
 Result<void, Error> validate(const BusConfig& config, const std::string& where);
 
+/// A domain id from the environment variable `variable` ($UGV_DDS_DOMAIN, ROS 2's $ROS_DOMAIN_ID): nothing when it
+/// is unset or empty, else a whole number in 0..232. @return an error "$VAR: 'text' is not a DDS domain id"
+Result<std::optional<int>, Error> domainFromEnvironment(const char* variable);
+
 /// Checks a discovery server list "IP:PORT[;IP:PORT...]" as Fast DDS reads it (empty is valid: multicast).
 /// @return an error naming `where` and the list
 Result<void, Error> checkDiscoveryServers(const std::string& list, const std::string& where);
@@ -130,13 +141,15 @@ enum class TopicId : std::uint8_t {
     Correlated,
     RosScan,
     RosNegatives,
+    RosGraph,     ///< ros_discovery_info: which ROS 2 nodes a participant holds (not namespaced)
+    RosClearScan, ///< the sectors as a LaserScan for clearing: range_max is the clear range
 };
-inline constexpr int kTopicCount = 10;
+inline constexpr int kTopicCount = 12;
 
 /// The topic name on the wire (the ROS 2 ones with the namespace of `config`).
 std::string topicName(TopicId id, const BusConfig& config);
 /// "sectors", "health", "pose", "observations", "uav", "confirmations", "pose_corrections", "correlated", "scan",
-/// "negatives": the short names of `ugvsense listen`.
+/// "negatives", "ros_discovery", "clear_scan": the short names of `ugvsense listen`.
 const char* shortName(TopicId id) noexcept;
 /// The topic of a short name or a wire name; false when unknown.
 bool parseTopic(const std::string& name, const BusConfig& config, TopicId& out);
@@ -160,6 +173,7 @@ UGV_DDS_TOPIC(msg::PoseCorrection, msg::PoseCorrectionPubSubType, PoseCorrection
 UGV_DDS_TOPIC(msg::CorrelatedOoiList, msg::CorrelatedOoiListPubSubType, Correlated);
 UGV_DDS_TOPIC(ros::LaserScan_, ros::LaserScan_PubSubType, RosScan);
 UGV_DDS_TOPIC(ros::PointCloud2_, ros::PointCloud2_PubSubType, RosNegatives);
+UGV_DDS_TOPIC(graph::ParticipantEntitiesInfo_, graph::ParticipantEntitiesInfo_PubSubType, RosGraph);
 #undef UGV_DDS_TOPIC
 
 /// A non-owning handle; valid while its Bus lives.
@@ -182,6 +196,11 @@ public:
     }
     /// Readers matched now.
     [[nodiscard]] int matched() const;
+    /// The writer's RTPS GUID (its ROS 2 GID: rosGid()); unknown (zero) without a writer.
+    [[nodiscard]] eprosima::fastrtps::rtps::GUID_t guid() const
+    {
+        return writer_ != nullptr ? writer_->guid() : eprosima::fastrtps::rtps::GUID_t::unknown();
+    }
     /// Waits until every matched reliable reader acknowledged every sample written so far.
     bool waitForAcks(std::chrono::milliseconds timeout);
     [[nodiscard]] bool valid() const noexcept { return writer_ != nullptr; }
@@ -208,6 +227,10 @@ private:
     eprosima::fastdds::dds::DataReader* reader_ = nullptr;
 };
 
+/// An RTPS GUID as ROS 2 Humble's rmw_fastrtps writes it into a Gid: the 12-byte prefix, the 4-byte entity id,
+/// zeros to 24 bytes.
+graph::Gid_ rosGid(const eprosima::fastrtps::rtps::GUID_t& guid);
+
 class WriterIdentities;
 
 class Bus {
@@ -220,29 +243,41 @@ public:
     Bus(Bus&&) = delete;
     Bus& operator=(Bus&&) = delete;
 
+    /// A writer of T on its topic, or on `id`: a topic of the same type (RosClearScan carries RosScan's LaserScan).
     template <class T>
-    Result<Writer<T>, Error> writer()
+    Result<Writer<T>, Error> writer(TopicId id = TopicOf<T>::id)
     {
-        auto w = makeWriter(TopicOf<T>::id, []() -> eprosima::fastdds::dds::TopicDataType* {
-            return new typename TopicOf<T>::PubSubType();
-        });
+        if (!carries(id, TopicOf<T>::id)) {
+            return Unexpected(wrongType(id));
+        }
+        auto w = makeWriter(
+            id, []() -> eprosima::fastdds::dds::TopicDataType* { return new typename TopicOf<T>::PubSubType(); });
         if (!w) {
             return Unexpected(w.error());
         }
         return Writer<T>(*w);
     }
     template <class T>
-    Result<Reader<T>, Error> reader()
+    Result<Reader<T>, Error> reader(TopicId id = TopicOf<T>::id)
     {
-        auto r = makeReader(TopicOf<T>::id, []() -> eprosima::fastdds::dds::TopicDataType* {
-            return new typename TopicOf<T>::PubSubType();
-        });
+        if (!carries(id, TopicOf<T>::id)) {
+            return Unexpected(wrongType(id));
+        }
+        auto r = makeReader(
+            id, []() -> eprosima::fastdds::dds::TopicDataType* { return new typename TopicOf<T>::PubSubType(); });
         if (!r) {
             return Unexpected(r.error());
         }
         return Reader<T>(*r);
     }
     [[nodiscard]] const BusConfig& config() const noexcept { return config_; }
+    /// Makes this participant visible to ROS 2 tools (`ros2 node list`, `ros2 node info`) as the node
+    /// /<rosNamespace>/<nodeName>, as rmw_fastrtps does: one ParticipantEntitiesInfo on ros_discovery_info (reliable,
+    /// transient local, keep last 1) listing the ROS 2 topics' writers and readers made so far. Call it again after
+    /// making more. On a secured bus the permissions must allow publishing ros_discovery_info (make_security.sh's
+    /// do since 2026-12-04).
+    /// @param[in] nodeName  a ROS 2 node name: letters, digits and _, not starting with a digit, 1..255 characters
+    Result<void, Error> announceRosNode(const std::string& nodeName);
     /// On a secured bus, the identity whose partition the writer of `info`'s sample writes in (access control lets
     /// a participant write only in its own), or "" when unknown (an open bus, or a writer not discovered).
     /// Thread-safe (discovery runs on Fast DDS's threads).
@@ -251,6 +286,12 @@ public:
 private:
     Bus() = default;
     using MakeType = eprosima::fastdds::dds::TopicDataType* (*)();
+    /// True when topic `id` carries the type whose own topic is `home`.
+    static constexpr bool carries(TopicId id, TopicId home) noexcept
+    {
+        return id == home || (home == TopicId::RosScan && id == TopicId::RosClearScan);
+    }
+    [[nodiscard]] Error wrongType(TopicId id) const;
     eprosima::fastdds::dds::Topic* topic(TopicId id, MakeType make);
     Result<eprosima::fastdds::dds::DataWriter*, Error> makeWriter(TopicId id, MakeType make);
     Result<eprosima::fastdds::dds::DataReader*, Error> makeReader(TopicId id, MakeType make);
@@ -262,7 +303,8 @@ private:
     eprosima::fastdds::dds::Publisher* rosPublisher_ = nullptr;   ///< the default partition (ROS 2)
     eprosima::fastdds::dds::Subscriber* rosSubscriber_ = nullptr; ///< the default partition (ROS 2)
     std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
-    std::unique_ptr<WriterIdentities> identities_; ///< writer GUID -> identity, from discovery
+    std::unique_ptr<WriterIdentities> identities_;           ///< writer GUID -> identity, from discovery
+    eprosima::fastdds::dds::DataWriter* graphOut_ = nullptr; ///< ros_discovery_info, made by announceRosNode()
 };
 
 // ---- template bodies ----

@@ -41,7 +41,10 @@ bool fromDds(const msg::ObstacleSectors& in, ObstacleSectors& out);
 /// The sectors as a sensor_msgs/LaserScan in frame `frameId` (x forward, y left, on the ground below the camera):
 /// one ray per sector at its centre bearing (ROS angles: counter-clockwise, like ours). Obstacle -> its range,
 /// Clear -> +inf (REP 117: nothing within range_max; costmaps clear along the ray), Unknown -> NaN (no
-/// measurement; nothing cleared). Negative obstacles are in it too: a hole is as impassable as a post.
+/// measurement; nothing cleared). Negative obstacles are in it too: a hole is as impassable as a post. An obstacle
+/// at or beyond `rangeMaxM` is +inf as well (nothing within range_max): so with `rangeMaxM` = the clear range
+/// (SectorBuilderConfig::clearRangeM) every ray says how far the ground is known free, and no farther (the
+/// clear_scan topic).
 void toLaserScan(const ObstacleSectors& sectors, std::int64_t captureRealNs, const std::string& frameId,
                  float rangeMinM, float rangeMaxM, float periodS, ros::LaserScan_& out);
 /// The negative obstacles as a sensor_msgs/PointCloud2 (x, y, z float32) in `frameId`: one point per Negative
@@ -62,6 +65,8 @@ const char* check(const msg::PoseCorrection& s) noexcept;
 const char* check(const msg::CorrelatedOoiList& s) noexcept;
 const char* check(const ros::LaserScan_& s) noexcept;
 const char* check(const ros::PointCloud2_& s) noexcept;
+/// A graph sample whose every node has a name (rmw sends none without one; the IDL bounds the rest).
+const char* check(const graph::ParticipantEntitiesInfo_& s) noexcept;
 
 /// The participant a sample names as its sender (vehicle, UGV or source): on a secured bus it must be the writer's
 /// identity (Bus::writerIdentity), or the sample is sent in another's name. ROS 2 samples name none (empty).
@@ -102,6 +107,10 @@ inline std::string sender(const ros::LaserScan_& /*s*/)
     return {};
 }
 inline std::string sender(const ros::PointCloud2_& /*s*/)
+{
+    return {};
+}
+inline std::string sender(const graph::ParticipantEntitiesInfo_& /*s*/)
 {
     return {};
 }
