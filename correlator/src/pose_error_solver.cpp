@@ -26,6 +26,10 @@ constexpr int kMinNoiseObjectObservations = 6;    ///< objects seen this often g
 constexpr int kMinSpreadTracks = 8;               ///< fewer tracks of a UGV on shared objects: spread not measured
 constexpr double kMedianToSigma2d = 1.0 / 1.1774; ///< per-axis sigma over the median distance of a 2-D Gaussian
 constexpr double kMaxPoseSpreadM = 2.0;           ///< [m] the measured spread is trusted up to this
+// The test that the evidence shows a pose error (keepOnlyShownErrors).
+constexpr double kSqrt2 = 1.4142135623730951;
+constexpr int kQuantileBisections = 60; ///< halvings of [0, kMaxNormalQuantile]: far below double precision
+constexpr double kMaxNormalQuantile = 40.0;
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
@@ -38,6 +42,12 @@ struct Layout {
     std::vector<int> objectBase;
     int n = 0;
 };
+
+/// The weights of the stored samples: for the solve, each window's samples stand for every observation of it
+/// (seen / stored) under the configured noise; for the test of keepOnlyShownErrors, what the estimate really rests
+/// on: each stored sample once, under its UGV's learnt noise (the estimate is a weighted mean of the stored samples,
+/// so its spread is theirs, not that of every observation).
+enum class SampleWeights : std::uint8_t { Solve, Test };
 
 /// The normal equations H delta = -g of one Gauss-Newton step.
 struct NormalEquations {
@@ -113,7 +123,7 @@ void extendOffsets(UgvPoseErrors& poses, const Layout& l)
 /// normal-equation terms are summed first.
 void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow& tw, const Eigen::Vector2d& objectMean,
                     int xo, const UgvPoseErrors& poses, const Layout& l, const PoseCorrectedConfig& config,
-                    NormalEquations& eq)
+                    SampleWeights weights, NormalEquations& eq)
 {
     const auto u = static_cast<std::size_t>(track.ugv);
     Eigen::Matrix2d sumW = Eigen::Matrix2d::Zero();   // sum W
@@ -123,15 +133,19 @@ void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow&
     double sumJWr = 0.0;                              // sum jh' W r
     Eigen::Matrix2d fixedW = Eigen::Matrix2d::Zero(); // samples under a pose correction
     Eigen::Vector2d fixedWr = Eigen::Vector2d::Zero();
-    const double weight = static_cast<double>(tw.seen) / static_cast<double>(tw.samples.size());
+    const bool test = weights == SampleWeights::Test;
+    const double weight = test ? 1.0 : static_cast<double>(tw.seen) / static_cast<double>(tw.samples.size());
     const RangeBearingNoise noise = config.noise();
+    const UgvPoseErrors::Ugv& ugv = poses.ugv(static_cast<std::size_t>(track.ugv));
+    const double rangeScale = test ? ugv.rangeScale : 1.0;
+    const double bearingScale = test ? ugv.bearingScale : 1.0;
     for (const RangeBearing& smp : tw.samples) {
         Eigen::Vector2d p;
         Eigen::Vector2d ray;
         poses.project(track.ugv, smp, p, nullptr, nullptr, &ray);
         // Measurement noise only: the pose errors are unknowns here.
-        const double sr = noise.alongSigma(smp.rangeM);
-        const double sc = noise.acrossSigma(smp.rangeM);
+        const double sr = noise.alongSigma(smp.rangeM, rangeScale);
+        const double sc = noise.acrossSigma(smp.rangeM, bearingScale);
         Eigen::Vector2d dPos;
         double dHeading = 0.0;
         if (poses.explicitCorrection(track.ugv, smp.t, dPos, dHeading)) {
@@ -173,7 +187,7 @@ void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow&
 }
 
 void addObservationTerms(const StaticMap& map, const UgvPoseErrors& poses, const Layout& l,
-                         const PoseCorrectedConfig& config, NormalEquations& eq)
+                         const PoseCorrectedConfig& config, SampleWeights weights, NormalEquations& eq)
 {
     for (std::size_t j = 0; j < map.objects().size(); ++j) {
         const StaticMap::StaticObject& so = map.objects()[j];
@@ -188,7 +202,7 @@ void addObservationTerms(const StaticMap& map, const UgvPoseErrors& poses, const
         for (const int ti : so.tracks) {
             const StaticMap::Track& track = map.tracks()[static_cast<std::size_t>(ti)];
             for (const StaticMap::TrackWindow& tw : track.windows) {
-                addWindowTerms(track, tw, so.mean, xo, poses, l, config, eq);
+                addWindowTerms(track, tw, so.mean, xo, poses, l, config, weights, eq);
             }
         }
     }
@@ -336,6 +350,90 @@ std::vector<int> ugvsOf(const StaticMap& map, const StaticMap::StaticObject& so)
     return ugvs;
 }
 
+/// The standard normal quantile with upper tail `alpha` (bisection on erfc).
+double normalQuantileUpper(double alpha)
+{
+    double lo = 0.0;
+    double hi = kMaxNormalQuantile;
+    for (int i = 0; i < kQuantileBisections; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(mid / kSqrt2) > alpha ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+/// The chi-square quantile of `dof` degrees of freedom with upper tail `alpha` (Wilson-Hilferty).
+double chiSquareQuantileUpper(double alpha, int dof)
+{
+    const double k = dof;
+    const double a = 2.0 / (9.0 * k);
+    return k * std::pow(1.0 - a + normalQuantileUpper(alpha) * std::sqrt(a), 3);
+}
+
+/// If the evidence cannot show a pose error, nothing moves: after a solve, the fleet's estimated pose errors theta
+/// (every solved UGV's heading bias and the offsets of its windows solved, measured from zero: no error) are tested
+/// jointly against their posterior covariance, the objects marginalised out. Its inverse is the Schur complement
+/// of the objects' blocks in the normal matrix (the terms `h`, with SampleWeights::Test), and the objects' blocks
+/// are 2 x 2 and uncoupled, so the statistical distance is theta' (H_pp - sum_j H_pj H_jj^-1 H_jp) theta: no
+/// inverse and no factorisation. Jointly, because only part of the errors is observable without the UAV's anchors (the
+/// UGVs' errors relative to each other): one UGV's estimate alone may be within its prior's reach of zero while the
+/// difference to another's is certain. Where the distance stays below the chi-square quantile of as many degrees
+/// of freedom at the gates' significance (gateChi2 of 2 degrees: exp(-gateChi2 / 2)), zero explains the data as
+/// well as the estimate does: every estimate is set to zero and the observations project as reported, as in mode
+/// original (without this, noise and the UAV's anchors moved the objects of UGVs with no pose error by up to 0.3 m,
+/// and every object by a common 0.2 m).
+void keepOnlyShownErrors(const Triplets& h, const Layout& l, const PoseCorrectedConfig& config, UgvPoseErrors& poses)
+{
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(l.n); // zero at the objects
+    int count = 0;                                      // the UGVs' unknowns come first: [0, count)
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        if (l.ugvBase[u] < 0) {
+            continue;
+        }
+        const UgvPoseErrors::Ugv& ugv = poses.ugv(u);
+        theta(l.ugvBase[u]) = ugv.headingBias;
+        for (int w = l.firstWindow[u]; w <= l.lastWindow[u]; ++w) {
+            theta.segment<2>(l.ugvBase[u] + 1 + 2 * (w - l.firstWindow[u])) = ugv.offsets[static_cast<std::size_t>(w)];
+        }
+        count += 1 + 2 * (l.lastWindow[u] - l.firstWindow[u] + 1); // heading bias, offsets
+    }
+    if (count == 0) {
+        return;
+    }
+    // Straight from the terms (duplicates sum): H theta (at the objects' rows: H_jp theta) and the objects' blocks.
+    Eigen::VectorXd ht = Eigen::VectorXd::Zero(l.n);
+    std::vector<Eigen::Matrix2d> hjj(static_cast<std::size_t>((l.n - count) / 2), Eigen::Matrix2d::Zero());
+    for (const Eigen::Triplet<double>& t : h) {
+        ht(t.row()) += t.value() * theta(t.col());
+        if (t.row() >= count && t.col() >= count && (t.row() - count) / 2 == (t.col() - count) / 2) {
+            hjj[static_cast<std::size_t>((t.row() - count) / 2)]((t.row() - count) % 2, (t.col() - count) % 2) +=
+                t.value();
+        }
+    }
+    double distance = theta.dot(ht); // theta' H_pp theta
+    for (std::size_t j = 0; j < hjj.size(); ++j) {
+        if (hjj[j].determinant() <= 0.0) {
+            return; // an object the data does not place: no test, the estimates stay as solved
+        }
+        const Eigen::Vector2d v = ht.segment<2>(count + 2 * static_cast<int>(j));
+        distance -= v.dot(hjj[j].inverse() * v);
+    }
+    const double alpha = std::exp(-config.gateChi2 / 2.0);
+    if (distance >= chiSquareQuantileUpper(alpha, count)) {
+        return;
+    }
+    for (std::size_t u = 0; u < poses.size(); ++u) {
+        if (l.ugvBase[u] < 0) {
+            continue;
+        }
+        UgvPoseErrors::Ugv& ugv = poses.ugv(u);
+        ugv.headingBias = 0.0;
+        for (int w = l.firstWindow[u]; w <= l.lastWindow[u]; ++w) {
+            ugv.offsets[static_cast<std::size_t>(w)].setZero();
+        }
+    }
+}
+
 /// Two compressed sparse matrices of one size with the same non-zero pattern.
 bool samePattern(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b)
 {
@@ -361,11 +459,16 @@ bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses, const UavAn
     }
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
     Eigen::SparseMatrix<double> analysed; // the pattern of ldlt's ordering
-    for (int iteration = 0; iteration < config_.solveIterations; ++iteration) {
+    // The terms of the normal equations at the estimate of the moment.
+    const auto normalEquations = [&](SampleWeights weights) {
         NormalEquations eq{{}, Eigen::VectorXd::Zero(l.n)};
-        addObservationTerms(map, poses, l, config_, eq);
+        addObservationTerms(map, poses, l, config_, weights, eq);
         addPoseTerms(poses, l, config_, eq);
         addAnchorTerms(anchors, poses, l, config_, eq);
+        return eq;
+    };
+    for (int iteration = 0; iteration < config_.solveIterations; ++iteration) {
+        const NormalEquations eq = normalEquations(SampleWeights::Solve);
         Eigen::SparseMatrix<double> hm(l.n, l.n);
         hm.setFromTriplets(eq.h.begin(), eq.h.end());
         hm.makeCompressed();
@@ -380,6 +483,7 @@ bool PoseErrorSolver::estimate(StaticMap& map, UgvPoseErrors& poses, const UavAn
         }
         applyStep(ldlt.solve(-eq.g), l, map, poses);
     }
+    keepOnlyShownErrors(normalEquations(SampleWeights::Test).h, l, config_, poses);
     recordSteps(before, l, poses);
     return true;
 }

@@ -5,8 +5,10 @@
 /// (constant) and position offset (per offsetWindowS window, a random walk between windows) are estimated jointly
 /// with the static objects by sparse Gauss-Newton least squares (Eigen); the UAV's anchors (UavAnchors) tie the
 /// UGVs' poses to the absolute frame, and zero-mean priors fix what no anchor reaches (the fleet on average is
-/// unbiased). Then each UGV's noise is learnt from its residuals (learnNoise): the gates widen with
-/// what is measured, never below the configured model.
+/// unbiased). If the evidence cannot show a pose error, nothing moves: the estimates of all UGVs, tested jointly
+/// against their posterior covariance (the information of the samples stored, under the learnt noise), within the
+/// chi-square quantile at the gates' significance are set to zero. Then each UGV's noise is learnt from its
+/// residuals (learnNoise): the gates widen with what is measured, never below the configured model.
 ///
 /// Thread-safety: reentrant (const; the state is in the StaticMap and UgvPoseErrors given). RT-safe: no.
 
@@ -22,7 +24,9 @@ public:
     explicit PoseErrorSolver(const PoseCorrectedConfig& config);
 
     /// solveIterations Gauss-Newton steps over the UGVs' errors (into `poses`) and the means of the static objects
-    /// with at least minStaticObservations (into `map`), with the UAV's `anchors` as absolute references.
+    /// with at least minStaticObservations (into `map`), with the UAV's `anchors` as absolute references; then, when
+    /// the estimates are not significantly different from zero (jointly, at the gates' significance), every UGV's
+    /// errors are set to zero (the objects' means follow at the next StaticMap::rebuild).
     /// @return false when there was nothing to solve or the system was singular (the steps before it stay).
     bool estimate(StaticMap& map, UgvPoseErrors& poses, const UavAnchors& anchors) const;
 
