@@ -82,17 +82,19 @@ background listen-open-correlated "$tool" listen correlated --domain "$domain" -
 l2=$last
 background listen-rogue "$tool" listen correlated "${bus[@]}" --security "$work/rogue/ugv-2" --timeout 8
 l3=$last
-# 1. The positive control.
-"$tool" bus-send --input "$work/ugv-1.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
-    --linger 20 >"$work/ugv-1.log" 2>&1 &
-pids+=($!)
-for _ in $(seq 200); do grep -q "acknowledged" "$work/ugv-1.log" && break; sleep 0.1; done
-grep -q " acknowledged by 1 reader" "$work/ugv-1.log" || fail "certified ugv-1's observations were not acknowledged"
-# A certified viewer (correlate --from-dds) takes the team's inputs too: ugv-1's writer keeps them for late joiners
-# while it lingers. 15 s: the secured handshakes of eight participants at once took more than 5 s on a slow CI run.
+# 1. The positive control. A certified viewer (correlate --from-dds) takes the team's inputs too; it starts first
+# and ugv-1 waits for both readers (the station's and the viewer's), so that neither depends on a late joiner getting
+# the writer's history (Fast DDS 2.9 sometimes gives a late-joining reader none of it: eProsima/Fast-DDS#3822).
+# 25 s: the secured handshakes of eight participants at once took more than 5 s on a slow CI run.
 background viewer "$tool" correlate --from-dds --domain "$domain" --partition "$partition" \
-    --security "$work/team/ugv-2" --duration 15 --output "$work/viewer.jsonl"
+    --security "$work/team/ugv-2" --duration 25 --output "$work/viewer.jsonl"
 v1=$last
+"$tool" bus-send --input "$work/ugv-1.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
+    --wait-readers 2 --linger 20 >"$work/ugv-1.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 300); do grep -q "acknowledged" "$work/ugv-1.log" && break; sleep 0.1; done
+grep -q " acknowledged by 2 reader" "$work/ugv-1.log" ||
+    fail "certified ugv-1's observations were not acknowledged by the station and the viewer"
 # 2. Injection without a valid certificate (their writers keep their histories while they linger).
 background inject-open "$tool" bus-send --input "$work/others.jsonl" "${bus[@]}" --source ugv-2 --wait-readers 0 \
     --linger 4
