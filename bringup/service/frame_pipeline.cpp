@@ -11,13 +11,6 @@ namespace ugv::service {
 
 namespace {
 
-std::int64_t nowNs() noexcept
-{
-    timespec t{};
-    ::clock_gettime(CLOCK_MONOTONIC, &t);
-    return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
-
 vision::MatcherMode matcherMode(bringup::MatcherMode mode)
 {
     switch (mode) {
@@ -94,14 +87,14 @@ PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 ri
                                       std::int64_t stampNs, std::int64_t& rectifiedNs, bool groundOnly) noexcept
 {
     if (left.width() != width_ || left.height() != height_ || right.width() != width_ || right.height() != height_) {
-        rectifiedNs = nowNs();
+        rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::WrongInputSize;
     }
     if (rectifier_.rectify(left, right) != vision::RectifyStatus::Ok) {
-        rectifiedNs = nowNs();
+        rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::RectifyFailed;
     }
-    rectifiedNs = nowNs();
+    rectifiedNs = MonotonicClock::nowNs();
     if (groundOnly) {
         detector_.processGroundOnly(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), sequence, stampNs);
     } else {

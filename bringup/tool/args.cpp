@@ -112,6 +112,16 @@ Result<double, Error> Args::number(const std::string& name, double fallback, dou
     return value;
 }
 
+Result<double, Error> Args::wholeNumber(const std::string& name, double fallback, double min, double max) const
+{
+    auto value = number(name, fallback, min, max);
+    if (value && std::floor(*value) != *value) {
+        return Unexpected(
+            Error{"ugvsense " + command_ + " --" + name, "bad value '" + get(name) + "'", "give a whole number"});
+    }
+    return value;
+}
+
 int reportUsageError(const std::string& command, const Error& error)
 {
     std::cerr << "ugvsense " << command << ": error: " << error.message() << '\n';

@@ -36,6 +36,8 @@ public:
     [[nodiscard]] const std::vector<std::string>& positional() const { return positional_; }
     /// The option as a finite number within [min, max].
     Result<double, Error> number(const std::string& name, double fallback, double min, double max) const;
+    /// As number(), and a whole number (a count, a seed).
+    Result<double, Error> wholeNumber(const std::string& name, double fallback, double min, double max) const;
 
 private:
     const OptionSpec* find(const std::string& name) const;

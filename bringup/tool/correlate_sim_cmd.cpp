@@ -66,17 +66,6 @@ std::string defaultTruthPath(const std::string& out)
     return out + ".truth.jsonl";
 }
 
-/// The option as a whole number within [min, max].
-Result<double, Error> wholeNumber(const Args& args, const std::string& name, double fallback, double min, double max)
-{
-    auto value = args.number(name, fallback, min, max);
-    if (value && std::floor(*value) != *value) {
-        return Unexpected(Error{"ugvsense " + std::string(kCommand) + " --" + name,
-                                "bad value '" + args.get(name) + "'", "give a whole number"});
-    }
-    return value;
-}
-
 /// A knob of the world or the sensor: option name, the config field it sets, and its bounds. The scenario's own
 /// validation (validateScenarioConfig) checks what depends on other fields.
 struct NumberKnob {
@@ -143,7 +132,7 @@ Result<void, Error> applyKnobs(const Args& args, ScenarioConfig& config)
         config.*knob.field = *value;
     }
     for (const CountKnob& knob : countKnobs()) {
-        const auto value = wholeNumber(args, knob.name, config.*knob.field, 0, knob.max);
+        const auto value = args.wholeNumber(knob.name, config.*knob.field, 0, knob.max);
         if (!value) {
             return Unexpected(value.error());
         }
@@ -176,8 +165,8 @@ Result<ScenarioConfig, Error> configFrom(const Args& args)
                                 "unknown setting '" + settingName + "'", "use clean, bias or drift"});
     }
     ScenarioConfig config = correlator::scenarioPreset(*setting);
-    const auto ugvs = wholeNumber(args, "ugvs", config.ugvCount, 1, kMaxUgvs);
-    const auto seed = wholeNumber(args, "seed", static_cast<double>(config.seed), 0, kMaxSeed);
+    const auto ugvs = args.wholeNumber("ugvs", config.ugvCount, 1, kMaxUgvs);
+    const auto seed = args.wholeNumber("seed", static_cast<double>(config.seed), 0, kMaxSeed);
     const auto duration = args.number("duration", config.durationS, 1, kMaxDurationS);
     const auto period = args.number("period", config.truthPeriodS, 0.01, kMaxPeriodS);
     for (const auto* number : {&ugvs, &seed, &duration, &period}) {

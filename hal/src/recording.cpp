@@ -10,6 +10,8 @@
 #include <ctime>
 #include <utility>
 
+#include "ugv/platform/clock.hpp"
+
 namespace ugv::hal {
 
 std::uint32_t crc32(std::uint32_t crc, const void* bytes, std::size_t size) noexcept
@@ -123,9 +125,7 @@ Result<RecordingWriter, Error> RecordingWriter::create(const std::string& path, 
     header.width = width;
     header.height = height;
     header.calibrationBytes = static_cast<std::uint32_t>(calibrationText.size());
-    timespec now{};
-    ::clock_gettime(CLOCK_REALTIME, &now);
-    header.createdRealtimeNs = static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+    header.createdRealtimeNs = clockNs(CLOCK_REALTIME);
     header.crc = headerCrc(header, calibrationText);
     auto written = writeAll(*fd, reinterpret_cast<const std::byte*>(&header), sizeof(header));
     if (written) {

@@ -5,25 +5,22 @@
 #include <ctime>
 #include <utility>
 
+#include "ugv/platform/clock.hpp"
+
 namespace ugv::hal {
 
 namespace {
 
-constexpr std::int64_t kNsPerS = 1'000'000'000;
 constexpr std::chrono::nanoseconds kFallbackPeriod{100'000'000}; ///< a one-frame recording: 10 fps
 
 std::int64_t monotonicNow(void* /*context*/)
 {
-    timespec t{};
-    ::clock_gettime(CLOCK_MONOTONIC, &t);
-    return static_cast<std::int64_t>(t.tv_sec) * kNsPerS + t.tv_nsec;
+    return MonotonicClock::nowNs();
 }
 
 void sleepUntilMonotonic(void* /*context*/, std::int64_t deadlineNs)
 {
-    timespec t{};
-    t.tv_sec = static_cast<time_t>(deadlineNs / kNsPerS);
-    t.tv_nsec = static_cast<long>(deadlineNs % kNsPerS);
+    const timespec t = MonotonicClock::toTimespec(deadlineNs);
     while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
     }
 }

@@ -2,22 +2,17 @@
 
 #include <time.h>
 
-#include "ugv/platform/angles.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
+#include "ugv/platform/angles.hpp"
+#include "ugv/platform/clock.hpp"
+
 namespace ugv::ipc::dds {
 
 namespace {
-
-std::int64_t clockNs(clockid_t clock) noexcept
-{
-    timespec t{};
-    ::clock_gettime(clock, &t);
-    return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
 
 builtin_interfaces::msg::dds_::Time_ rosTime(std::int64_t realNs)
 {

@@ -19,6 +19,7 @@
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
 #include "iceoryx_posh/runtime/posh_runtime_single_process.hpp"
+#include "ugv/platform/clock.hpp"
 
 namespace ugv::ipc {
 
@@ -241,10 +242,7 @@ bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, s
         }
     }
     if (publishStampNs != nullptr) {
-        timespec now{};
-        ::clock_gettime(CLOCK_MONOTONIC, &now);
-        publishStampNs->store(static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec,
-                              std::memory_order_release);
+        publishStampNs->store(MonotonicClock::nowNs(), std::memory_order_release);
     }
     impl_->publisher.publish(chunk);
     ++published_;

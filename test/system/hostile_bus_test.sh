@@ -9,9 +9,9 @@
 # the default) refused and counted (all but the first few seconds' worth), every scenario message before and after the attack was applied,
 # and the state stayed consistent: `ugvsense correlate` on the station's inputs.jsonl gives its snapshots.jsonl.
 # (The intruder's own writer may not get every flood sample acknowledged in time: its exit code is not checked.)
-# Usage: hostile_bus_test.sh UGVSENSE UGVSENSED WORKDIR DOMAIN
+# Usage: hostile_bus_test.sh UGVSENSE UGVSENSED BUS_HOSTILE WORKDIR DOMAIN
 set -u
-tool=$1 daemon=$2 work=$3 domain=$4
+tool=$1 daemon=$2 hostile=$3 work=$4 domain=$5
 rm -rf "$work" && mkdir -p "$work"
 partition="hostile-test-$$"
 gcs=""
@@ -44,7 +44,7 @@ bus=(--domain "$domain" --partition "$partition")
 "$tool" bus-send --input "$work/first.jsonl" --source uav-1 "${bus[@]}" >"$work/first.log" 2>&1 ||
     fail "bus-send --input (first half)"
 sleep 2 # applied before the attack (the reorder window is 1 s)
-"$tool" bus-send --hostile --source intruder --flood 5000 --ahead-flood 2000 "${bus[@]}" >"$work/hostile.log" 2>&1
+"$hostile" --source intruder --flood 5000 --ahead-flood 2000 "${bus[@]}" >"$work/hostile.log" 2>&1
 # The whole scenario from a new process: the first half's lines are duplicates (same sender, same line numbers).
 "$tool" bus-send --input "$work/scenario.jsonl" --source uav-1 "${bus[@]}" >"$work/second.log" 2>&1 ||
     fail "bus-send --input (second half, after the attack)"

@@ -3,13 +3,13 @@
 #   1. a short correlate-sim scenario sent with bus-send --input: every line arrives on its topic (observations,
 #      uav, pose_corrections) and each sample's sequence_number is its line number in the file;
 #   2. --only-ugv sends that UGV's observations and nothing else;
-#   3. bus-send --hostile: listen refuses the 10 hostile observations (stderr "refused: ...", counted) and prints
+#   3. bus-hostile (the test tool): listen refuses the 10 hostile observations (stderr "refused: ...", counted) and prints
 #      the 5000 valid ones of the flood;
 #   4. listen with nobody publishing: exit 1 after --timeout, saying what to check.
 # A domain id and partition of its own (150 + pid % 80), so parallel runs and other DDS users do not cross-talk.
-# Usage: bus_loopback_test.sh UGVSENSE WORKDIR
+# Usage: bus_loopback_test.sh UGVSENSE BUS_HOSTILE WORKDIR
 set -u
-tool=$1 work=$2
+tool=$1 hostile=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
 domain=$((150 + $$ % 80))
 part="bus-test-$$"
@@ -77,13 +77,13 @@ echo "$out"
 # 3. hostile samples and a flood
 "$tool" listen observations --count 5000 --timeout 30 "${bus[@]}" >"$work/hostile.out" 2>"$work/hostile.err" &
 l5=$!; pids+=($l5)
-out=$("$tool" bus-send --hostile --flood 5000 "${bus[@]}" 2>&1) || fail "bus-send --hostile: $out"
+out=$("$hostile" --flood 5000 "${bus[@]}" 2>&1) || fail "bus-hostile: $out"
 echo "$out"
 for want in "observations      NaN time: 1" "observations      latitude 91: 1" "observations      latitude -91: 1" \
     "observations      longitude 200: 1" "observations      unknown class 9: 1" "observations      empty ugv name: 1" \
     "observations      track name of 100 characters: 1" "uav               empty source name: 1" "confirmations     unknown confirmation state 7: 1" \
     "pose_corrections  since_t > until_t: 1" "flood: 5000 valid observation(s)"; do
-    grep -qF -- "$want" <<<"$out" || fail "bus-send --hostile: missing '$want'"
+    grep -qF -- "$want" <<<"$out" || fail "bus-hostile: missing '$want'"
 done
 wait $l5 || fail "listen (hostile) exited $?"
 cat "$work/hostile.err"

@@ -1,7 +1,8 @@
 #pragma once
 
 /// @file
-/// `ugv::MonotonicClock`: CLOCK_MONOTONIC as std::chrono::nanoseconds and as int64 nanoseconds.
+/// `ugv::MonotonicClock`: CLOCK_MONOTONIC as std::chrono::nanoseconds and as int64 nanoseconds; `clockNs()`: any
+/// POSIX clock as int64 nanoseconds (CLOCK_REALTIME for stamps that leave the machine).
 /// clock_gettime(CLOCK_MONOTONIC) is served by the vDSO on Linux (no kernel entry), so it is cheap enough for
 /// RT loops and log records.
 ///
@@ -13,6 +14,17 @@
 
 namespace ugv {
 
+/// @brief The time of POSIX clock `clock` (CLOCK_MONOTONIC, CLOCK_REALTIME, ...) as a plain integer. [ns]
+/// Thread-safety: reentrant. RT-safe: yes.
+[[nodiscard]] inline std::int64_t clockNs(clockid_t clock) noexcept
+{
+    constexpr std::int64_t kNsPerSecond = 1'000'000'000;
+    timespec ts{};
+    // The system clocks with a valid pointer cannot fail on Linux.
+    static_cast<void>(::clock_gettime(clock, &ts));
+    return static_cast<std::int64_t>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;
+}
+
 class MonotonicClock {
 public:
     /// @brief Time since an unspecified start (boot), never jumps backwards. [ns]
@@ -21,14 +33,7 @@ public:
 
     /// @brief As now(), as a plain integer for fixed-size records. [ns]
     /// Thread-safety: reentrant. RT-safe: yes.
-    [[nodiscard]] static std::int64_t nowNs() noexcept
-    {
-        constexpr std::int64_t kNsPerSecond = 1'000'000'000;
-        timespec ts{};
-        // CLOCK_MONOTONIC with a valid pointer cannot fail on Linux.
-        static_cast<void>(::clock_gettime(CLOCK_MONOTONIC, &ts));
-        return static_cast<std::int64_t>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;
-    }
+    [[nodiscard]] static std::int64_t nowNs() noexcept { return clockNs(CLOCK_MONOTONIC); }
 
     /// @brief A CLOCK_MONOTONIC time point (as from nowNs()) as a timespec, for sem_clockwait,
     /// pthread_cond_clockwait and clock_nanosleep(TIMER_ABSTIME) with CLOCK_MONOTONIC. [ns]
