@@ -9,10 +9,12 @@ rm -rf "$work" && mkdir -p "$work"
 command -v fastdds >/dev/null || { echo "SKIPPED: fastdds (package fastdds-tools) is not installed"; exit 0; }
 port=$((20000 + $$ % 20000))
 server=""
-cleanup() { [ -n "$server" ] && kill "$server" 2>/dev/null; wait 2>/dev/null; true; }
+# `fastdds discovery` is a wrapper that starts fast-discovery-server as its child: the server runs in a session of
+# its own and the whole group is stopped, else the child outlives the test.
+cleanup() { [ -n "$server" ] && { kill -- -"$server" 2>/dev/null || kill "$server" 2>/dev/null; }; wait 2>/dev/null; true; }
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -n 20 "$f"; done; exit 1; }
-fastdds discovery -i 0 -l 127.0.0.1 -p "$port" >"$work/server.log" 2>&1 &
+setsid fastdds discovery -i 0 -l 127.0.0.1 -p "$port" >"$work/server.log" 2>&1 &
 server=$!
 sleep 1
 kill -0 "$server" 2>/dev/null || fail "the discovery server did not start"
