@@ -109,6 +109,7 @@ void PoseCorrectedCorrelator::advance(double t)
         flushUav();
     }
     statics_.dropTentative(t, ids_);
+    statics_.markShown();
     mobiles_.timeOut(t);
 }
 

@@ -485,7 +485,7 @@ void StaticMap::foldBeyondHorizon(int oldestWindow)
     }
 }
 
-void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Snapshot& s, rules::Placed& threats) const
+std::vector<const StaticMap::StaticObject*> StaticMap::published() const
 {
     std::vector<const StaticObject*> published; // in creation order (objects_ is), so the older come first
     for (const StaticObject& so : objects_) {
@@ -495,28 +495,47 @@ void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Sna
         }
         // A possible duplicate of an older object (a churned track UUID that missed the gate, or the UGVs' pose
         // errors putting one object in two places) is not shown while it waits for a merge: its id would steal the
-        // object's for a while and then vanish. Unless one UGV saw both at one instant: then they are two.
+        // object's for a while and then vanish. Unless one UGV saw both at one instant: then they are two. Once
+        // shown it stays shown (hysteresis): hiding it again is the vanishing the rule is there to avoid.
         const int index = static_cast<int>(&so - objects_.data());
-        if (std::any_of(published.begin(), published.end(), [&](const StaticObject* older) {
+        if (!so.shown && std::any_of(published.begin(), published.end(), [&](const StaticObject* older) {
                 return maybeSameObject(*older, so) && !seenApart(*older, index);
             })) {
             continue;
         }
-        const Ellipse el = ellipseOf(so.info.inverse() + floorCovariance());
-        ObjectEstimate e = rules::estimateOf(frame, so.mean, el, so.id, so.cls, so.state);
-        e.observations = static_cast<int>(so.observations);
-        std::set<std::string> names;
         bool sustained = false; // a track that saw it twice: clutter falls on an object once per track
+        std::set<int> ugvs;
         for (const int ti : so.tracks) {
-            names.insert(poses.ugv(static_cast<std::size_t>(tracks_[static_cast<std::size_t>(ti)].ugv)).name);
+            ugvs.insert(tracks_[static_cast<std::size_t>(ti)].ugv);
             sustained = sustained || tracks_[static_cast<std::size_t>(ti)].seen >= 2;
         }
-        if (!sustained && names.size() < 2) {
+        if (!sustained && ugvs.size() < 2) {
             continue;
         }
-        e.ugvs.assign(names.begin(), names.end());
         published.push_back(&so);
-        threats.emplace_back(so.mean, s.objects.size());
+    }
+    return published;
+}
+
+void StaticMap::markShown()
+{
+    for (const StaticObject* so : published()) {
+        objects_[static_cast<std::size_t>(so - objects_.data())].shown = true;
+    }
+}
+
+void StaticMap::publish(const LocalFrame& frame, const UgvPoseErrors& poses, Snapshot& s, rules::Placed& threats) const
+{
+    for (const StaticObject* so : published()) {
+        const Ellipse el = ellipseOf(so->info.inverse() + floorCovariance());
+        ObjectEstimate e = rules::estimateOf(frame, so->mean, el, so->id, so->cls, so->state);
+        e.observations = static_cast<int>(so->observations);
+        std::set<std::string> names;
+        for (const int ti : so->tracks) {
+            names.insert(poses.ugv(static_cast<std::size_t>(tracks_[static_cast<std::size_t>(ti)].ugv)).name);
+        }
+        e.ugvs.assign(names.begin(), names.end());
+        threats.emplace_back(so->mean, s.objects.size());
         s.objects.push_back(std::move(e));
     }
 }

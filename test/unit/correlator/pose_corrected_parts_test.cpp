@@ -15,6 +15,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -207,6 +208,70 @@ TEST(StaticMap, ASplitThatUndoesAMergeGivesTheAbsorbedObjectItsIdBack)
     EXPECT_EQ(ids.find(idA)->index, 0);
     EXPECT_LT((sut.objects()[0].mean - a).norm(), 0.1);
     EXPECT_LT((sut.objects()[1].mean - b).norm(), 0.1);
+}
+
+/// Two posts 4 m apart, A seen by ugv-1 and B by ugv-2, both UGVs' poses solved: two objects, both published. Then
+/// the UGVs' pose uncertainty grows back to the prior (a solve that could not tell): B is now within A's gate once
+/// that uncertainty is counted, a possible duplicate, and a map that never showed B holds it back. The map that
+/// published B keeps publishing it (hysteresis): hiding it would make its id vanish and come back as the gate flips.
+TEST(StaticMap, AnObjectOncePublishedIsNotHeldBackAgainAsAPossibleDuplicate)
+{
+    const PoseCorrectedConfig config;
+    UgvPoseErrors poses(config);
+    const int one = poses.index("ugv-1");
+    const int two = poses.index("ugv-2");
+    const Eigen::Vector2d posOne(-10, 0);
+    const Eigen::Vector2d posTwo(10, 0);
+    const Eigen::Vector2d a(0, 20);
+    const Eigen::Vector2d b(4, 20);
+    const auto fill = [&](StaticMap& map, ObjectIds& ids) {
+        for (int i = 0; i < 40; ++i) {
+            for (const auto& [ugv, name, from, post] :
+                 {std::tuple{one, "ugv-1", posOne, a}, std::tuple{two, "ugv-2", posTwo, b}}) {
+                Observation o;
+                o.t = 0.5 * i;
+                o.ugv = name;
+                o.track = name;
+                o.cls = OoiClass::Static;
+                const Eigen::Vector2d d = post - from;
+                map.add(o, ugv, RangeBearing{o.t, from, 0.0, d.norm(), std::atan2(d.x(), d.y())}, poses, ids);
+            }
+        }
+    };
+    const auto publishedIds = [&](const StaticMap& map) {
+        std::vector<std::string> out;
+        for (const auto* so : map.published()) {
+            out.push_back(so->id);
+        }
+        return out;
+    };
+    poses.ugv(static_cast<std::size_t>(one)).solved = true;
+    poses.ugv(static_cast<std::size_t>(two)).solved = true;
+    ObjectIds ids;
+    StaticMap sut(config);
+    fill(sut, ids);
+    sut.rebuild(poses, ids);
+    ASSERT_EQ(sut.objects().size(), 2U);
+    const std::vector<std::string> both{sut.objects()[0].id, sut.objects()[1].id};
+    ASSERT_EQ(publishedIds(sut), both) << "two objects 4 m apart under known poses";
+    sut.markShown();
+
+    poses.ugv(static_cast<std::size_t>(one)).solved = false; // pose uncertainty back to the prior
+    poses.ugv(static_cast<std::size_t>(two)).solved = false;
+    sut.rebuild(poses, ids);
+    ObjectIds neverShownIds;
+    StaticMap neverShown(config);
+    fill(neverShown, neverShownIds);
+    neverShown.rebuild(poses, neverShownIds);
+    ASSERT_EQ(neverShown.objects().size(), 2U);
+    ASSERT_TRUE(neverShown.objects()[1].alive);
+    ASSERT_EQ(publishedIds(neverShown), std::vector<std::string>{neverShown.objects()[0].id})
+        << "B should be a possible duplicate of A under the prior pose uncertainty";
+
+    ASSERT_TRUE(sut.objects()[1].alive) << "not merged: B is still its own object";
+    EXPECT_EQ(publishedIds(sut), both);
+    sut.markShown();
+    EXPECT_EQ(publishedIds(sut), both);
 }
 
 /// What a UGV at `from` (reported heading north, no pose error) measures of an object at `object` at time t.

@@ -12,7 +12,7 @@
 ///   seen apart become one, the earliest id kept; hysteresis: a split that undoes a merge (the leaving group's
 ///   tracks came mostly from the absorbed object) revives that object and its id instead of making a new one; a
 ///   possible duplicate of an older object (within its gate once both objects' pose uncertainty is counted, not seen
-///   apart) is not published until a merge folds it in;
+///   apart) is not published until a merge folds it in, unless it was published before (markShown: hysteresis);
 /// - tentative objects (fewer than minStaticObservations after tentativeTimeoutS) are dropped (clutter);
 /// - samples older than the horizon fold into their object's prior.
 ///
@@ -77,6 +77,9 @@ public:
         /// of a UGV's observations, so not reduced by their number) and the weights.
         Eigen::Matrix2d poseCovSum = Eigen::Matrix2d::Zero();
         double weightSum = 0.0;
+        /// Once published, not held back again as a possible duplicate (hysteresis: its id stays shown until a
+        /// merge folds it in).
+        bool shown = false;
     };
 
     explicit StaticMap(const PoseCorrectedConfig& config);
@@ -91,9 +94,14 @@ public:
     /// Drops the samples of windows before `oldestWindow`, folding them into their object's prior.
     void foldBeyondHorizon(int oldestWindow);
     void setState(int object, Confirmation state) { objects_[static_cast<std::size_t>(object)].state = state; }
+    /// Marks the objects published now as shown: a possible duplicate of an older object that was shown once stays
+    /// shown (hiding it again would only make its id vanish and come back as the gate flips).
+    void markShown();
     /// Appends the published static objects to `s` and their positions to `threats`.
     void publish(const LocalFrame& frame, const UgvPoseErrors& poses, Snapshot& s, rules::Placed& threats) const;
     [[nodiscard]] std::size_t storedPoints() const noexcept;
+    /// The objects published now, in creation order.
+    [[nodiscard]] std::vector<const StaticObject*> published() const;
 
     /// For the pose-error solver, which estimates the objects' means jointly with the UGVs' errors.
     [[nodiscard]] const std::vector<Track>& tracks() const noexcept { return tracks_; }
