@@ -9,29 +9,10 @@
 
 namespace ugv::service {
 
-namespace {
-
-vision::MatcherMode matcherMode(bringup::MatcherMode mode)
-{
-    switch (mode) {
-    case bringup::MatcherMode::CensusSgm:
-        return vision::MatcherMode::CensusSgm;
-    case bringup::MatcherMode::Sgbm:
-        return vision::MatcherMode::Sgbm;
-    case bringup::MatcherMode::Sgbm3Way:
-        return vision::MatcherMode::Sgbm3Way;
-    case bringup::MatcherMode::Hh4:
-        return vision::MatcherMode::Hh4;
-    }
-    return vision::MatcherMode::CensusSgm;
-}
-
-} // namespace
-
 vision::DetectorConfig detectorConfigFrom(const bringup::ServiceConfig& config)
 {
     vision::DetectorConfig d;
-    d.matcher.mode = matcherMode(config.stereo.mode);
+    d.matcher.mode = config.stereo.mode;
     d.matcher.numDisparities = config.stereo.numDisparities;
     d.matcher.blockSize = config.stereo.blockSize;
     d.sectors.sectorCount = config.obstacles.sectorCount;

@@ -30,6 +30,7 @@
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/matcher_mode.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/roi_matcher.hpp"
@@ -856,16 +857,12 @@ int runEval(int argc, char** argv)
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
     if (args.has("matcher")) {
         const std::string name = args.get("matcher");
-        if (name == "sgbm_3way") {
-            matcher = vision::MatcherMode::Sgbm3Way;
-        } else if (name == "sgbm") {
-            matcher = vision::MatcherMode::Sgbm;
-        } else if (name == "hh4") {
-            matcher = vision::MatcherMode::Hh4;
-        } else if (name != "census_sgm") {
+        const auto mode = vision::parseMatcherMode(name);
+        if (!mode) {
             return reportUsageError("eval", Error{"ugvsense eval --matcher", "unknown mode '" + name + "'",
-                                                  "use census_sgm, sgbm_3way, sgbm or hh4"});
+                                                  "use " + std::string(vision::kMatcherModeNames)});
         }
+        matcher = *mode;
     }
     std::filesystem::path root = "../shared/data";
     if (args.has("data")) {

@@ -19,6 +19,7 @@
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/rt/task.hpp"
+#include "ugv/vision/matcher_mode.hpp"
 
 namespace ugv::ipc::dds {
 struct SecurityConfig; // ugv/ipc/dds_bus.hpp
@@ -31,7 +32,7 @@ enum class ReplayPace { Recorded, Fixed, Fastest };
 enum class PixelFormatChoice { Yuyv, Grey };
 enum class OverloadChoice { Degrade, Drop };
 enum class DetectorMode { Stereo, Colour, Both };
-enum class MatcherMode { CensusSgm, Sgbm, Sgbm3Way, Hh4 };
+using MatcherMode = vision::MatcherMode; ///< names and parsing in ugv/vision/matcher_mode.hpp
 
 struct CameraConfig {
     CameraBackend backend = CameraBackend::Replay;

@@ -22,17 +22,10 @@
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/vision/census_sgm.hpp"
+#include "ugv/vision/matcher_mode.hpp"
 #include "ugv/vision/stage_times.hpp"
 
 namespace ugv::vision {
-
-/// The matcher (config stereo.mode): ours, or an OpenCV StereoSGBM mode.
-enum class MatcherMode : std::uint8_t {
-    CensusSgm, ///< census 9x7 + 5-path SGM (census_sgm.hpp): no allocation per frame
-    Sgbm,      ///< MODE_SGBM: 5 paths, single pass
-    Sgbm3Way,  ///< MODE_SGBM_3WAY: 3 paths, faster (measured 28 vs 37 ms on 640x242)
-    Hh4,       ///< MODE_HH4: 8 paths with 4-way full-image passes, slowest
-};
 
 struct RoiMatcherConfig {
     MatcherMode mode = MatcherMode::CensusSgm;
