@@ -18,7 +18,7 @@
 
 namespace ugv::tool::bus {
 
-inline constexpr int kMaxDomainId = 232; ///< the RTPS UDP port formula's limit (ipc::dds::validate)
+inline constexpr int kMaxDomainId = ipc::dds::kMaxDomainId;
 
 /// The option specs, to append to a command's own.
 inline std::vector<OptionSpec> options()

@@ -286,7 +286,7 @@ Result<void, Error> checkIdentity(const std::string& id, const std::string& wher
 
 Result<void, Error> validate(const BusConfig& config, const std::string& where)
 {
-    if (config.domainId < 0 || config.domainId > 232) {
+    if (config.domainId < 0 || config.domainId > kMaxDomainId) {
         return Unexpected(Error{where + " domain_id", "domain id " + std::to_string(config.domainId) + " out of range",
                                 "use 0..232 (the same on every vehicle and the ground station)"});
     }
@@ -322,7 +322,7 @@ Result<std::optional<int>, Error> domainFromEnvironment(const char* variable)
     char* end = nullptr;
     errno = 0;
     const long id = std::strtol(env, &end, 10);
-    if (errno != 0 || end == env || *end != '\0' || id < 0 || id > 232) {
+    if (errno != 0 || end == env || *end != '\0' || id < 0 || id > kMaxDomainId) {
         return Unexpected(Error{std::string("$") + variable, std::string("'") + env + "' is not a DDS domain id",
                                 "give a whole number in 0..232, or unset it"});
     }

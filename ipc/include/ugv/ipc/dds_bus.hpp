@@ -103,8 +103,11 @@ Result<void, Error> checkSecurity(const SecurityConfig& config, const std::strin
 /// A secured participant's identity: a partition suffix, 1..64 characters of [A-Za-z0-9_-].
 Result<void, Error> checkIdentity(const std::string& id, const std::string& where);
 
+/// The largest DDS domain id: the RTPS UDP port formula's limit.
+inline constexpr int kMaxDomainId = 232;
+
 struct BusConfig {
-    int domainId = 42; ///< 0..232 (the UDP port formula's limit)
+    int domainId = 42; ///< 0..kMaxDomainId
     std::string participantName = "ugvsense";
     std::vector<std::string> partitions; ///< of our topics; empty = the default partition
     std::string rosNamespace = "ugv1";   ///< ROS 2 topics: rt/<rosNamespace>/...
