@@ -42,6 +42,21 @@ void fuse(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen
     object.mean = object.info.ldlt().solve(object.infoMean);
 }
 
+/// Fuses every stored sample of `track` into `object`, each standing for seen / stored observations.
+void fuseTrack(StaticMap::StaticObject& object, const StaticMap::Track& track, const UgvPoseErrors& poses)
+{
+    for (const StaticMap::TrackWindow& tw : track.windows) {
+        const double weight = sampleWeight(tw);
+        for (const RangeBearing& smp : tw.samples) {
+            Eigen::Vector2d p;
+            Eigen::Matrix2d cov;
+            Eigen::Matrix2d measurementCov;
+            poses.project(track.ugv, smp, p, &cov, &measurementCov);
+            fuse(object, p, cov, measurementCov, weight);
+        }
+    }
+}
+
 /// Two groups of an object's track means (two-means seeded by the farthest pair).
 struct TwoGroups {
     Eigen::Vector2d ca = Eigen::Vector2d::Zero();
@@ -133,8 +148,11 @@ void StaticMap::noteInstant(int ugv, int ti, double t)
     }
     const auto note = [this](int from, int to) {
         auto& apart = tracks_[static_cast<std::size_t>(from)].apart;
-        if (std::find(apart.begin(), apart.end(), to) == apart.end()) {
-            apart.push_back(to);
+        const auto found = std::find_if(apart.begin(), apart.end(), [to](const Apart& a) { return a.track == to; });
+        if (found == apart.end()) {
+            apart.push_back(Apart{to, 1});
+        } else {
+            ++found->instants;
         }
     };
     for (const int other : instant.tracks) {
@@ -146,16 +164,18 @@ void StaticMap::noteInstant(int ugv, int ti, double t)
     instant.tracks.push_back(ti);
 }
 
-bool StaticMap::trackSeenApart(int ti, int object) const
+bool StaticMap::trackSeenApart(int ti, int object, int instants) const
 {
     const auto& apart = tracks_[static_cast<std::size_t>(ti)].apart;
-    return std::any_of(apart.begin(), apart.end(),
-                       [this, object](int other) { return tracks_[static_cast<std::size_t>(other)].object == object; });
+    return std::any_of(apart.begin(), apart.end(), [this, object, instants](const Apart& a) {
+        return a.instants >= instants && tracks_[static_cast<std::size_t>(a.track)].object == object;
+    });
 }
 
 bool StaticMap::seenApart(const StaticObject& x, int y) const
 {
-    return std::any_of(x.tracks.begin(), x.tracks.end(), [this, y](int ti) { return trackSeenApart(ti, y); });
+    return std::any_of(x.tracks.begin(), x.tracks.end(),
+                       [this, y](int ti) { return trackSeenApart(ti, y, kApartInstants); });
 }
 
 int StaticMap::associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
@@ -165,7 +185,7 @@ int StaticMap::associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen:
     double bestD2 = config_.gateChi2;
     for (int i = 0; i < static_cast<int>(objects_.size()); ++i) {
         const StaticObject& so = objects_[static_cast<std::size_t>(i)];
-        if (!so.alive || trackSeenApart(ti, i)) {
+        if (!so.alive || trackSeenApart(ti, i, 1)) {
             continue;
         }
         // Against an object only this UGV has seen, its pose error is common to both: measurement noise only.
@@ -231,17 +251,7 @@ void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses) const
     object.poseCovSum.setZero();
     object.weightSum = 0.0;
     for (const int ti : object.tracks) {
-        const Track& track = tracks_[static_cast<std::size_t>(ti)];
-        for (const TrackWindow& tw : track.windows) {
-            const double weight = sampleWeight(tw);
-            for (const RangeBearing& smp : tw.samples) {
-                Eigen::Vector2d p;
-                Eigen::Matrix2d cov;
-                Eigen::Matrix2d measurementCov;
-                poses.project(track.ugv, smp, p, &cov, &measurementCov);
-                fuse(object, p, cov, measurementCov, weight);
-            }
-        }
+        fuseTrack(object, tracks_[static_cast<std::size_t>(ti)], poses);
     }
     if (object.info.determinant() > 0.0) {
         object.mean = object.info.ldlt().solve(object.infoMean);
@@ -255,8 +265,92 @@ void StaticMap::rebuild(const UgvPoseErrors& poses, ObjectIds& ids)
             refit(so, poses);
         }
     }
+    reassignTracks(poses);
     splitAll(poses, ids);
     mergeAll(ids);
+}
+
+StaticMap::TrackEstimate StaticMap::trackEstimate(int trackIndex, const UgvPoseErrors& poses) const
+{
+    StaticObject fused; // the track alone, fused as refit() fuses an object
+    fuseTrack(fused, tracks_[static_cast<std::size_t>(trackIndex)], poses);
+    TrackEstimate e;
+    if (fused.weightSum <= 0.0 || fused.measurementInfo.determinant() <= 0.0) {
+        return e;
+    }
+    // The samples' measurement noise averages out; their UGV's pose error is common to all of them and does not.
+    e.valid = true;
+    e.mean = fused.mean;
+    e.cov = fused.measurementInfo.inverse() + fused.poseCovSum / fused.weightSum;
+    return e;
+}
+
+/// Hard-assignment EM over tracks: a track joins its object on its first reading, which under range noise can lie
+/// nearer the neighbour of a close pair; then the object's other tracks that one UGV saw at the same instant as it
+/// are kept out (seen apart) and the one post becomes two objects that never merge. Here each track's own estimate
+/// is gated again against its object: outside the gate and inside the gate of another object of its class that no
+/// track seen apart from it belongs to, it moves there. An object keeps at least one track (an object leaving whole
+/// is a merge, mergeAll's decision); the track's origin stays (the id it first joined).
+void StaticMap::reassignTracks(const UgvPoseErrors& poses)
+{
+    std::vector<int> changed;
+    for (std::size_t j = 0; j < objects_.size(); ++j) {
+        if (!objects_[j].alive || objects_[j].tracks.size() < 2) {
+            continue;
+        }
+        for (std::size_t k = 0; k < objects_[j].tracks.size() && objects_[j].tracks.size() >= 2;) {
+            const int ti = objects_[j].tracks[k];
+            const int target = betterObject(ti, static_cast<int>(j), poses);
+            if (target < 0) {
+                ++k;
+                continue;
+            }
+            objects_[j].tracks.erase(objects_[j].tracks.begin() + static_cast<std::ptrdiff_t>(k));
+            objects_[static_cast<std::size_t>(target)].tracks.push_back(ti);
+            tracks_[static_cast<std::size_t>(ti)].object = target;
+            changed.push_back(static_cast<int>(j));
+            changed.push_back(target);
+        }
+    }
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    for (const int j : changed) {
+        StaticObject& so = objects_[static_cast<std::size_t>(j)];
+        so.observations = 0;
+        for (const int ti : so.tracks) {
+            so.observations += tracks_[static_cast<std::size_t>(ti)].seen;
+        }
+        refit(so, poses);
+    }
+}
+
+int StaticMap::betterObject(int ti, int current, const UgvPoseErrors& poses) const
+{
+    const TrackEstimate e = trackEstimate(ti, poses);
+    if (!e.valid) {
+        return -1;
+    }
+    const auto d2 = [&](const StaticObject& so) {
+        return mahalanobis2(e.mean - so.mean, e.cov + so.info.inverse() + floorCovariance());
+    };
+    const StaticObject& own = objects_[static_cast<std::size_t>(current)];
+    if (own.info.determinant() <= 0.0 || d2(own) < config_.gateChi2) {
+        return -1;
+    }
+    int best = -1;
+    double bestD2 = config_.gateChi2;
+    for (int i = 0; i < static_cast<int>(objects_.size()); ++i) {
+        const StaticObject& so = objects_[static_cast<std::size_t>(i)];
+        if (i == current || !so.alive || so.cls != tracks_[static_cast<std::size_t>(ti)].cls ||
+            so.info.determinant() <= 0.0 || trackSeenApart(ti, i, kApartInstants)) {
+            continue;
+        }
+        if (const double d = d2(so); d < bestD2) {
+            best = i;
+            bestD2 = d;
+        }
+    }
+    return best;
 }
 
 Eigen::Vector2d StaticMap::trackMean(int trackIndex, const UgvPoseErrors& poses, double& weight) const

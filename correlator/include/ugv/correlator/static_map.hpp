@@ -4,9 +4,13 @@
 /// Mode `pose-corrected`'s static objects and their rules:
 /// - every static observation is kept in its UGV's frame (a bounded reservoir per track and offset window), so
 ///   that pose corrections and estimated pose errors re-project it exactly (rebuild);
-/// - two tracks one UGV reports at the same instant are two objects (seen apart);
+/// - two tracks one UGV reports at the same instant are two objects (seen apart): a new track never joins an object
+///   with a track it was seen with; two objects never merge, nor a track moves between them, once seen apart at
+///   kApartInstants instants (one shared instant is often a clutter report beside a real one);
 /// - a new track joins the nearest object within the chi-square gate (Mahalanobis distance, the UGVs' pose
 ///   uncertainty included unless only its own UGV saw the object) and not seen apart from it, else starts one;
+/// - a track whose own estimate lies outside its object's gate and inside another's (not seen apart from it) moves
+///   there at the next rebuild (hard-assignment EM over tracks: a first reading decided its object);
 /// - split: an object whose tracks form two groups far apart (associated while the pose errors were unknown)
 ///   splits, the group with more observations keeps the id; merge: two objects within each other's gate and not
 ///   seen apart become one, the earliest id kept; hysteresis: a split that undoes a merge (the leaving group's
@@ -44,6 +48,15 @@ public:
         std::uint64_t seen = 0;
         std::vector<RangeBearing> samples; ///< a uniform reservoir of the `seen`
     };
+    struct Apart {
+        int track = -1;
+        int instants = 0;
+    };
+    /// Instants two tracks must share before their objects count as seen apart for a merge, a move or a publication
+    /// (one is enough to keep a new track out of an object): one clutter report beside an object's reading at one
+    /// instant is chance (measured: seed 24 of correlate-sim's defaults, an object published twice for good), a close
+    /// pair in view is reported together at every instant both are seen.
+    static constexpr int kApartInstants = 2;
     struct Track {
         int ugv = -1;
         int object = -1;
@@ -52,8 +65,9 @@ public:
         std::string key; ///< in trackIndex_
         std::uint64_t seen = 0;
         double lastT = 0.0;
-        /// Tracks of the same UGV observed at the same instant as this one: other objects (seen apart).
-        std::vector<int> apart;
+        /// Tracks of the same UGV observed at the same instant as this one, and at how many instants: other objects
+        /// (seen apart; see kApartInstants).
+        std::vector<Apart> apart;
         /// The object this track first joined: when a merge folded that object into another and the track's group
         /// splits off again, it gets that object's id back (the merge is undone, not a new object made).
         int origin = -1;
@@ -118,10 +132,24 @@ private:
     /// The alive object within the gate of `p` nearest to it and not seen apart from track `ti`, or -1.
     [[nodiscard]] int associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                                 const Eigen::Matrix2d& measurementCov) const;
-    /// Track `ti` and a track of the object at index `object` were observed at one instant by one UGV.
-    [[nodiscard]] bool trackSeenApart(int ti, int object) const;
-    /// A track of `x` and one of the object at index `y` were observed at one instant by one UGV: two objects.
+    /// Track `ti` and a track of the object at index `object` were observed at `instants` or more instants by one UGV.
+    [[nodiscard]] bool trackSeenApart(int ti, int object, int instants) const;
+    /// A track of `x` and one of the object at index `y` were observed at kApartInstants instants by one UGV: two
+    /// objects.
     [[nodiscard]] bool seenApart(const StaticObject& x, int y) const;
+    /// A track's own estimate from its stored samples: the mean, and its covariance (the samples' measurement noise
+    /// averaged, plus their UGV's remaining pose uncertainty, which is common to them).
+    struct TrackEstimate {
+        bool valid = false; ///< false: no samples left
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+    };
+    [[nodiscard]] TrackEstimate trackEstimate(int trackIndex, const UgvPoseErrors& poses) const;
+    /// Moves every track outside its object's gate to the object of its class whose gate it is in (see the .cpp).
+    void reassignTracks(const UgvPoseErrors& poses);
+    /// The object track `ti` belongs to rather than `current`: -1 while it is within `current`'s gate, else the
+    /// nearest alive object of its class within the gate and not seen apart from it, or -1.
+    [[nodiscard]] int betterObject(int ti, int current, const UgvPoseErrors& poses) const;
     /// Recomputes an object's estimate from its tracks' stored samples under the current pose model.
     void refit(StaticObject& object, const UgvPoseErrors& poses) const;
     void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
