@@ -30,8 +30,9 @@ double sampleWeight(const StaticMap::TrackWindow& tw)
     return tw.samples.empty() ? 0.0 : static_cast<double>(tw.seen) / static_cast<double>(tw.samples.size());
 }
 
-void fuse(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
-          const Eigen::Matrix2d& measurementCov, double weight = 1.0)
+/// Adds one observation's information to `object` (its mean is left for the caller to solve).
+void accumulate(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+                const Eigen::Matrix2d& measurementCov, double weight)
 {
     const Eigen::Matrix2d info = weight * cov.inverse();
     object.info += info;
@@ -39,11 +40,19 @@ void fuse(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen
     object.measurementInfo += weight * measurementCov.inverse();
     object.poseCovSum += weight * (cov - measurementCov);
     object.weightSum += weight;
+}
+
+void fuse(StaticMap::StaticObject& object, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+          const Eigen::Matrix2d& measurementCov)
+{
+    accumulate(object, p, cov, measurementCov, 1.0);
     object.mean = object.info.ldlt().solve(object.infoMean);
 }
 
-/// Fuses every stored sample of `track` into `object`, each standing for seen / stored observations.
-void fuseTrack(StaticMap::StaticObject& object, const StaticMap::Track& track, const UgvPoseErrors& poses)
+/// Adds every stored sample of `track` to `object` and to `alone` (the track's own sums), each standing for seen /
+/// stored observations; the means are left for the caller to solve.
+void fuseTrack(StaticMap::StaticObject& object, StaticMap::StaticObject& alone, const StaticMap::Track& track,
+               const UgvPoseErrors& poses)
 {
     for (const StaticMap::TrackWindow& tw : track.windows) {
         const double weight = sampleWeight(tw);
@@ -52,9 +61,24 @@ void fuseTrack(StaticMap::StaticObject& object, const StaticMap::Track& track, c
             Eigen::Matrix2d cov;
             Eigen::Matrix2d measurementCov;
             poses.project(track.ugv, smp, p, &cov, &measurementCov);
-            fuse(object, p, cov, measurementCov, weight);
+            accumulate(object, p, cov, measurementCov, weight);
+            accumulate(alone, p, cov, measurementCov, weight);
         }
     }
+}
+
+/// A track's own estimate from its samples summed alone (`part`): the samples' measurement noise averages out, their
+/// UGV's pose error is common to all of them and does not.
+StaticMap::TrackEstimate estimateOf(const StaticMap::StaticObject& part)
+{
+    StaticMap::TrackEstimate e;
+    if (part.weightSum <= 0.0 || part.info.determinant() <= 0.0 || part.measurementInfo.determinant() <= 0.0) {
+        return e;
+    }
+    e.valid = true;
+    e.mean = part.info.ldlt().solve(part.infoMean);
+    e.cov = part.measurementInfo.inverse() + part.poseCovSum / part.weightSum;
+    return e;
 }
 
 /// Two groups of an object's track means (two-means seeded by the farthest pair).
@@ -243,15 +267,20 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
     ++object.observations;
 }
 
-void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses) const
+void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses)
 {
     object.info = object.priorInfo;
     object.infoMean = object.priorInfo * object.priorMean;
     object.measurementInfo = object.priorInfo;
     object.poseCovSum.setZero();
     object.weightSum = 0.0;
+    if (trackEstimates_.size() < tracks_.size()) {
+        trackEstimates_.resize(tracks_.size());
+    }
     for (const int ti : object.tracks) {
-        fuseTrack(object, tracks_[static_cast<std::size_t>(ti)], poses);
+        StaticObject alone;
+        fuseTrack(object, alone, tracks_[static_cast<std::size_t>(ti)], poses);
+        trackEstimates_[static_cast<std::size_t>(ti)] = estimateOf(alone);
     }
     if (object.info.determinant() > 0.0) {
         object.mean = object.info.ldlt().solve(object.infoMean);
@@ -270,21 +299,6 @@ void StaticMap::rebuild(const UgvPoseErrors& poses, ObjectIds& ids)
     mergeAll(ids);
 }
 
-StaticMap::TrackEstimate StaticMap::trackEstimate(int trackIndex, const UgvPoseErrors& poses) const
-{
-    StaticObject fused; // the track alone, fused as refit() fuses an object
-    fuseTrack(fused, tracks_[static_cast<std::size_t>(trackIndex)], poses);
-    TrackEstimate e;
-    if (fused.weightSum <= 0.0 || fused.measurementInfo.determinant() <= 0.0) {
-        return e;
-    }
-    // The samples' measurement noise averages out; their UGV's pose error is common to all of them and does not.
-    e.valid = true;
-    e.mean = fused.mean;
-    e.cov = fused.measurementInfo.inverse() + fused.poseCovSum / fused.weightSum;
-    return e;
-}
-
 /// Hard-assignment EM over tracks: a track joins its object on its first reading, which under range noise can lie
 /// nearer the neighbour of a close pair; then the object's other tracks that one UGV saw at the same instant as it
 /// are kept out (seen apart) and the one post becomes two objects that never merge. Here each track's own estimate
@@ -300,7 +314,7 @@ void StaticMap::reassignTracks(const UgvPoseErrors& poses)
         }
         for (std::size_t k = 0; k < objects_[j].tracks.size() && objects_[j].tracks.size() >= 2;) {
             const int ti = objects_[j].tracks[k];
-            const int target = betterObject(ti, static_cast<int>(j), poses);
+            const int target = betterObject(ti, static_cast<int>(j));
             if (target < 0) {
                 ++k;
                 continue;
@@ -324,9 +338,9 @@ void StaticMap::reassignTracks(const UgvPoseErrors& poses)
     }
 }
 
-int StaticMap::betterObject(int ti, int current, const UgvPoseErrors& poses) const
+int StaticMap::betterObject(int ti, int current) const
 {
-    const TrackEstimate e = trackEstimate(ti, poses);
+    const TrackEstimate& e = trackEstimates_[static_cast<std::size_t>(ti)];
     if (!e.valid) {
         return -1;
     }

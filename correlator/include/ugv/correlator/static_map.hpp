@@ -48,6 +48,13 @@ public:
         std::uint64_t seen = 0;
         std::vector<RangeBearing> samples; ///< a uniform reservoir of the `seen`
     };
+    /// A track's own estimate from its stored samples: the mean, and its covariance (the samples' measurement noise
+    /// averaged, plus their UGV's remaining pose uncertainty, which is common to them).
+    struct TrackEstimate {
+        bool valid = false; ///< false: no samples left
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+    };
     struct Apart {
         int track = -1;
         int instants = 0;
@@ -137,21 +144,15 @@ private:
     /// A track of `x` and one of the object at index `y` were observed at kApartInstants instants by one UGV: two
     /// objects.
     [[nodiscard]] bool seenApart(const StaticObject& x, int y) const;
-    /// A track's own estimate from its stored samples: the mean, and its covariance (the samples' measurement noise
-    /// averaged, plus their UGV's remaining pose uncertainty, which is common to them).
-    struct TrackEstimate {
-        bool valid = false; ///< false: no samples left
-        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-        Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
-    };
-    [[nodiscard]] TrackEstimate trackEstimate(int trackIndex, const UgvPoseErrors& poses) const;
-    /// Moves every track outside its object's gate to the object of its class whose gate it is in (see the .cpp).
+    /// Moves every track outside its object's gate to the object of its class whose gate it is in (see the .cpp);
+    /// the tracks' own estimates are those of the refit just before.
     void reassignTracks(const UgvPoseErrors& poses);
     /// The object track `ti` belongs to rather than `current`: -1 while it is within `current`'s gate, else the
     /// nearest alive object of its class within the gate and not seen apart from it, or -1.
-    [[nodiscard]] int betterObject(int ti, int current, const UgvPoseErrors& poses) const;
-    /// Recomputes an object's estimate from its tracks' stored samples under the current pose model.
-    void refit(StaticObject& object, const UgvPoseErrors& poses) const;
+    [[nodiscard]] int betterObject(int ti, int current) const;
+    /// Recomputes an object's estimate from its tracks' stored samples under the current pose model, and each of
+    /// its tracks' own estimate (trackEstimates_).
+    void refit(StaticObject& object, const UgvPoseErrors& poses);
     void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
     void split(std::size_t object, const UgvPoseErrors& poses, ObjectIds& ids);
     /// The object most of `tracks`' observations first joined, if a merge folded it into the object at `into`
@@ -166,6 +167,7 @@ private:
 
     PoseCorrectedConfig config_;
     std::vector<Track> tracks_;
+    std::vector<TrackEstimate> trackEstimates_; ///< per track, from the last refit of its object
     std::unordered_map<std::string, int> trackIndex_;
     std::vector<StaticObject> objects_;
     /// Per UGV index: the time of its latest observation and the tracks observed then.
