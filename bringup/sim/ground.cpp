@@ -147,35 +147,45 @@ GroundHit GroundModel::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d
 
 GroundLook::GroundLook(const Scene& scene) : shadows_(scene.shadows), reflectors_(scene.reflectors)
 {
+    const auto vec = [](const Chroma& c) { return Eigen::Vector3d(c.b, c.g, c.r); };
+    const Eigen::Vector3d white(1.0, 1.0, 1.0);
+    const Eigen::Vector3d yellow = vec(chromaOf(40.0, 190.0, 230.0)); // road-marking yellow
+    const Eigen::Vector3d steel = vec(chromaOf(200.0, 195.0, 190.0)); // polished rail head, faintly blue
     const Markings& m = scene.markings;
     const double period = m.gapM > 0.0 ? m.dashM + m.gapM : 0.0;
     for (const double y : m.laneLinesY) {
-        stripes_.push_back({y, m.lineWidthM, m.paintAlbedo, period, m.dashM, true});
+        stripes_.push_back({y, m.lineWidthM, m.paintAlbedo, period, m.dashM, true, m.yellowLines ? yellow : white});
     }
     if (m.stopLineX >= 0.0) {
-        stripes_.push_back({m.stopLineX + m.stopLineWidthM / 2.0, m.stopLineWidthM, m.paintAlbedo, 0.0, 0.0, false});
+        stripes_.push_back(
+            {m.stopLineX + m.stopLineWidthM / 2.0, m.stopLineWidthM, m.paintAlbedo, 0.0, 0.0, false, white});
     }
     for (const double y : m.tracksY) {
         for (const double side : {-1.0, 1.0}) {
             const double rail = y + side * m.gaugeM / 2.0;
             const double groove = rail - side * (m.railWidthM + m.grooveWidthM) / 2.0; // inside the track
-            stripes_.push_back({rail, m.railWidthM, m.railAlbedo, 0.0, 0.0, true});
+            stripes_.push_back({rail, m.railWidthM, m.railAlbedo, 0.0, 0.0, true, steel});
             if (m.grooveWidthM > 0.0) {
-                stripes_.push_back({groove, m.grooveWidthM, m.grooveAlbedo, 0.0, 0.0, true});
+                stripes_.push_back({groove, m.grooveWidthM, m.grooveAlbedo, 0.0, 0.0, true, white});
             }
         }
     }
 }
 
+double GroundLook::coverage(const Stripe& s, double x, double y, double footprint) noexcept
+{
+    const double across = s.alongX ? y : x;
+    double covered = intervalCoverage(across, footprint, s.centre - s.width / 2.0, s.centre + s.width / 2.0);
+    if (covered > 0.0 && s.period > 0.0) {
+        covered *= wireCoverage(x, footprint, s.period, s.dash);
+    }
+    return covered;
+}
+
 double GroundLook::albedo(double albedo, double x, double y, double footprint) const noexcept
 {
     for (const Stripe& s : stripes_) {
-        const double across = s.alongX ? y : x;
-        double coverage = intervalCoverage(across, footprint, s.centre - s.width / 2.0, s.centre + s.width / 2.0);
-        if (coverage > 0.0 && s.period > 0.0) {
-            coverage *= wireCoverage(x, footprint, s.period, s.dash);
-        }
-        albedo += coverage * (s.albedo - albedo);
+        albedo += coverage(s, x, y, footprint) * (s.albedo - albedo);
     }
     for (const Shadow& shadow : shadows_) {
         if (insidePolygon(shadow.polygon, x, y)) {
@@ -183,6 +193,19 @@ double GroundLook::albedo(double albedo, double x, double y, double footprint) c
         }
     }
     return albedo;
+}
+
+Eigen::Vector3d GroundLook::colour(Eigen::Vector3d colour, double x, double y, double footprint) const noexcept
+{
+    for (const Stripe& s : stripes_) {
+        colour += coverage(s, x, y, footprint) * (s.albedo * s.chroma - colour);
+    }
+    for (const Shadow& shadow : shadows_) {
+        if (insidePolygon(shadow.polygon, x, y)) {
+            colour *= shadow.factor; // a shadow darkens; its chroma stays the surface's
+        }
+    }
+    return colour;
 }
 
 double GroundLook::reflectance(double x, double y) const noexcept

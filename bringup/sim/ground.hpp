@@ -73,6 +73,10 @@ public:
     /// `albedo` of the bare ground texture at (x, y) with paint, rails and shadows applied; stripes are box-filtered
     /// over `footprint` [m].
     [[nodiscard]] double albedo(double albedo, double x, double y, double footprint) const noexcept;
+    /// albedo() in colour: `colour` is the bare texture's albedo times its chroma (B, G, R); paint, rails and shadows
+    /// apply as in albedo(), each stripe with its own chroma (white or yellow paint, steel, a dark groove), so that the
+    /// luminance of the result is albedo()'s.
+    [[nodiscard]] Eigen::Vector3d colour(Eigen::Vector3d colour, double x, double y, double footprint) const noexcept;
     /// Reflectance of the ground at (x, y): the largest of the reflectors containing it, else 0.
     [[nodiscard]] double reflectance(double x, double y) const noexcept;
 
@@ -84,7 +88,10 @@ private:
         double period = 0.0; // [m] dash period along x; 0 = solid
         double dash = 0.0;   // [m]
         bool alongX = true;
+        Eigen::Vector3d chroma{1.0, 1.0, 1.0}; // B, G, R, luminance 1
     };
+    /// Fraction of the footprint around (x, y) that stripe `s` covers.
+    [[nodiscard]] static double coverage(const Stripe& s, double x, double y, double footprint) noexcept;
     std::vector<Stripe> stripes_;
     const std::vector<Shadow>& shadows_;
     const std::vector<Reflector>& reflectors_;

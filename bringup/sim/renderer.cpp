@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <opencv2/core/matx.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "sim/ground.hpp"
@@ -69,6 +70,7 @@ struct Neg {
 struct ObjectInfo {
     Label label = Label::Positive;
     double albedo = 0.5;
+    Vector3d chroma{1.0, 1.0, 1.0}; ///< B, G, R, luminance 1 (a barrier's dark stripes)
     bool striped = false;
     double depthM = 0.0; ///< [m] a negative obstacle's depth below the ground
 };
@@ -92,7 +94,19 @@ struct RayContext {
     int bounces = kMirrorBounces;
     double pathM = 0.0; ///< [m]
     bool cull = true;
+    bool colour = false; ///< also compute the colour (left image only)
 };
+
+/// What a ray sees: the grey radiance and, when asked for, its colour (B, G, R) whose luminance is the grey one.
+struct Radiance {
+    double grey = 0.0;
+    Vector3d bgr = Vector3d::Zero();
+};
+
+Vector3d toVector(const Chroma& c)
+{
+    return {c.b, c.g, c.r};
+}
 
 struct ScreenRect {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0; // inclusive [px]
@@ -200,19 +214,24 @@ public:
     }
 
     /// Radiance (albedo x shading, before the camera gains) along a ray; fences blend with what lies behind, mirrors
-    /// on the ground with what the reflected ray sees.
-    double radiance(const Vector3d& o, const Vector3d& d, double tMin, const RayContext& ray) const
+    /// on the ground with what the reflected ray sees. The colour (ray.colour) follows the same blends, so that its
+    /// luminance is the grey radiance; the grey arithmetic is the same with or without it.
+    Radiance radiance(const Vector3d& o, const Vector3d& d, double tMin, const RayContext& ray) const
     {
         const Hit hit = trace(o, d, tMin, ray.px, ray.py, ray.view, ray.cull);
         if (hit.surface == Surface::Sky) {
-            return sky(d);
+            const double s = sky(d);
+            return {s, ray.colour ? Vector3d(s * skyChroma_) : Vector3d::Zero()};
         }
         const Vector3d p = o + hit.t * d;
         // [m] pixel footprint, only mildly stretched at grazing incidence: the across-view detail that stereo
         // matching needs is kept, and the supersampling handles the foreshortened direction.
         const double footprint = (ray.pathM + hit.t) / scene_.rig.focalPx /
                                  std::sqrt(std::sqrt(std::max(std::abs(hit.n.dot(d)), kMinIncidence)));
-        const double value = albedo(hit, p, footprint) * shading(hit.n);
+        Vector3d colour = Vector3d::Zero();
+        const double shade = shading(hit.n);
+        const double value = albedo(hit, p, footprint, ray.colour ? &colour : nullptr) * shade;
+        colour *= shade;
         if (hit.surface == Surface::Ground && ray.bounces > 0) {
             const double reflectance = look_.reflectance(p.x(), p.y());
             if (reflectance > 0.0) {
@@ -221,11 +240,13 @@ public:
                 mirrored.bounces = ray.bounces - 1;
                 mirrored.pathM = ray.pathM + hit.t;
                 const Vector3d r = d - 2.0 * d.dot(hit.n) * hit.n;
-                return (1.0 - reflectance) * value + reflectance * radiance(p, r, kBehindEpsM, mirrored);
+                const Radiance seen = radiance(p, r, kBehindEpsM, mirrored);
+                return {(1.0 - reflectance) * value + reflectance * seen.grey,
+                        (1.0 - reflectance) * colour + reflectance * seen.bgr};
             }
         }
         if (hit.prim < 0 || !isFence(hit.prim) || ray.layers <= 0) {
-            return value;
+            return {value, colour};
         }
         const Prim& f = prims_[static_cast<std::size_t>(hit.prim)];
         double lx = 0.0;
@@ -237,8 +258,8 @@ public:
         const double coverage = 1.0 - (1.0 - across) * (1.0 - up);
         RayContext behindRay = ray;
         behindRay.layers = ray.layers - 1;
-        const double behind = radiance(o, d, hit.t + kBehindEpsM, behindRay);
-        return coverage * value + (1.0 - coverage) * behind;
+        const Radiance behind = radiance(o, d, hit.t + kBehindEpsM, behindRay);
+        return {coverage * value + (1.0 - coverage) * behind.grey, coverage * colour + (1.0 - coverage) * behind.bgr};
     }
 
 private:
@@ -253,6 +274,7 @@ private:
             const double s = std::sin(o.yawDeg * kDegToRad);
             ObjectInfo info;
             info.albedo = o.albedo;
+            info.chroma = toVector(o.chroma.value_or(defaultChroma(o.type)));
             info.striped = o.type == ObstacleType::Barrier;
             // The object stands on the ground at its footprint centre; parts that touch the ground reach `sink`
             // below it, so that no gap opens under them where the ground falls away (the ground hides the rest).
@@ -715,35 +737,48 @@ private:
         return kAmbient + kDiffuse * std::max(n.dot(kSun), 0.0);
     }
 
-    double albedo(const Hit& hit, const Vector3d& p, double footprint) const
+    /// Albedo of the hit surface at p; with `colour`, also its colour (albedo times the surface's chroma).
+    double albedo(const Hit& hit, const Vector3d& p, double footprint, Vector3d* colour) const
     {
         constexpr std::uint32_t kGroundSeed = 101U;
         constexpr std::uint32_t kObjectSeed = 202U;
         constexpr std::uint32_t kSoilSeed = 303U;
         constexpr std::uint32_t kFarSeed = 404U;
         constexpr double kMinAlbedo = 0.02;
+        // The colour: the albedo times the surface's chroma (a surface of one colour), or for the ground the same
+        // mixing of paint and shadows on colours.
+        const auto tinted = [colour](double a, const Vector3d& chroma) {
+            if (colour != nullptr) {
+                *colour = a * chroma;
+            }
+            return a;
+        };
         switch (hit.surface) {
         case Surface::Ground: {
             const GroundStyle g = groundStyle(scene_.texture);
             const double v = g.base + g.spread * detail::fbm2(p.x(), p.y(), g.octaves, footprint, kGroundSeed);
+            if (colour != nullptr) {
+                *colour = look_.colour(std::clamp(v, kMinAlbedo, 1.0) * groundChromaAt(p, footprint), p.x(), p.y(),
+                                       footprint);
+            }
             return look_.albedo(std::clamp(v, kMinAlbedo, 1.0), p.x(), p.y(), footprint);
         }
         case Surface::Kerb: { // kerb stones: concrete, like the curb obstacle
             constexpr double kKerbAlbedo = 0.65;
             constexpr std::uint32_t kKerbSeed = 505U;
             const double v = kKerbAlbedo + 0.6 * detail::fbm3(p.x(), p.y(), p.z(), kObject, footprint, kKerbSeed);
-            return std::clamp(v, kMinAlbedo, 1.0);
+            return tinted(std::clamp(v, kMinAlbedo, 1.0), concreteChroma_);
         }
         case Surface::HoleWall:
         case Surface::HoleFloor: {
             // Darker soil; the floor darker still (less sky visible from inside).
             const double occlusion = hit.surface == Surface::HoleFloor ? 0.6 : 0.8;
             const double v = 0.35 + 0.5 * detail::fbm3(p.x(), p.y(), p.z(), kSoil, footprint, kSoilSeed);
-            return std::clamp(v * occlusion, kMinAlbedo, 1.0);
+            return tinted(std::clamp(v * occlusion, kMinAlbedo, 1.0), info(hit.obstacle).chroma);
         }
         case Surface::Background: {
             const double v = 0.45 + 0.5 * detail::fbm3(p.x(), p.y(), p.z(), kFar, footprint, kFarSeed);
-            return std::clamp(v, kMinAlbedo, 1.0);
+            return tinted(std::clamp(v, kMinAlbedo, 1.0), backgroundChroma_);
         }
         case Surface::Object:
             break;
@@ -759,9 +794,24 @@ private:
             double ly = 0.0;
             toLocal(p.x(), p.y(), b.cx, b.cy, b.cosYaw, b.sinYaw, lx, ly);
             const bool light = static_cast<long>(std::floor((ly + p.z()) / kStripeM)) % 2 == 0;
-            return std::clamp((light ? 0.8 : 0.25) + 0.3 * n, kMinAlbedo, 1.0);
+            return tinted(std::clamp((light ? 0.8 : 0.25) + 0.3 * n, kMinAlbedo, 1.0),
+                          light ? Vector3d(1.0, 1.0, 1.0) : info.chroma);
         }
-        return std::clamp(info.albedo + 0.6 * n, kMinAlbedo, 1.0);
+        return tinted(std::clamp(info.albedo + 0.6 * n, kMinAlbedo, 1.0), info.chroma);
+    }
+
+    /// The ground texture's chroma at p: grass drifts between lush and dry over metres, the others are uniform.
+    Vector3d groundChromaAt(const Vector3d& p, double footprint) const
+    {
+        if (scene_.texture != GroundTexture::Grass) {
+            return groundChroma_;
+        }
+        constexpr std::array<Octave, 2> kHue = {{{0.6, 0.5}, {2.5, 0.7}}};
+        constexpr std::uint32_t kHueSeed = 606U;
+        constexpr double kHueGain = 0.9;
+        const std::uint32_t seed = kHueSeed + scene_.colourSeed * 7919U;
+        const double dry = std::clamp(0.5 + kHueGain * detail::fbm2(p.x(), p.y(), kHue, footprint, seed), 0.0, 1.0);
+        return (1.0 - dry) * lushGrass_ + dry * dryGrass_;
     }
 
     const Scene& scene_;
@@ -773,6 +823,13 @@ private:
     std::vector<Neg> negs_;
     std::vector<ObjectInfo> infos_;
     std::array<std::vector<ScreenRect>, 2> rects_;
+    // Chromas of the colour image (B, G, R, luminance 1); the reference colours are in bringup/sim/README.md.
+    Vector3d groundChroma_ = toVector(groundChroma(scene_.texture));
+    Vector3d lushGrass_ = toVector(chromaOf(40.0, 120.0, 60.0));
+    Vector3d dryGrass_ = toVector(chromaOf(50.0, 115.0, 100.0));
+    Vector3d concreteChroma_ = toVector(defaultChroma(ObstacleType::Curb));
+    Vector3d backgroundChroma_ = toVector(chromaOf(100.0, 110.0, 140.0)); // buildings: brick and render
+    Vector3d skyChroma_ = toVector(chromaOf(235.0, 215.0, 190.0));        // hazy blue
     Vector3d forward_, right_, down_, originL_, vehicleOrigin_;
     double cosYaw_ = 1.0;
     double sinYaw_ = 0.0;
@@ -940,13 +997,16 @@ void renderTruth(const Tracer& tracer, const Scene& scene, const RenderOptions& 
     finishSectors(sectors.hits, sectors.seesGround, options, out.sectors);
 }
 
-/// JPEG round trip of an 8-bit image at `quality` (1..100).
+/// JPEG round trip of an 8-bit grey or BGR image at `quality` (1..100).
 void compressJpeg(cv::Mat& image, int quality)
 {
     std::vector<std::uint8_t> bytes;
     cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
-    image = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+    image = cv::imdecode(bytes, image.channels() == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
 }
+
+/// BT.601 luminance weights of B, G, R (OpenCV's BGR2GRAY).
+const Vector3d kLuma(0.114, 0.587, 0.299);
 
 /// Images: samplesPerAxis^2 stratified, jittered rays per pixel, then gains, gradient, vignetting, noise, JPEG.
 void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions& options, RenderResult& out)
@@ -957,6 +1017,13 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
     const double cornerSq = rig.cx() * rig.cx() + rig.cy() * rig.cy(); // [px^2]
     std::mt19937_64 rng(scene.seed);
     std::normal_distribution<double> noise(0.0, 1.0);
+    // Colour noise of its own (the grey image's draws stay as they were): per-channel Gaussian noise less its
+    // luminance, so that the colour image's luminance noise is the grey image's.
+    constexpr std::uint64_t kChromaNoiseSeed = 0x9e3779b97f4a7c15ULL;
+    // (A distribution of its own too: std::normal_distribution keeps the second value of each pair it draws.)
+    std::mt19937_64 chromaRng(scene.seed ^ kChromaNoiseSeed);
+    std::normal_distribution<double> chromaNoiseDist(0.0, 1.0);
+    out.leftColour.create(rig.height, rig.width, CV_8UC3);
     for (int view = 0; view < 2; ++view) {
         cv::Mat& img = view == 0 ? out.left : out.right;
         img.create(rig.height, rig.width, CV_8U);
@@ -965,16 +1032,23 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
         const double offset = light.offsetGrey + (view == 0 ? 0.0 : light.rightOffsetGrey); // [grey levels]
         const double vignette = view == 0 ? light.vignetteLeft : light.vignetteRight;
         const auto jitterSeed = static_cast<std::uint32_t>(scene.seed * 7919U + static_cast<std::uint64_t>(view));
+        const bool colour = view == 0;
         for (int y = 0; y < rig.height; ++y) {
             auto* row = img.ptr<std::uint8_t>(y);
+            auto* colourRow = out.leftColour.ptr<cv::Vec3b>(y);
             for (int x = 0; x < rig.width; ++x) {
                 double sum = 0.0;
+                Vector3d sumColour = Vector3d::Zero();
                 for (int k = 0; k < n * n; ++k) {
                     const double jx = detail::lattice(x, y, 2 * k, jitterSeed);
                     const double jy = detail::lattice(x, y, 2 * k + 1, jitterSeed);
                     const double u = x - 0.5 + ((k % n) + jx) / n;
                     const double v = y - 0.5 + ((k / n) + jy) / n;
-                    sum += tracer.radiance(o, tracer.direction(u, v), 0.0, RayContext{x, y, view});
+                    RayContext ray{x, y, view};
+                    ray.colour = colour;
+                    const Radiance r = tracer.radiance(o, tracer.direction(u, v), 0.0, ray);
+                    sum += r.grey;
+                    sumColour += r.bgr;
                 }
                 double gradient = 1.0 + light.gradientX * ((x - rig.cx()) / rig.width) +
                                   light.gradientY * ((y - rig.cy()) / rig.height);
@@ -983,13 +1057,26 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
                     const double dy = y - rig.cy();
                     gradient *= 1.0 - vignette * (dx * dx + dy * dy) / cornerSq;
                 }
-                const double grey =
-                    255.0 * cameraGain * gradient * (sum / (n * n)) + offset + light.noiseSigmaGrey * noise(rng);
+                const double greyNoise = light.noiseSigmaGrey * noise(rng);
+                const double grey = 255.0 * cameraGain * gradient * (sum / (n * n)) + offset + greyNoise;
                 row[x] = static_cast<std::uint8_t>(std::clamp(std::lround(grey), 0L, 255L));
+                if (colour) {
+                    Vector3d chromaNoise(chromaNoiseDist(chromaRng), chromaNoiseDist(chromaRng),
+                                         chromaNoiseDist(chromaRng));
+                    chromaNoise -= Vector3d::Constant(kLuma.dot(chromaNoise));
+                    const Vector3d bgr = 255.0 * cameraGain * gradient * (sumColour / (n * n)) +
+                                         Vector3d::Constant(offset + greyNoise) + light.noiseSigmaGrey * chromaNoise;
+                    for (int c = 0; c < 3; ++c) {
+                        colourRow[x][c] = static_cast<std::uint8_t>(std::clamp(std::lround(bgr[c]), 0L, 255L));
+                    }
+                }
             }
         }
         if (light.jpegQuality > 0) {
             compressJpeg(img, light.jpegQuality);
+            if (colour) {
+                compressJpeg(out.leftColour, light.jpegQuality);
+            }
         }
     }
 }

@@ -42,7 +42,10 @@ struct RenderOptions {
 
 /// One rendered stereo pair with its ground truth (all images rig.width x rig.height).
 struct RenderResult {
-    cv::Mat left;            ///< CV_8UC1 grey
+    cv::Mat left; ///< CV_8UC1 grey
+    /// CV_8UC3 BGR of the left camera: the same radiance with each surface's Chroma, so that its luminance
+    /// (OpenCV BGR2GRAY) is `left` within rounding, where no channel clips at 0 or 255 (bringup/sim/README.md).
+    cv::Mat leftColour;
     cv::Mat right;           ///< CV_8UC1 grey
     cv::Mat disparity;       ///< CV_32F [px] of the left image, fx * baseline / Z; exactly 0 for sky (Z = infinity)
     cv::Mat depth;           ///< CV_32F [m] Z along the left optical axis; +inf for sky

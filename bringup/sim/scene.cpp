@@ -107,6 +107,57 @@ double Rig::hfovDeg() const noexcept
     return 2.0 * std::atan(width / (2.0 * focalPx)) * kRadToDeg;
 }
 
+Chroma chromaOf(double b, double g, double r) noexcept
+{
+    const double luminance = 0.114 * b + 0.587 * g + 0.299 * r;
+    if (!(luminance > 0.0)) {
+        return {};
+    }
+    return {b / luminance, g / luminance, r / luminance};
+}
+
+Chroma groundChroma(GroundTexture texture) noexcept
+{
+    // Reference colours (8-bit B, G, R) of the materials in daylight; the README's table lists them.
+    switch (texture) {
+    case GroundTexture::Grass:
+        return chromaOf(45.0, 118.0, 80.0); // between lush (40, 120, 60) and dry (50, 115, 100) grass
+    case GroundTexture::Gravel:
+        return chromaOf(100.0, 112.0, 125.0); // grey-brown crushed stone
+    case GroundTexture::PaintedFloor:
+        return chromaOf(95.0, 130.0, 90.0); // green epoxy workshop floor
+    case GroundTexture::Asphalt:
+        break;
+    }
+    return chromaOf(92.0, 88.0, 85.0); // dark grey, a trace of blue
+}
+
+Chroma defaultChroma(ObstacleType type) noexcept
+{
+    switch (type) {
+    case ObstacleType::Pole:
+    case ObstacleType::MeshFence:
+        return chromaOf(128.0, 125.0, 122.0); // galvanised steel: grey, close to asphalt (a hard case)
+    case ObstacleType::TableLegs:
+        return chromaOf(70.0, 110.0, 150.0); // wood
+    case ObstacleType::Box:
+        return chromaOf(85.0, 130.0, 170.0); // cardboard
+    case ObstacleType::Barrier:
+        return chromaOf(40.0, 40.0, 200.0); // red stripes (the light stripes are white)
+    case ObstacleType::Curb:
+    case ObstacleType::Overhang:
+        return chromaOf(150.0, 152.0, 155.0); // concrete: near neutral (a hard case on asphalt)
+    case ObstacleType::WallWithDoorway:
+        return chromaOf(150.0, 180.0, 200.0); // beige plaster
+    case ObstacleType::Person:
+        return chromaOf(140.0, 80.0, 50.0); // blue jacket and jeans
+    case ObstacleType::Trench:
+    case ObstacleType::Hole:
+        break;
+    }
+    return chromaOf(50.0, 75.0, 100.0); // brown soil
+}
+
 std::pair<double, double> obstacleCentre(const Obstacle& obstacle) noexcept
 {
     const double r = obstacle.rangeM + centreOffsetM(obstacle);

@@ -13,6 +13,7 @@
 /// Thread-safety: plain data and pure functions (reentrant). RT-safe: no (host tooling; allocates).
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -42,6 +43,21 @@ struct Rig {
 
 /// Procedural ground textures (fBm of value noise in world coordinates).
 enum class GroundTexture : std::uint8_t { Asphalt, Grass, Gravel, PaintedFloor };
+
+/// A surface colour as a chroma: factors of B, G and R around the grey level, with the luminance
+/// 0.114 b + 0.587 g + 0.299 r (ITU-R BT.601, OpenCV's BGR2GRAY) equal to 1, so that the colour image of a surface
+/// of grey radiance L is (b, g, r) * L and its luminance is the grey image's L. (1, 1, 1) is neutral grey.
+struct Chroma {
+    double b = 1.0;
+    double g = 1.0;
+    double r = 1.0;
+};
+
+/// The chroma of a reference colour given as 8-bit B, G, R (any brightness: only the ratios count).
+[[nodiscard]] Chroma chromaOf(double b, double g, double r) noexcept;
+
+/// The mean chroma of a ground texture (grass varies around it; see bringup/sim/README.md, "Colour").
+[[nodiscard]] Chroma groundChroma(GroundTexture texture) noexcept;
 
 /// Photometric variation. Grey value = 255 * gain * cameraGain * gradient(u, v) * albedo * shading + offset
 /// + N(0, noiseSigma), clamped to [0, 255].
@@ -83,6 +99,7 @@ struct Markings {
     double stopLineX = -1.0;        ///< [m] world x of the near edge of a stop line across the view; < 0 = none
     double stopLineWidthM = 0.3;    ///< [m]
     double paintAlbedo = 0.85;
+    bool yellowLines = false;    ///< colour image: lane lines yellow (a centre line) instead of white
     std::vector<double> tracksY; ///< [m] world y of tram track centre lines (two rails each, along x)
     double gaugeM = 1.435;       ///< [m] between the rail centres
     double railWidthM = 0.07;    ///< [m] rail head (polished steel, bright)
@@ -156,7 +173,13 @@ struct Obstacle {
     double wireM = 0.0;      ///< [m] mesh fence wire diameter
     bool round = true;       ///< hole: round (radiusM) or square (side widthM)
     double albedo = 0.5;     ///< mean albedo of the procedural texture, (0, 1]
+    /// Colour image only: the object's chroma; nullopt = its kind's default (defaultChroma()).
+    std::optional<Chroma> chroma;
 };
+
+/// The default chroma of an obstacle kind (bringup/sim/README.md, "Colour"); a barrier's dark stripes (its light ones
+/// are white), a hole's or trench's soil.
+[[nodiscard]] Chroma defaultChroma(ObstacleType type) noexcept;
 
 /// Vertical cylinder; range to its nearest point (centre at range + radius).
 [[nodiscard]] Obstacle pole(double rangeM, double bearingDeg, double radiusM = 0.06, double heightM = 1.5);
@@ -208,6 +231,8 @@ struct Scene {
     Background background;
     std::vector<Obstacle> obstacles; ///< each stands on the ground at its footprint centre
     std::uint64_t seed = 1;          ///< sensor noise and sub-pixel jitter
+    /// Colour image only: which hue pattern the grass has (another lawn); the grey images do not depend on it.
+    std::uint32_t colourSeed = 0;
     GroundShape ground;
     Markings markings;
     std::vector<Shadow> shadows;

@@ -106,6 +106,7 @@ Result<void, Error> writeSample(const RenderResult& sample, const Rig& rig, cons
     };
     const std::vector<Item> items = {
         {"_left.png", sample.left},
+        {"_left_colour.png", sample.leftColour},
         {"_right.png", sample.right},
         {"_disparity.png", toU16(sample.disparity, kDisparityScale)},
         {"_depth.png", toU16(sample.depth, kDepthScale)},

@@ -5,6 +5,7 @@
 ///
 /// Files for `stem` in `dir`:
 /// - `<stem>_left.png`, `<stem>_right.png`: 8-bit grey images.
+/// - `<stem>_left_colour.png`: the left image in colour (8-bit BGR; its luminance is `<stem>_left.png`).
 /// - `<stem>_disparity.png`: 16-bit, value = round(disparity [px] * 256); 0 = sky (no disparity).
 /// - `<stem>_depth.png`: 16-bit, value = round(Z [mm]); 0 = sky; saturates at 65535 (65.535 m).
 /// - `<stem>_labels.png` (8-bit, values of sim::Label) and `<stem>_ids.png` (16-bit obstacle index + 1).

@@ -1,5 +1,6 @@
 // ugvsense detect: one-shot obstacle detection on one stereo pair with a calibration file; prints the sectors and
-// optionally writes them (with the ground estimate) as JSON and an overlay PNG.
+// optionally writes them (with the ground estimate) as JSON and an overlay PNG. With --mono, the one-camera mode:
+// vision::ColourFreeSpace on the left image read in colour, the ground from the calibration's mount.
 
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -18,6 +20,7 @@
 #include "detection.hpp"
 #include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
+#include "ugv/vision/colour_free_space.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
@@ -114,14 +117,100 @@ void printSectors(const ObstacleSectors& sectors)
     }
 }
 
+/// The one-camera mode's result: the ground it used (the mount), its reference patch and the sectors.
+bool writeMonoJson(const std::string& path, const vision::GroundPlane& g, const vision::ColourFreeSpace& colour,
+                   const ObstacleSectors& sectors)
+{
+    std::ofstream out(path);
+    if (!out) {
+        return false;
+    }
+    const vision::ColourReference& ref = colour.reference();
+    out << "{\n  \"detector\": \"colour\",\n  \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
+        << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
+        << ", \"source\": \"configured mount\"},\n  \"reference\": {\"mean_saturation\": "
+        << jsonNumber(ref.meanSaturation) << ", \"mean_value\": " << jsonNumber(ref.meanValue)
+        << ", \"consistency\": " << jsonNumber(ref.consistency)
+        << ", \"ground_like\": " << (ref.groundLike ? "true" : "false")
+        << "},\n  \"degraded\": " << (sectors.degraded ? "true" : "false") << ",\n  \"count\": " << sectors.count
+        << ",\n  \"sectors\": " << sectorsJsonArray(sectors, 4) << "\n}\n";
+    out.flush();
+    return static_cast<bool>(out);
+}
+
+/// `detect --mono`: ColourFreeSpace on the left image (rectified with the calibration's left camera unless the
+/// calibration is already in rectified form); the ground plane is the calibration's mount.
+int runMono(const Args& args, const vision::StereoCalibration& calib, const DetectionOptions& options)
+{
+    if (!calib.mount) {
+        return fail(Error{args.get("calib"), "no mount: one camera cannot estimate the ground",
+                          "add the mount (height_m, pitch_deg, roll_deg) to the calibration"});
+    }
+    std::string why;
+    const cv::Mat image = readImage(args.get("left"), cv::IMREAD_COLOR, &why);
+    if (image.empty()) {
+        return fail(Error{args.get("left"), why, "give an existing 8-bit image file"});
+    }
+    if (image.size() != calib.imageSize) {
+        return fail(Error{args.get("left"), "image size does not match the calibration",
+                          "use the calibration of this camera at this resolution"});
+    }
+    vision::RectifierConfig rectConfig;
+    rectConfig.fullFrame = true;
+    auto rectifier = vision::Rectifier::create(calib, rectConfig);
+    if (!rectifier) {
+        return fail(rectifier.error());
+    }
+    cv::Mat left = image;
+    if (!calib.rectified) {
+        try {
+            cv::Mat mapX;
+            cv::Mat mapY;
+            cv::initUndistortRectifyMap(calib.K1, calib.D1, calib.R1, calib.P1, calib.imageSize, CV_32FC1, mapX, mapY);
+            cv::remap(image, left, mapX, mapY, cv::INTER_LINEAR);
+        } catch (const std::exception& e) {
+            return fail(Error{args.get("calib"), std::string("cannot rectify the left image: ") + e.what(),
+                              "check the calibration file"});
+        }
+    }
+    vision::ColourFreeSpaceConfig config;
+    config.sectorCount = options.sectorCount;
+    config.dangerDistanceM = options.dangerM;
+    config.cautionDistanceM = options.cautionM;
+    const vision::GroundPlane ground = vision::GroundPlane::fromMount(*calib.mount);
+    auto colour = vision::ColourFreeSpace::create(config, calib.imageSize, rectifier->projection(), ground);
+    if (!colour) {
+        return fail(colour.error());
+    }
+    ObstacleSectors sectors;
+    (void)colour->process(bgrViewOf(left), sectors); // the size was checked: always Ok
+    const vision::ColourReference& ref = colour->reference();
+    std::printf("one camera (ColourFreeSpace): ground from the mount: height %.3f m, pitch %.2f deg, roll %.2f deg; "
+                "reference patch: saturation %.1f, value %.1f, consistency %.2f -> %s\n",
+                ground.heightM, ground.pitchDeg(), ground.rollDeg(), ref.meanSaturation, ref.meanValue, ref.consistency,
+                ref.groundLike ? "ground-like" : "NOT ground-like (all sectors Unknown)");
+    printSectors(sectors);
+    if (args.has("json")) {
+        if (!writeMonoJson(args.get("json"), ground, *colour, sectors)) {
+            return fail(Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
+        }
+        std::printf("wrote %s\n", args.get("json").c_str());
+    }
+    return 0;
+}
+
 } // namespace
 
 int runDetect(int argc, char** argv)
 {
-    Args args("detect", "--calib FILE --left L.png --right R.png [--json OUT] [--overlay OUT.png] [options]",
+    Args args("detect", "--calib FILE --left L.png (--right R.png | --mono) [--json OUT] [--overlay OUT.png] [options]",
               {{"calib", "FILE", "calibration file (full or already-rectified form; mount optional)", true},
                {"left", "L.png", "left image", true},
-               {"right", "R.png", "right image", true},
+               {"right", "R.png", "right image (required unless --mono)", false},
+               {"mono", "",
+                "one camera: ColourFreeSpace on the left image read in colour (no --right); the ground is the "
+                "calibration's mount (required)",
+                false},
                {"json", "OUT", "write the ground estimate and the sectors as JSON", false},
                {"overlay", "OUT.png", "write the rectified left image with obstacles and the sector bar", false},
                {"sectors", "N", "number of sectors, 1..180, default 64", false},
@@ -146,6 +235,15 @@ int runDetect(int argc, char** argv)
             return reportUsageError("detect", value->error());
         }
     }
+    const bool mono = args.has("mono");
+    if (!mono && !args.has("right")) {
+        return reportUsageError("detect", Error{"ugvsense detect", "missing required option '--right R.png'",
+                                                "give --right, or --mono for one camera"});
+    }
+    if (mono && (args.has("right") || args.has("overlay"))) {
+        return reportUsageError("detect", Error{"ugvsense detect --mono", "--right and --overlay are stereo options",
+                                                "leave them out with --mono"});
+    }
     if (*sectorCount != std::floor(*sectorCount) || *caution < *danger) {
         return reportUsageError("detect", Error{"ugvsense detect", "--sectors must be whole and --caution >= --danger",
                                                 "see 'ugvsense detect --help'"});
@@ -156,6 +254,9 @@ int runDetect(int argc, char** argv)
     auto calib = bringup::loadCalibration(args.get("calib"));
     if (!calib) {
         return fail(calib.error());
+    }
+    if (mono) {
+        return runMono(args, *calib, options);
     }
     std::string why;
     const cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, &why);

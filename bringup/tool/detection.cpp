@@ -69,6 +69,12 @@ ConstImageViewU8 viewOf(const cv::Mat& grey)
     return ConstImageViewU8(grey.ptr<std::uint8_t>(0), grey.cols, grey.rows, static_cast<std::ptrdiff_t>(grey.step));
 }
 
+vision::ConstBgrView bgrViewOf(const cv::Mat& bgr)
+{
+    CV_Assert(bgr.type() == CV_8UC3);
+    return {bgr.ptr<vision::BgrPixel>(0), bgr.cols, bgr.rows, static_cast<std::ptrdiff_t>(bgr.step)};
+}
+
 Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const vision::RectifiedProjection& projection)
 {
     const std::string where = "ground estimate";

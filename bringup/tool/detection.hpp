@@ -16,6 +16,7 @@
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugv/platform/sectors_json.hpp" // stateName, kindName, className, jsonNumber, sectorsJsonArray
+#include "ugv/vision/colour_free_space.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
@@ -34,6 +35,9 @@ vision::DetectorConfig detectorConfig(const DetectionOptions& options);
 
 /// Read-only view of a continuous or strided CV_8UC1 matrix (the matrix must outlive the view).
 ConstImageViewU8 viewOf(const cv::Mat& grey);
+
+/// Read-only view of a CV_8UC3 BGR matrix, for vision::ColourFreeSpace (the matrix must outlive the view).
+vision::ConstBgrView bgrViewOf(const cv::Mat& bgr);
 
 /// A ground plane fitted to a disparity map without a prior (calibration without a mount).
 struct GroundFit {

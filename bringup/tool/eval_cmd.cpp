@@ -29,6 +29,7 @@
 #include "real_eval.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
+#include "ugv/vision/colour_free_space.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/matcher_mode.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
@@ -82,6 +83,7 @@ struct SimOptions {
     std::vector<double> groundRanges = {1.5, 2.5, 3.75, 5.25, 7.0, 9.0};                ///< [m] ... at these ranges
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
     bool groundPrior = false; ///< RoiMatcherConfig::groundPrior
+    bool colour = false;      ///< --detector colour: ColourFreeSpace on the left colour image, not stereo
 };
 
 const char* textureName(sim::GroundTexture t)
@@ -100,9 +102,11 @@ const char* textureName(sim::GroundTexture t)
 }
 
 /// One detector for the default rig (level, 0.59 m), fed with rendered frames; the ground prior is the rig mount.
+/// The stereo detector on the grey pair, or (colour) the one-camera ColourFreeSpace on the left colour image, with
+/// the same sector layout and the same mount.
 class SimDetector {
 public:
-    static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior)
+    static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior, bool colour)
     {
         const sim::Rig rig;
         vision::StereoCalibration calib = vision::makeRectifiedCalibration(
@@ -124,25 +128,49 @@ public:
         }
         const vision::DisparityPlane ground =
             vision::GroundPlane::fromMount(*calib.mount).disparityPlane(rectifier->projection());
-        return SimDetector(std::move(rectifier).value(), std::move(detector).value(), ground);
+        std::optional<vision::ColourFreeSpace> colourFreeSpace;
+        if (colour) {
+            vision::ColourFreeSpaceConfig colourConfig;
+            colourConfig.sectorCount = config.sectors.sectorCount;
+            colourConfig.dangerDistanceM = config.sectors.dangerDistanceM;
+            colourConfig.cautionDistanceM = config.sectors.cautionDistanceM;
+            auto made =
+                vision::ColourFreeSpace::create(colourConfig, cv::Size(rig.width, rig.height), rectifier->projection(),
+                                                vision::GroundPlane::fromMount(*calib.mount));
+            if (!made) {
+                return Unexpected(made.error());
+            }
+            colourFreeSpace = std::move(made).value();
+        }
+        return SimDetector(std::move(rectifier).value(), std::move(detector).value(), ground,
+                           std::move(colourFreeSpace));
     }
 
     /// Renders `scene` and runs the detector on it; false when rendering or detection failed.
     bool run(const sim::Scene& scene, sim::RenderResult& rendered)
     {
-        auto result = sim::render(scene);
+        auto result = colour_ ? renderColour(scene) : sim::render(scene);
         if (!result) {
             std::cerr << "ugvsense eval: error: " << result.error().message() << '\n';
             return false;
         }
         rendered = std::move(result).value();
+        if (colour_) {
+            ++frames_;
+            const bool ok =
+                colour_->process(bgrViewOf(rendered.leftColour), colourSectors_) == vision::ColourFreeSpaceStatus::Ok;
+            notGroundLike_ += colour_->reference().groundLike ? 0 : 1;
+            return ok;
+        }
         if (rectifier_.rectify(viewOf(rendered.left), viewOf(rendered.right)) != vision::RectifyStatus::Ok) {
             return false;
         }
         (void)detector_.process(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), frames_++, 0);
         return detector_.status() == vision::DetectorStatus::Ok;
     }
-    [[nodiscard]] const ObstacleSectors& sectors() const { return detector_.sectors(); }
+    [[nodiscard]] const ObstacleSectors& sectors() const { return colour_ ? colourSectors_ : detector_.sectors(); }
+    /// Colour detector: frames so far whose reference patch was not ground-like (all sectors Unknown).
+    [[nodiscard]] int notGroundLikeFrames() const { return notGroundLike_; }
     /// The rig's ground (its mount) as a disparity model of the rectified left image.
     [[nodiscard]] const vision::DisparityPlane& ground() const { return ground_; }
     /// Frames run so far (each one rendered and detected).
@@ -154,13 +182,26 @@ public:
     }
 
 private:
-    SimDetector(vision::Rectifier rectifier, vision::ObstacleDetector detector, const vision::DisparityPlane& ground)
-        : rectifier_(std::move(rectifier)), detector_(std::move(detector)), ground_(ground)
+    /// The scene with a lawn of its own per frame (Scene::colourSeed): the ground's texture is fixed in the world and
+    /// the reference patch sees the same piece of it in every scene, so without this all grass frames would judge one
+    /// hue pattern.
+    Result<sim::RenderResult, Error> renderColour(const sim::Scene& scene) const
+    {
+        sim::Scene lawn = scene;
+        lawn.colourSeed = static_cast<std::uint32_t>(frames_);
+        return sim::render(lawn);
+    }
+    SimDetector(vision::Rectifier rectifier, vision::ObstacleDetector detector, const vision::DisparityPlane& ground,
+                std::optional<vision::ColourFreeSpace> colour)
+        : rectifier_(std::move(rectifier)), detector_(std::move(detector)), ground_(ground), colour_(std::move(colour))
     {
     }
     vision::Rectifier rectifier_;
     vision::ObstacleDetector detector_;
     vision::DisparityPlane ground_;
+    std::optional<vision::ColourFreeSpace> colour_;
+    ObstacleSectors colourSectors_;
+    int notGroundLike_ = 0;
     std::uint64_t frames_ = 0;
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
@@ -186,7 +227,7 @@ std::vector<std::string> obstacleTypes(const SimOptions& o)
 /// A fresh detector for a run (the ground estimate's smoothing starts anew); prints the error when it cannot be made.
 std::optional<SimDetector> makeSimDetector(const SimOptions& o)
 {
-    auto detector = SimDetector::create(o.matcher, o.groundPrior);
+    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.colour);
     if (!detector) {
         std::cerr << "ugvsense eval: error: " << detector.error().message() << '\n';
         return std::nullopt;
@@ -202,6 +243,7 @@ struct ObstacleCase {
     sim::GroundTexture texture;
     std::string ground; ///< sim::applyCondition name; empty: none
     int variant;
+    std::optional<sim::Chroma> chroma = std::nullopt; ///< the obstacle's colour; nullopt: its kind's default
 };
 
 /// The band of kBands holding `rangeM`, or -1.
@@ -224,6 +266,11 @@ bool runObstacleCase(const SimOptions& o, SimDetector& det, const ObstacleCase& 
         auto scene = sim::makeScene(c.type, c.rangeM, honoursBearing(c.type) ? c.bearingDeg : 0.0, c.texture,
                                     static_cast<std::uint64_t>(seed));
         const bool made = scene.has_value() && (c.ground.empty() || sim::applyCondition(*scene, c.ground, c.variant));
+        if (made && c.chroma) {
+            for (sim::Obstacle& obstacle : scene->obstacles) {
+                obstacle.chroma = c.chroma;
+            }
+        }
         if (!made || !det.run(*scene, frame)) {
             std::cerr << "ugvsense eval: error: scene " << c.type << (c.ground.empty() ? "" : " over " + c.ground)
                       << " failed\n";
@@ -383,6 +430,163 @@ int runGroundsSuite(const SimOptions& o, SimDetector& det, std::ostringstream& j
     const double seconds = det.seconds() - secondsBefore;
     std::printf("new grounds: %d frames in %.1f s\n", frames, seconds);
     json << "\n      ],\n      \"frames\": " << frames << ",\n      \"seconds\": " << jsonNumber(seconds) << "\n    }";
+    return 0;
+}
+
+/// Issue 23's targets for the one-camera mode: each positive obstacle type detected in >= 90 % of its frames at
+/// 1-6 m on every ground; <= 2 % of the sectors of empty ground reported Obstacle.
+constexpr double kColourTargetDetection = 0.90;
+constexpr double kColourTargetFalseSectors = 0.02;
+constexpr double kColourMaxRangeM = 6.0; ///< [m]
+constexpr int kColourLabelColumn = 18;   ///< [chars]
+
+bool isNegativeType(const std::string& type)
+{
+    return type == "trench" || type == "hole" || type == "hole_square";
+}
+
+/// The one-camera mode (`--detector colour`): ColourFreeSpace on the left colour image, scored by the stereo
+/// suite's scorer (scoreObstacleFrame) per obstacle type and ground at 1-6 m, plus the hard case of a box painted
+/// the ground's own colour, and the false Obstacle sectors of empty ground. Negative obstacles are listed for
+/// information (the target names the positive ones). Appends the "colour" object to `json`.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runColourSuite(const SimOptions& o, std::ostringstream& json)
+{
+    std::optional<SimDetector> detector = makeSimDetector(o);
+    if (!detector) {
+        return 1;
+    }
+    SimDetector& det = *detector;
+    struct Row {
+        std::string label;
+        std::string type;
+        bool groundColoured; ///< the obstacle takes the ground's chroma (the hard case)
+    };
+    std::vector<Row> rows;
+    for (const std::string& type : obstacleTypes(o)) {
+        rows.push_back({type, type, false});
+    }
+    rows.push_back({"box_ground_colour", "box", true});
+    std::printf("\none-camera mode: ColourFreeSpace on the left colour image, default rig (640x480, level, 0.59 m), "
+                "%zu range(s) per band at 1-6 m, %zu bearing(s) taking turns, %d seed(s); the stereo suite's scorer. "
+                "ref_bad = frames whose reference patch was not ground-like (all Unknown)\n",
+                o.rangesPerBand.size(), o.bearings.size(), o.seeds);
+    std::printf("%-*s %-8s %6s %6s %7s %7s %7s %10s %7s %11s %11s\n", kColourLabelColumn, "type", "ground", "frames",
+                "gt", "det1-3", "det3-6", "det1-6", "p95err_m", "ref_bad", "spill/frame", "fclear/frm");
+    json << "  \"colour\": {\n    \"obstacles\": [";
+    bool firstRow = true;
+    bool detectionOk = true;
+    for (const sim::GroundTexture texture : o.textures) {
+        for (const Row& row : rows) {
+            std::vector<BandStats> stats(kBandCount);
+            const int refBefore = det.notGroundLikeFrames();
+            std::size_t cases = 0;
+            for (int b = 0; b < kBandCount && kBands[b].hi <= kColourMaxRangeM; ++b) {
+                for (const double fraction : o.rangesPerBand) {
+                    const double range = kBands[b].lo + fraction * (kBands[b].hi - kBands[b].lo);
+                    const double bearing = o.bearings[cases++ % o.bearings.size()];
+                    const ObstacleCase c{row.type,
+                                         range,
+                                         bearing,
+                                         texture,
+                                         "",
+                                         0,
+                                         row.groundColoured ? std::optional(sim::groundChroma(texture)) : std::nullopt};
+                    if (!runObstacleCase(o, det, c, stats)) {
+                        return 1;
+                    }
+                }
+            }
+            const int refBad = det.notGroundLikeFrames() - refBefore;
+            BandStats all;
+            for (int b = 0; b < kBandCount && kBands[b].hi <= kColourMaxRangeM; ++b) {
+                const BandStats& s = stats[static_cast<std::size_t>(b)];
+                all.frames += s.frames;
+                all.gtFrames += s.gtFrames;
+                all.detected += s.detected;
+                all.spill += s.spill;
+                all.falseClear += s.falseClear;
+                all.errors.insert(all.errors.end(), s.errors.begin(), s.errors.end());
+            }
+            const bool target = !isNegativeType(row.type);
+            const bool pass = all.gtFrames > 0 && all.rate() >= kColourTargetDetection;
+            detectionOk = detectionOk && (!target || pass);
+            char p95Text[24] = "-";
+            if (!all.errors.empty()) {
+                std::snprintf(p95Text, sizeof(p95Text), "%.3f", quantile(all.errors, 0.95));
+            }
+            std::printf("%-*s %-8s %6d %6d %7.1f %7.1f %7.1f %10s %7d %11.2f %11.2f %s\n", kColourLabelColumn,
+                        row.label.c_str(), textureName(texture), all.frames, all.gtFrames, 100.0 * stats[0].rate(),
+                        100.0 * stats[1].rate(), 100.0 * all.rate(), p95Text, refBad,
+                        all.frames > 0 ? double(all.spill) / all.frames : 0.0,
+                        all.frames > 0 ? double(all.falseClear) / all.frames : 0.0,
+                        target ? (pass ? "PASS" : "FAIL") : "(negative: no target)");
+            json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << row.label << "\", \"ground\": \""
+                 << textureName(texture) << "\", \"frames\": " << all.frames << ", \"gt_frames\": " << all.gtFrames
+                 << ", \"detected\": " << all.detected << ", \"detection_rate_1_3\": " << jsonNumber(stats[0].rate())
+                 << ", \"detection_rate_3_6\": " << jsonNumber(stats[1].rate())
+                 << ", \"detection_rate\": " << jsonNumber(all.rate())
+                 << ", \"range_error_p95_m\": " << jsonNumber(all.errors.empty() ? NAN : quantile(all.errors, 0.95))
+                 << ", \"reference_not_ground_like_frames\": " << refBad << ", \"spill_sectors\": " << all.spill
+                 << ", \"false_clear_sectors\": " << all.falseClear << ", \"target\": " << (target ? "true" : "false")
+                 << "}";
+            firstRow = false;
+        }
+    }
+    // Empty ground: every sector reported Obstacle is false.
+    std::printf("empty ground (%d seed(s) per ground): false = sectors reported Obstacle, of all sectors\n",
+                o.emptySeeds);
+    std::printf("%-8s %6s %8s %9s %8s %8s %8s %7s\n", "ground", "frames", "sectors", "false_obs", "false%", "unknown%",
+                "clear%", "ref_bad");
+    json << "\n    ],\n    \"empty\": [";
+    bool emptyOk = true;
+    sim::RenderResult frame;
+    for (std::size_t t = 0; t < o.emptyTextures.size(); ++t) {
+        const sim::GroundTexture texture = o.emptyTextures[t];
+        const int refBefore = det.notGroundLikeFrames();
+        int frames = 0;
+        int sectors = 0;
+        int falseObstacle = 0;
+        int unknown = 0;
+        int clear = 0;
+        for (int seed = 1; seed <= o.emptySeeds; ++seed) {
+            auto scene = sim::makeScene("empty", 5.0, 0.0, texture, static_cast<std::uint64_t>(seed));
+            if (!scene || !det.run(*scene, frame)) {
+                return 1;
+            }
+            ++frames;
+            for (int i = 0; i < det.sectors().count; ++i) {
+                const SectorState state = det.sectors().sectors[static_cast<std::size_t>(i)].state;
+                const bool gtObstacle =
+                    frame.sectors.sectors[static_cast<std::size_t>(i)].state == SectorState::Obstacle;
+                ++sectors;
+                falseObstacle += state == SectorState::Obstacle && !gtObstacle ? 1 : 0;
+                unknown += state == SectorState::Unknown ? 1 : 0;
+                clear += state == SectorState::Clear ? 1 : 0;
+            }
+        }
+        const int refBad = det.notGroundLikeFrames() - refBefore;
+        const double falseRate = sectors > 0 ? double(falseObstacle) / sectors : 0.0;
+        const bool ok = falseRate <= kColourTargetFalseSectors;
+        emptyOk = emptyOk && ok;
+        std::printf("%-8s %6d %8d %9d %8.2f %8.1f %8.1f %7d %s\n", textureName(texture), frames, sectors, falseObstacle,
+                    100.0 * falseRate, sectors > 0 ? 100.0 * unknown / sectors : 0.0,
+                    sectors > 0 ? 100.0 * clear / sectors : 0.0, refBad, ok ? "PASS" : "FAIL");
+        json << (t == 0 ? "\n" : ",\n") << "      {\"ground\": \"" << textureName(texture)
+             << "\", \"frames\": " << frames << ", \"sectors\": " << sectors
+             << ", \"false_obstacle_sectors\": " << falseObstacle
+             << ", \"false_obstacle_rate\": " << jsonNumber(falseRate) << ", \"unknown_sectors\": " << unknown
+             << ", \"clear_sectors\": " << clear << ", \"reference_not_ground_like_frames\": " << refBad << "}";
+    }
+    const int framesRun = static_cast<int>(det.frames());
+    const double seconds = det.seconds();
+    std::printf("one-camera mode: %d frames in %.1f s\n", framesRun, seconds);
+    std::printf("verdicts (one-camera mode): every positive type >= 90%% at 1-6 m on every ground: %s; false obstacle "
+                "sectors <= 2%% on empty ground: %s\n",
+                detectionOk ? "PASS" : "FAIL", emptyOk ? "PASS" : "FAIL");
+    json << "\n    ],\n    \"frames\": " << framesRun << ",\n    \"seconds\": " << jsonNumber(seconds)
+         << ",\n    \"verdicts\": {\"detection\": " << (detectionOk ? "true" : "false")
+         << ", \"empty_false_sectors\": " << (emptyOk ? "true" : "false") << "}\n  }";
     return 0;
 }
 
@@ -794,7 +998,7 @@ int runEval(int argc, char** argv)
         "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
         "MODE] "
-        "[--ground-prior] [--json OUT] [--data DIR] [--skip-missing]",
+        "[--ground-prior] [--detector stereo|colour] [--json OUT] [--data DIR] [--skip-missing]",
         {{"sim", "",
           "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway, and the new grounds: "
           "camber, grade, kerb, photometry, paint, rails, shadows, mirrors)",
@@ -830,6 +1034,11 @@ int runEval(int argc, char** argv)
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
          {"ground-prior", "", "simulator: census SGM's top path follows the ground (RoiMatcherConfig::groundPrior)",
           false},
+         {"detector", "NAME",
+          "simulator suite: stereo (default) or colour: the one-camera mode (ColourFreeSpace on the left colour "
+          "image) on asphalt, grass and floor at 1-6 m, scored by the same scorer, and its false sectors on empty "
+          "ground",
+          false},
          {"json", "OUT", "write all figures as JSON", false},
          {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
          {"skip-missing", "", "exit 77 (skipped) when the Middlebury or real data are missing", false}});
@@ -863,6 +1072,16 @@ int runEval(int argc, char** argv)
                                                   "use " + std::string(vision::kMatcherModeNames)});
         }
         matcher = *mode;
+    }
+    const std::string detectorName = args.has("detector") ? args.get("detector") : "stereo";
+    if (detectorName != "stereo" && detectorName != "colour") {
+        return reportUsageError("eval", Error{"ugvsense eval --detector", "unknown detector '" + detectorName + "'",
+                                              "use stereo or colour"});
+    }
+    const bool colourDetector = detectorName == "colour";
+    if (colourDetector && (!args.has("sim") || args.has("approach") || args.has("hole-signal"))) {
+        return reportUsageError("eval", Error{"ugvsense eval --detector colour", "runs with --sim only",
+                                              "give --sim (the approach and hole signal are stereo measures)"});
     }
     std::filesystem::path root = "../shared/data";
     if (args.has("data")) {
@@ -949,7 +1168,18 @@ int runEval(int argc, char** argv)
         }
         o.matcher = matcher;
         o.groundPrior = args.has("ground-prior");
-        if (args.has("sim")) {
+        if (colourDetector) {
+            // The grounds of issue 23's one-camera targets; the empty scenes on the same ones.
+            o.colour = true;
+            o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::PaintedFloor};
+            o.emptyTextures = o.textures;
+            if (!args.has("quick")) {
+                o.rangesPerBand = {0.125, 0.375, 0.625, 0.875};
+            }
+            if (const int rc = runColourSuite(o, json); rc != 0) {
+                return rc;
+            }
+        } else if (args.has("sim")) {
             if (const int rc = runSimSuite(o, json); rc != 0) {
                 return rc;
             }

@@ -326,7 +326,7 @@ int runCatalogueScene(const Args& args)
     std::cout << "wrote scene '" << name << "' (range " << *range << " m, bearing " << *bearing << " deg, "
               << textureName << ", pitch " << *pitch << " deg, roll " << *roll << " deg, height " << *height << " m"
               << (args.has("condition") ? ", conditions " + args.get("condition") : std::string()) << ") to "
-              << out.string() << ": " << name << "_{left,right,disparity,depth,labels,ids}.png, " << name
+              << out.string() << ": " << name << "_{left,left_colour,right,disparity,depth,labels,ids}.png, " << name
               << "_sectors.json, calibration.yaml\n";
     return 0;
 }

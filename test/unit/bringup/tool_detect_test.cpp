@@ -86,6 +86,24 @@ protected:
     static inline std::filesystem::path dir_;
 };
 
+/// The sector line of `output` (printSectors) holding bearing 0 when it reports an obstacle: its range, else NaN.
+double obstacleRangeAtBearingZero(const std::string& output)
+{
+    std::istringstream lines(output);
+    for (std::string line; std::getline(lines, line);) {
+        int index = 0;
+        double bearingMin = 0.0;
+        double bearingMax = 0.0;
+        double range = 0.0;
+        if (std::sscanf(line.c_str(), "sector %d [ %lf, %lf] deg obstacle positive %*s range %lf", &index, &bearingMin,
+                        &bearingMax, &range) == 4 &&
+            bearingMin <= 0.0 && bearingMax > 0.0) {
+            return range;
+        }
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+}
+
 TEST_F(ToolDetect, ConfiguredMountFindsThePoleAndWritesJsonAndOverlay)
 {
     const auto json = dir_ / "configured.json";
@@ -99,21 +117,7 @@ TEST_F(ToolDetect, ConfiguredMountFindsThePoleAndWritesJsonAndOverlay)
     EXPECT_TRUE(contains(sut.output, "summary: 64 sectors")) << sut.output;
     // The sector holding bearing 0 reports the pole at 3 m (its nearest point). (Not the overall nearest obstacle:
     // the detector in progress reports horizon artefacts at ~1.4 m elsewhere in this frame.)
-    bool found = false;
-    std::istringstream lines(sut.output);
-    for (std::string line; std::getline(lines, line);) {
-        int index = 0;
-        double bearingMin = 0.0;
-        double bearingMax = 0.0;
-        double range = 0.0;
-        if (std::sscanf(line.c_str(), "sector %d [ %lf, %lf] deg obstacle positive %*s range %lf", &index, &bearingMin,
-                        &bearingMax, &range) == 4 &&
-            bearingMin <= 0.0 && bearingMax > 0.0) {
-            found = true;
-            EXPECT_NEAR(range, 3.0, 0.10) << line;
-        }
-    }
-    EXPECT_TRUE(found) << sut.output;
+    EXPECT_NEAR(obstacleRangeAtBearingZero(sut.output), 3.0, 0.10) << sut.output;
     EXPECT_TRUE(contains(sut.output, "nearest obstacle: ")) << sut.output;
     const std::string text = readText(json);
     EXPECT_TRUE(contains(text, "\"source\": \"configured mount\"")) << text;
@@ -153,6 +157,45 @@ TEST_F(ToolDetect, GroundEstimateFailsCleanlyOnAFeaturelessPair)
     EXPECT_EQ(sut.exitCode, 1) << sut.output;
     EXPECT_TRUE(contains(sut.output, "no mount, and the ground estimate failed")) << sut.output;
     EXPECT_TRUE(contains(sut.output, "give the mount in the calibration file")) << sut.output;
+}
+
+TEST_F(ToolDetect, MonoFindsABoxOnTheGreenFloorAndWritesJson)
+{
+    const auto floor = dir_ / "floor";
+    const ToolRun sim = run("sim --scene box --range 3 --bearing 0 --texture floor --out " + floor.string());
+    ASSERT_EQ(sim.exitCode, 0) << sim.output;
+    const auto json = dir_ / "mono.json";
+
+    const ToolRun sut = run("detect --mono --calib " + (floor / "calibration.yaml").string() + " --left " +
+                            (floor / "box_left_colour.png").string() + " --json " + json.string());
+
+    ASSERT_EQ(sut.exitCode, 0) << sut.output;
+    EXPECT_TRUE(contains(sut.output, "-> ground-like")) << sut.output;
+    EXPECT_NEAR(obstacleRangeAtBearingZero(sut.output), 3.0, 0.15) << sut.output;
+    const std::string text = readText(json);
+    EXPECT_TRUE(contains(text, "\"detector\": \"colour\"")) << text;
+    EXPECT_TRUE(contains(text, "\"ground_like\": true")) << text;
+    EXPECT_TRUE(contains(text, "\"state\": \"obstacle\"")) << text;
+}
+
+TEST_F(ToolDetect, MonoOnGreyAsphaltReportsEverySectorUnknown)
+{
+    // Asphalt is nearly achromatic: hue means nothing there, so the reference patch is not ground-like.
+    const ToolRun sut = run("detect --mono --calib " + (dir_ / "calibration.yaml").string() + " --left " +
+                            (dir_ / "pole_left_colour.png").string());
+
+    ASSERT_EQ(sut.exitCode, 0) << sut.output;
+    EXPECT_TRUE(contains(sut.output, "NOT ground-like")) << sut.output;
+    EXPECT_TRUE(contains(sut.output, "0 obstacle (red 0, blue 0), 0 clear, 64 unknown")) << sut.output;
+}
+
+TEST_F(ToolDetect, MonoWithoutMountFails)
+{
+    const ToolRun sut = run("detect --mono --calib " + (dir_ / "nomount.yaml").string() + " --left " +
+                            (dir_ / "pole_left_colour.png").string());
+
+    EXPECT_EQ(sut.exitCode, 1) << sut.output;
+    EXPECT_TRUE(contains(sut.output, "no mount: one camera cannot estimate the ground")) << sut.output;
 }
 
 TEST_F(ToolDetect, BadInputFailsWithAClearMessage)
