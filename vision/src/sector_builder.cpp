@@ -418,30 +418,45 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
 BuildStatus SectorBuilder::build(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
                                  const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs) noexcept
 {
-    return buildImpl(disparity16, labels, ground, sequence, stampNs, false);
+    const BuildStatus status = checkInputs(disparity16, labels, sequence, stampNs);
+    if (status != BuildStatus::Ok) {
+        return status;
+    }
+    resetAccumulators();
+    finish(collectPerRow(disparity16, labels, ground), ground, sequence, stampNs);
+    return BuildStatus::Ok;
 }
 
 BuildStatus SectorBuilder::buildReference(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
                                           const GroundPlane& ground, std::uint64_t sequence,
                                           std::int64_t stampNs) noexcept
 {
-    return buildImpl(disparity16, labels, ground, sequence, stampNs, true);
+    const BuildStatus status = checkInputs(disparity16, labels, sequence, stampNs);
+    if (status != BuildStatus::Ok) {
+        return status;
+    }
+    resetAccumulators();
+    finish(collectPerPixel(disparity16, labels, ground), ground, sequence, stampNs);
+    return BuildStatus::Ok;
 }
 
-BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
-                                     const GroundPlane& ground, std::uint64_t sequence, std::int64_t stampNs,
-                                     bool reference) noexcept
+BuildStatus SectorBuilder::checkInputs(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                       std::uint64_t sequence, std::int64_t stampNs) noexcept
 {
     if (disparity16.data() == nullptr || disparity16.width() != roi_.width || disparity16.height() != roi_.height) {
         setAllUnknown(sequence, stampNs);
         return BuildStatus::WrongDisparitySize;
     }
-    const bool haveLabels = !labels.empty();
-    if (haveLabels && (labels.width() != roi_.width || labels.height() != roi_.height)) {
+    if (!labels.empty() && (labels.width() != roi_.width || labels.height() != roi_.height)) {
         setAllUnknown(sequence, stampNs);
         return BuildStatus::WrongLabelSize;
     }
+    return BuildStatus::Ok;
+}
 
+void SectorBuilder::resetAccumulators() noexcept
+{
+    localGround_.clear();
     std::fill(histograms_.begin(), histograms_.end(), 0U);
     std::fill(extremes_.begin(), extremes_.end(), 0.0F);
     std::fill(tallVotes_.begin(), tallVotes_.end(), 0U);
@@ -456,189 +471,212 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
     std::fill(rowCrossing_.begin(), rowCrossing_.end(), 0.0F);
     std::fill(rowDisparity_.begin(), rowDisparity_.end(), 0.0F);
     std::fill(rowDropLabels_.begin(), rowDropLabels_.end(), 0U);
+}
 
+int SectorBuilder::minDisparity16() const noexcept
+{
+    // Disparities below this are farther than maxRangeM even straight ahead: skipped early.
+    return static_cast<int>(std::floor(projection_.fx * projection_.baselineM / config_.maxRangeM * kDisparityScale));
+}
+
+void SectorBuilder::addPoint(std::size_t& count, int s, int v, float range, float z, int d16, const std::uint8_t* label,
+                             int u) noexcept
+{
+    points_[count++] = PixelPoint{range,
+                                  z,
+                                  0.0F,
+                                  static_cast<std::int16_t>(s),
+                                  static_cast<std::int16_t>(v),
+                                  static_cast<std::int16_t>(d16),
+                                  label != nullptr ? label[u] : static_cast<std::uint8_t>(0)};
+    localGround_.add(s, range, z);
+}
+
+std::size_t SectorBuilder::collectPerPixel(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                           const GroundPlane& ground) noexcept
+{
+    const bool haveLabels = !labels.empty();
+    const int minDisparity16 = this->minDisparity16();
     const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
-    // Disparities below minDisparity16 are farther than maxRangeM even straight ahead: skipped early.
-    const auto minDisparity16 =
-        static_cast<int>(std::floor(projection_.fx * projection_.baselineM / config_.maxRangeM * kDisparityScale));
-    const auto bins = static_cast<std::size_t>(bins_);
-    const auto labelWeight = static_cast<std::uint32_t>(config_.labelWeight);
-
-    const auto groundHeight = static_cast<float>(ground.heightM);
-    groundHeight_ = groundHeight;
-    const float faceHeight = config_.faceHeightFraction * config_.minHeightM;
-    float dropResidualPx = 0.0F;  // set between the passes, from the frame's ground noise
-    float heightNoisePerM = 0.0F; // [m/m] likewise
-    const auto vote = [&](int s, int v, float range, float zLocal, float zPlane, int d16,
-                          std::uint8_t labelValue) noexcept {
-        // Row profile: residual d - d_g = d z / h (d / d_g = h / (h - z) along one ray) and the ray's ground
-        // crossing, range h / (h - z) (a function of the pixel only; only rays that meet the ground ahead).
-        if (zPlane < groundHeight) {
-            const std::size_t row =
-                static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_) + static_cast<std::size_t>(v);
-            ++rowCount_[row];
-            rowDropLabels_[row] += labelValue == kLabelNegative ? 1U : 0U;
-            rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * zPlane / groundHeight;
-            rowCrossing_[row] += range * groundHeight / (groundHeight - zPlane);
-            rowDisparity_[row] += static_cast<float>(d16) / kDisparityScale;
-        }
-        const float z = zLocal;
-        int kind = -1;
-        // The height noise grows with the range (a disparity error e moves a ground point's height by
-        // h r e / (fx B)): beyond where it reaches minHeightM / heightNoiseFactor, a positive vote must rise above
-        // heightNoiseFactor times it.
-        const float noiseHeight = heightNoisePerM * range;
-        if (z > std::max(faceHeight, noiseHeight)) {
-            kind = 0;
-        } else if ((z < -config_.minDepthM ||
-                    (z < -config_.minDropDepthM && range * -z >= config_.minDropGapM * (groundHeight - z))) &&
-                   static_cast<float>(d16) / kDisparityScale * z / groundHeight < -dropResidualPx) {
-            kind = 1;
-        } else {
-            ++groundVotes_[static_cast<std::size_t>(s)];
-            ++groundByRange_[static_cast<std::size_t>(s) * bins + static_cast<std::size_t>(range / config_.rangeBinM)];
-            farGroundVotes_[static_cast<std::size_t>(s)] += range >= config_.clearRangeM ? 1U : 0U;
-            return;
-        }
-        const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
-        const bool labelled = labelValue == wanted;
-        const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
-        // Face votes (below minHeightM) support a cluster but do not forbid Clear by themselves.
-        const bool tall = kind == 1 || z > std::max(config_.minHeightM, noiseHeight);
-        if (!labelled && !config_.useDenseCue) {
-            kindVotes_[slot] += tall ? 1U : 0U; // unconfirmed: not an obstacle, but it forbids Clear
-            return;
-        }
-        const std::uint32_t weight = 1U + (labelled ? labelWeight : 0U);
-        // A drop's range is where the ground ends: the ray from the camera (height h) to the point below the
-        // ground crosses the ground plane at h / (h - z) of the point's horizontal range (the near rim).
-        const float ownRange = range;
-        if (kind == 1) {
-            range *= static_cast<float>(ground.heightM / (ground.heightM - static_cast<double>(z)));
-        }
-        const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
-        if (kind == 1) {
-            dropDistance_[static_cast<std::size_t>(s) * bins + bin] += ownRange * static_cast<float>(weight);
-            const double own = static_cast<double>(d16) / kDisparityScale;
-            const double groundD = own - own * static_cast<double>(z / groundHeight); // d - residual d z / h
-            WallSums& w = wallSums_[static_cast<std::size_t>(s) * static_cast<std::size_t>(wallBins_) +
-                                    bin / static_cast<std::size_t>(wallBinRatio_)];
-            w.n += 1.0;
-            w.g += groundD;
-            w.o += own;
-            w.gg += groundD * groundD;
-            w.go += groundD * own;
-            w.oo += own * own;
-        }
-        histograms_[slot * bins + bin] += weight;
-        float& extreme = extremes_[slot * bins + bin];
-        extreme = std::max(extreme, std::fabs(z));
-        if (tall) {
-            kindVotes_[slot] += weight;
-            if (kind == 0) {
-                tallVotes_[static_cast<std::size_t>(s) * bins + bin] += weight;
+    std::size_t count = 0;
+    for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
+        const std::int16_t* d16 = disparity16.row(v);
+        const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
+        const double yFull = v + roi_.y;
+        for (int u = 0; u < roi_.width; ++u) {
+            if (d16[u] <= 0 || d16[u] < minDisparity16) {
+                continue;
             }
-        }
-    };
-
-    // First pass: every analysed pixel's sector, range and height above the plane (and the local ground's
-    // histograms); second pass: the votes, with heights above the local ground.
-    std::size_t pointCount = 0;
-    localGround_.clear();
-    const auto collect = [&](int s, int v, float range, float z, int d16, const std::uint8_t* label, int u) noexcept {
-        points_[pointCount++] = PixelPoint{range,
-                                           z,
-                                           0.0F,
-                                           static_cast<std::int16_t>(s),
-                                           static_cast<std::int16_t>(v),
-                                           static_cast<std::int16_t>(d16),
-                                           label != nullptr ? label[u] : static_cast<std::uint8_t>(0)};
-        localGround_.add(s, range, z);
-    };
-    if (reference) {
-        for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
-            const std::int16_t* d16 = disparity16.row(v);
-            const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
-            const double yFull = v + roi_.y;
-            for (int u = 0; u < roi_.width; ++u) {
-                if (d16[u] <= 0 || d16[u] < minDisparity16) {
-                    continue;
-                }
-                const double d = static_cast<double>(d16[u]) / kDisparityScale;
-                const VehiclePoint p = ground.pixelToVehicle(u + roi_.x, yFull, d, projection_);
-                const auto range = static_cast<float>(std::hypot(p.x, p.y));
-                if (!(p.x > 0.0) || range >= config_.maxRangeM) {
-                    continue;
-                }
-                const auto bearing = static_cast<float>(std::atan2(p.y, p.x) * kRadToDeg);
-                const int s = static_cast<int>(std::floor((bearing + hfovDeg_ / 2.0F) / binDeg));
-                if (s < 0 || s >= config_.sectorCount) {
-                    continue;
-                }
-                collect(s, v - (firstRow_ - roi_.y), range, static_cast<float>(p.z), d16[u], label, u);
+            const double d = static_cast<double>(d16[u]) / kDisparityScale;
+            const VehiclePoint p = ground.pixelToVehicle(u + roi_.x, yFull, d, projection_);
+            const auto range = static_cast<float>(std::hypot(p.x, p.y));
+            if (!(p.x > 0.0) || range >= config_.maxRangeM) {
+                continue;
             }
-        }
-    } else {
-        // For a fixed plane the vehicle point of pixel (u, v) at disparity d is linear in 1/d:
-        // with the ray r = ((u - cx)/fx, (v - cy)/fy, 1) and depth Z = fx B / d, GroundPlane::toVehicle gives
-        // x = Z (r . F) / |F|, y = Z (r . L) / |F|, z = h + Z (r . U) (F forward, L left, U up, unnormalised as
-        // toVehicle). So the bearing atan2(y, x) = atan2(r . L, r . F) does not depend on d, the range is
-        // Z |(r.F, r.L)| / |F| and the height h + Z (r . U). Per row, r . F, r . L and r . U are linear in u; the
-        // sector of a pixel is found by walking the sector boundaries (bearing monotone along a row) instead of
-        // an atan2 per pixel, and the range and height factors are computed once per pixel of the row.
-        // Equal to the reference up to double rounding (the last bits of Z r . F vs the reference's order of
-        // operations): the sectors are equal on the simulator scenes (sector_builder_test.cpp).
-        const GroundAxes axes = groundAxes(ground);
-        const double fb = projection_.fx * projection_.baselineM * kDisparityScale; // Z = fb / d16
-        const int boundaries = config_.sectorCount + 1;
-        for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
-            const std::int16_t* d16 = disparity16.row(v);
-            const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
-            const double ry = (v + roi_.y - projection_.cy) / projection_.fy;
-            const double du = 1.0 / projection_.fx; // d r.x / d u
-            const double rx0 = (roi_.x - projection_.cx) / projection_.fx;
-            // r . A = (A.x rx0 + A.y ry + A.z) + A.x du u
-            const double f0 = axes.f[0] * rx0 + axes.f[1] * ry + axes.f[2];
-            const double f1 = axes.f[0] * du;
-            const double l0 = axes.l[0] * rx0 + axes.l[1] * ry + axes.l[2];
-            const double l1 = axes.l[0] * du;
-            const double up0 = axes.u[0] * rx0 + axes.u[1] * ry + axes.u[2];
-            const double up1 = axes.u[0] * du;
-            for (int k = 0; k < boundaries; ++k) {
-                const auto ku = static_cast<std::size_t>(k);
-                // Bearing >= boundary k  <=>  g_k(u) = (r.L) cos(b_k) - (r.F) sin(b_k) >= 0 (for r.F > 0).
-                boundary0_[ku] = l0 * boundaryCos_[ku] - f0 * boundarySin_[ku];
-                boundary1_[ku] = l1 * boundaryCos_[ku] - f1 * boundarySin_[ku];
+            const auto bearing = static_cast<float>(std::atan2(p.y, p.x) * kRadToDeg);
+            const int s = static_cast<int>(std::floor((bearing + hfovDeg_ / 2.0F) / binDeg));
+            if (s < 0 || s >= config_.sectorCount) {
+                continue;
             }
-            int s = -1; // number of boundaries at or below the bearing, minus 1
-            for (int u = 0; u < roi_.width; ++u) {
-                const double uu = u;
-                const double rf = f0 + f1 * uu;
-                // The walk runs for every pixel so that s stays near the bearing; it is only used where r.F > 0.
-                while (s + 1 < boundaries &&
-                       boundary0_[static_cast<std::size_t>(s + 1)] + boundary1_[static_cast<std::size_t>(s + 1)] * uu >=
-                           0.0) {
-                    ++s;
-                }
-                while (s >= 0 &&
-                       boundary0_[static_cast<std::size_t>(s)] + boundary1_[static_cast<std::size_t>(s)] * uu < 0.0) {
-                    --s;
-                }
-                if (d16[u] <= 0 || d16[u] < minDisparity16 || !(rf > 0.0) || s < 0 || s >= config_.sectorCount) {
-                    continue;
-                }
-                const double z = fb / static_cast<double>(d16[u]);
-                const double rl = l0 + l1 * uu;
-                const auto range = static_cast<float>(z * std::sqrt(rf * rf + rl * rl) * axes.invNorm);
-                if (range >= config_.maxRangeM) {
-                    continue;
-                }
-                collect(s, v - (firstRow_ - roi_.y), range, static_cast<float>(ground.heightM + z * (up0 + up1 * uu)),
-                        d16[u], label, u);
-            }
+            addPoint(count, s, v - (firstRow_ - roi_.y), range, static_cast<float>(p.z), d16[u], label, u);
         }
     }
+    return count;
+}
 
+std::size_t SectorBuilder::collectPerRow(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                         const GroundPlane& ground) noexcept
+{
+    const bool haveLabels = !labels.empty();
+    const int minDisparity16 = this->minDisparity16();
+    std::size_t count = 0;
+    // For a fixed plane the vehicle point of pixel (u, v) at disparity d is linear in 1/d:
+    // with the ray r = ((u - cx)/fx, (v - cy)/fy, 1) and depth Z = fx B / d, GroundPlane::toVehicle gives
+    // x = Z (r . F) / |F|, y = Z (r . L) / |F|, z = h + Z (r . U) (F forward, L left, U up, unnormalised as
+    // toVehicle). So the bearing atan2(y, x) = atan2(r . L, r . F) does not depend on d, the range is
+    // Z |(r.F, r.L)| / |F| and the height h + Z (r . U). Per row, r . F, r . L and r . U are linear in u; the
+    // sector of a pixel is found by walking the sector boundaries (bearing monotone along a row) instead of
+    // an atan2 per pixel, and the range and height factors are computed once per pixel of the row.
+    // Equal to the reference up to double rounding (the last bits of Z r . F vs the reference's order of
+    // operations): the sectors are equal on the simulator scenes (sector_builder_test.cpp).
+    const GroundAxes axes = groundAxes(ground);
+    const double fb = projection_.fx * projection_.baselineM * kDisparityScale; // Z = fb / d16
+    const int boundaries = config_.sectorCount + 1;
+    for (int v = firstRow_ - roi_.y; v < roi_.height; ++v) {
+        const std::int16_t* d16 = disparity16.row(v);
+        const std::uint8_t* label = haveLabels ? labels.row(v) : nullptr;
+        const double ry = (v + roi_.y - projection_.cy) / projection_.fy;
+        const double du = 1.0 / projection_.fx; // d r.x / d u
+        const double rx0 = (roi_.x - projection_.cx) / projection_.fx;
+        // r . A = (A.x rx0 + A.y ry + A.z) + A.x du u
+        const double f0 = axes.f[0] * rx0 + axes.f[1] * ry + axes.f[2];
+        const double f1 = axes.f[0] * du;
+        const double l0 = axes.l[0] * rx0 + axes.l[1] * ry + axes.l[2];
+        const double l1 = axes.l[0] * du;
+        const double up0 = axes.u[0] * rx0 + axes.u[1] * ry + axes.u[2];
+        const double up1 = axes.u[0] * du;
+        for (int k = 0; k < boundaries; ++k) {
+            const auto ku = static_cast<std::size_t>(k);
+            // Bearing >= boundary k  <=>  g_k(u) = (r.L) cos(b_k) - (r.F) sin(b_k) >= 0 (for r.F > 0).
+            boundary0_[ku] = l0 * boundaryCos_[ku] - f0 * boundarySin_[ku];
+            boundary1_[ku] = l1 * boundaryCos_[ku] - f1 * boundarySin_[ku];
+        }
+        int s = -1; // number of boundaries at or below the bearing, minus 1
+        for (int u = 0; u < roi_.width; ++u) {
+            const double uu = u;
+            const double rf = f0 + f1 * uu;
+            // The walk runs for every pixel so that s stays near the bearing; it is only used where r.F > 0.
+            while (s + 1 < boundaries &&
+                   boundary0_[static_cast<std::size_t>(s + 1)] + boundary1_[static_cast<std::size_t>(s + 1)] * uu >=
+                       0.0) {
+                ++s;
+            }
+            while (s >= 0 &&
+                   boundary0_[static_cast<std::size_t>(s)] + boundary1_[static_cast<std::size_t>(s)] * uu < 0.0) {
+                --s;
+            }
+            if (d16[u] <= 0 || d16[u] < minDisparity16 || !(rf > 0.0) || s < 0 || s >= config_.sectorCount) {
+                continue;
+            }
+            const double z = fb / static_cast<double>(d16[u]);
+            const double rl = l0 + l1 * uu;
+            const auto range = static_cast<float>(z * std::sqrt(rf * rf + rl * rl) * axes.invNorm);
+            if (range >= config_.maxRangeM) {
+                continue;
+            }
+            addPoint(count, s, v - (firstRow_ - roi_.y), range,
+                     static_cast<float>(ground.heightM + z * (up0 + up1 * uu)), d16[u], label, u);
+        }
+    }
+    return count;
+}
+
+void SectorBuilder::vote(const PixelPoint& p, const VoteLimits& limits) noexcept
+{
+    const int s = p.sector;
+    const int v = p.row;
+    float range = p.rangeM;
+    const float zPlane = p.z;
+    const int d16 = p.d16;
+    const std::uint8_t labelValue = p.label;
+    const float groundHeight = limits.groundHeight;
+    const float dropResidualPx = limits.dropResidualPx;
+    const auto bins = static_cast<std::size_t>(bins_);
+    // Row profile: residual d - d_g = d z / h (d / d_g = h / (h - z) along one ray) and the ray's ground
+    // crossing, range h / (h - z) (a function of the pixel only; only rays that meet the ground ahead).
+    if (zPlane < groundHeight) {
+        const std::size_t row =
+            static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_) + static_cast<std::size_t>(v);
+        ++rowCount_[row];
+        rowDropLabels_[row] += labelValue == kLabelNegative ? 1U : 0U;
+        rowResidual_[row] += static_cast<float>(d16) / kDisparityScale * zPlane / groundHeight;
+        rowCrossing_[row] += range * groundHeight / (groundHeight - zPlane);
+        rowDisparity_[row] += static_cast<float>(d16) / kDisparityScale;
+    }
+    const float z = p.zLocal;
+    int kind = -1;
+    // The height noise grows with the range (a disparity error e moves a ground point's height by
+    // h r e / (fx B)): beyond where it reaches minHeightM / heightNoiseFactor, a positive vote must rise above
+    // heightNoiseFactor times it.
+    const float noiseHeight = limits.heightNoisePerM * range;
+    if (z > std::max(limits.faceHeight, noiseHeight)) {
+        kind = 0;
+    } else if ((z < -config_.minDepthM ||
+                (z < -config_.minDropDepthM && range * -z >= config_.minDropGapM * (groundHeight - z))) &&
+               static_cast<float>(d16) / kDisparityScale * z / groundHeight < -dropResidualPx) {
+        kind = 1;
+    } else {
+        ++groundVotes_[static_cast<std::size_t>(s)];
+        ++groundByRange_[static_cast<std::size_t>(s) * bins + static_cast<std::size_t>(range / config_.rangeBinM)];
+        farGroundVotes_[static_cast<std::size_t>(s)] += range >= config_.clearRangeM ? 1U : 0U;
+        return;
+    }
+    const std::uint8_t wanted = kind == 0 ? kLabelPositive : kLabelNegative;
+    const bool labelled = labelValue == wanted;
+    const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
+    // Face votes (below minHeightM) support a cluster but do not forbid Clear by themselves.
+    const bool tall = kind == 1 || z > std::max(config_.minHeightM, noiseHeight);
+    if (!labelled && !config_.useDenseCue) {
+        kindVotes_[slot] += tall ? 1U : 0U; // unconfirmed: not an obstacle, but it forbids Clear
+        return;
+    }
+    const std::uint32_t weight = 1U + (labelled ? static_cast<std::uint32_t>(config_.labelWeight) : 0U);
+    // A drop's range is where the ground ends: the ray from the camera (height h) to the point below the
+    // ground crosses the ground plane at h / (h - z) of the point's horizontal range (the near rim).
+    const float ownRange = range;
+    if (kind == 1) {
+        range *= static_cast<float>(limits.groundHeightM / (limits.groundHeightM - static_cast<double>(z)));
+    }
+    const auto bin = static_cast<std::size_t>(range / config_.rangeBinM);
+    if (kind == 1) {
+        dropDistance_[static_cast<std::size_t>(s) * bins + bin] += ownRange * static_cast<float>(weight);
+        const double own = static_cast<double>(d16) / kDisparityScale;
+        const double groundD = own - own * static_cast<double>(z / groundHeight); // d - residual d z / h
+        WallSums& w = wallSums_[static_cast<std::size_t>(s) * static_cast<std::size_t>(wallBins_) +
+                                bin / static_cast<std::size_t>(wallBinRatio_)];
+        w.n += 1.0;
+        w.g += groundD;
+        w.o += own;
+        w.gg += groundD * groundD;
+        w.go += groundD * own;
+        w.oo += own * own;
+    }
+    histograms_[slot * bins + bin] += weight;
+    float& extreme = extremes_[slot * bins + bin];
+    extreme = std::max(extreme, std::fabs(z));
+    if (tall) {
+        kindVotes_[slot] += weight;
+        if (kind == 0) {
+            tallVotes_[static_cast<std::size_t>(s) * bins + bin] += weight;
+        }
+    }
+}
+
+void SectorBuilder::finish(std::size_t pointCount, const GroundPlane& ground, std::uint64_t sequence,
+                           std::int64_t stampNs) noexcept
+{
+    // First pass (collectPer*): every analysed pixel's sector, range and height above the plane, and the local
+    // ground's histograms; second pass: the votes, with heights above the local ground.
     if (config_.useLocalGround) {
         localGround_.fit();
     }
@@ -646,15 +684,27 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         PixelPoint& p = points_[i];
         p.zLocal = p.z - localGround_.at(p.sector, p.rangeM);
     }
+    const auto groundHeight = static_cast<float>(ground.heightM);
+    groundHeight_ = groundHeight;
     disparityNoisePx_ = groundNoise(pointCount);
-    heightNoisePerM = config_.heightNoiseFactor * disparityNoisePx_ * groundHeight /
-                      static_cast<float>(projection_.fx * projection_.baselineM);
-    dropResidualPx = config_.dropNoiseFactor * disparityNoisePx_;
+    VoteLimits limits;
+    limits.groundHeightM = ground.heightM;
+    limits.groundHeight = groundHeight;
+    limits.faceHeight = config_.faceHeightFraction * config_.minHeightM;
+    limits.heightNoisePerM = config_.heightNoiseFactor * disparityNoisePx_ * groundHeight /
+                             static_cast<float>(projection_.fx * projection_.baselineM);
+    limits.dropResidualPx = config_.dropNoiseFactor * disparityNoisePx_;
     for (std::size_t i = 0; i < pointCount; ++i) {
-        const PixelPoint& p = points_[i];
-        vote(p.sector, p.row, p.rangeM, p.zLocal, p.z, p.d16, p.label);
+        vote(points_[i], limits);
     }
+    classifySectors(sequence, stampNs);
+    widenDrops();
+    closeGaps();
+}
 
+void SectorBuilder::classifySectors(std::uint64_t sequence, std::int64_t stampNs) noexcept
+{
+    const auto bins = static_cast<std::size_t>(bins_);
     initSectors(sectors_, config_.sectorCount, hfovDeg_);
     sectors_.sequence = sequence;
     sectors_.captureStampNs = stampNs;
@@ -721,9 +771,6 @@ BuildStatus SectorBuilder::buildImpl(ImageView<const std::int16_t> disparity16, 
         }
         out.danger = classify(out.state, out.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
     }
-    widenDrops();
-    closeGaps();
-    return BuildStatus::Ok;
 }
 
 void SectorBuilder::keepContinuousDrops() noexcept

@@ -758,6 +758,46 @@ TEST(SectorBuilder, LabelsOnlyModeNeedsLabelsAndUnlabelledVotesForbidClear)
     EXPECT_NEAR(labelled.rangeM, 3.0, 0.03);
 }
 
+/// A builder keeps nothing of the frames before (its histograms, local ground and row profile are per frame): after a
+/// frame whose ground lies 0.15 m below the plane, with a trench, the next frame's sectors are those a new builder
+/// gives, by both projections (per row and the per-pixel reference).
+TEST(SectorBuilder, TheSectorsOfAFrameDoNotDependOnTheFramesBefore)
+{
+    cv::Mat before = groundDisparity();
+    const DisparityPlane lower = GroundPlane::fromMount(Mount{kHeightM + 0.15, 0.0, 0.0}).disparityPlane(kProjection);
+    for (int v = 0; v < kRoi.height; ++v) {
+        for (int u = 0; u < kRoi.width; ++u) {
+            const double d = lower.at(u, v + kRoi.y);
+            before.at<std::int16_t>(v, u) = d > 0.0 ? static_cast<std::int16_t>(std::lround(d * 16.0)) : -16;
+        }
+    }
+    paintSunkenGround(before, 0.3, 4.0, 5.0, 0.5);
+    cv::Mat frame = groundDisparity();
+    paintFace(frame, 3.0, -0.2, 0.2, 0.5);
+
+    for (const bool reference : {false, true}) {
+        const auto build = [reference](SectorBuilder& b, const cv::Mat& d16) {
+            return reference ? b.buildReference(view16(d16), {}, kGround, 2U, 0)
+                             : b.build(view16(d16), {}, kGround, 2U, 0);
+        };
+        auto fresh = makeBuilder();
+        auto reused = makeBuilder();
+        ASSERT_EQ(build(reused, before), BuildStatus::Ok);
+        ASSERT_EQ(build(reused, frame), BuildStatus::Ok);
+        ASSERT_EQ(build(fresh, frame), BuildStatus::Ok);
+        EXPECT_EQ(reused.groundNoisePx(), fresh.groundNoisePx());
+        for (int i = 0; i < fresh.sectors().count; ++i) {
+            const Sector& a = fresh.sectors().sectors[static_cast<std::size_t>(i)];
+            const Sector& b = reused.sectors().sectors[static_cast<std::size_t>(i)];
+            EXPECT_EQ(a.state, b.state) << "sector " << i << (reference ? " (reference)" : "");
+            EXPECT_EQ(a.kind, b.kind) << "sector " << i;
+            EXPECT_EQ(a.rangeM, b.rangeM) << "sector " << i;
+            EXPECT_EQ(a.heightM, b.heightM) << "sector " << i;
+            EXPECT_EQ(a.confidence, b.confidence) << "sector " << i;
+        }
+    }
+}
+
 TEST(SectorBuilder, WrongInputSizesGiveAllUnknownDegraded)
 {
     auto sut = makeBuilder();

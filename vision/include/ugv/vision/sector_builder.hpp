@@ -237,8 +237,37 @@ private:
     /// Whether the negative votes of sector s whose rays cross the ground in range bins [firstBin, endBin) are a
     /// wall (see maxWallSlope).
     [[nodiscard]] bool wallLike(int s, int firstBin, int endBin) const noexcept;
-    BuildStatus buildImpl(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, const GroundPlane& ground,
-                          std::uint64_t sequence, std::int64_t stampNs, bool reference) noexcept;
+    /// Sets every sector Unknown (degraded) and returns the error when an input has the wrong size.
+    BuildStatus checkInputs(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels, std::uint64_t sequence,
+                            std::int64_t stampNs) noexcept;
+    void resetAccumulators() noexcept;
+    /// [px * kDisparityScale] disparities below this are farther than maxRangeM even straight ahead.
+    [[nodiscard]] int minDisparity16() const noexcept;
+    /// First pass: every analysed pixel's point (sector, range, height above the plane) into points_ and the local
+    /// ground; per pixel with GroundPlane::pixelToVehicle and atan2 (the reference), or per row from linear factors
+    /// (build(), see the .cpp). @return the number of points.
+    std::size_t collectPerPixel(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                                const GroundPlane& ground) noexcept;
+    std::size_t collectPerRow(ImageView<const std::int16_t> disparity16, ConstImageViewU8 labels,
+                              const GroundPlane& ground) noexcept;
+    void addPoint(std::size_t& count, int s, int v, float range, float z, int d16, const std::uint8_t* label,
+                  int u) noexcept;
+    /// What a vote is measured against, fixed per frame between the passes (the frame's noise).
+    struct VoteLimits {
+        double groundHeightM = 0.0;   ///< [m] the plane's camera height
+        float groundHeight = 0.0F;    ///< [m] the same
+        float faceHeight = 0.0F;      ///< [m] faceHeightFraction * minHeightM
+        float heightNoisePerM = 0.0F; ///< [m/m] heightNoiseFactor times the height noise per metre of range
+        float dropResidualPx = 0.0F;  ///< [px] a negative vote's residual disparity must be below minus this
+    };
+    struct PixelPoint;
+    /// Second pass for one point: a positive, negative or ground vote into the accumulators.
+    void vote(const PixelPoint& p, const VoteLimits& limits) noexcept;
+    /// The local ground, the frame's noise, the votes and the sectors from the first pass's points.
+    void finish(std::size_t pointCount, const GroundPlane& ground, std::uint64_t sequence,
+                std::int64_t stampNs) noexcept;
+    /// Each sector's state from its clusters, ground support and stray votes.
+    void classifySectors(std::uint64_t sequence, std::int64_t stampNs) noexcept;
 
     SectorBuilderConfig config_;
     RectifiedProjection projection_;
