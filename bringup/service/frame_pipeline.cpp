@@ -15,6 +15,9 @@ vision::DetectorConfig detectorConfigFrom(const bringup::ServiceConfig& config)
     d.matcher.mode = config.stereo.mode;
     d.matcher.numDisparities = config.stereo.numDisparities;
     d.matcher.blockSize = config.stereo.blockSize;
+    d.matcher.groundRange = config.stereo.groundRange;
+    d.matcher.groundRangeDropM = config.stereo.groundRangeDropM;
+    d.matcher.groundRangeMarginDeg = config.stereo.groundRangeMarginDeg;
     d.sectors.sectorCount = config.obstacles.sectorCount;
     d.sectors.dangerDistanceM = static_cast<float>(config.obstacles.dangerDistanceM);
     d.sectors.cautionDistanceM = static_cast<float>(config.obstacles.cautionDistanceM);

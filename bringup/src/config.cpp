@@ -131,6 +131,16 @@ std::vector<KeySpec> baseKeys()
         numberKey("stereo.num_disparities", Kind::Int, 16, 256, "disparity search range [px], a multiple of 16",
                   UGV_REF(stereo.numDisparities)),
         numberKey("stereo.block_size", Kind::Int, 1, 11, "matching block size [px], odd", UGV_REF(stereo.blockSize)),
+        choiceKey<bool>("stereo.ground_range",
+                        "census SGM: each row searches only the disparities from a little below the previous "
+                        "frame's ground up (full range without a reliable ground estimate)",
+                        {{"true", true}, {"false", false}}, UGV_REF(stereo.groundRange)),
+        numberKey("stereo.ground_range_drop_m", Kind::Double, 0.05, 10,
+                  "ground_range: drops down to this far below the ground are searched at their true depth [m]",
+                  UGV_REF(stereo.groundRangeDropM)),
+        numberKey("stereo.ground_range_margin_deg", Kind::Double, 0, 10,
+                  "ground_range: pitch and roll change between two frames that the search floor absorbs [deg]",
+                  UGV_REF(stereo.groundRangeMarginDeg)),
         choiceKey<DetectorMode>(
             "obstacles.detector", "stereo (two cameras), colour (one camera) or both",
             {{"stereo", DetectorMode::Stereo}, {"colour", DetectorMode::Colour}, {"both", DetectorMode::Both}},
@@ -410,6 +420,12 @@ public:
                   "value " + std::to_string(config_.stereo.numDisparities) + " is not below the image width " +
                       std::to_string(config_.camera.width),
                   "lower num_disparities");
+        }
+        if (config_.stereo.groundRange && config_.stereo.mode != MatcherMode::CensusSgm) {
+            error(at("stereo"), "stereo.ground_range",
+                  std::string("is true but stereo.mode is ") +
+                      std::string(vision::matcherModeName(config_.stereo.mode)),
+                  "only census_sgm searches ground-guided ranges: set mode: census_sgm or ground_range: false");
         }
         if (config_.stereo.blockSize % 2 == 0) {
             error(at("stereo"), "stereo.block_size", "value " + std::to_string(config_.stereo.blockSize) + " is even",

@@ -185,7 +185,12 @@ Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, 
         return Unexpected(std::move(detector).error());
     }
     out.detector.emplace(std::move(detector).value());
-    (void)out.detector->process(rect.rectifiedLeft(), rect.rectifiedRight(), 0, 0);
+    // With ground-guided ranges the first frame searches the full range and sets the next frame's floor from its
+    // ground: the pair's second frame is what the service sees in steady state (a still vehicle).
+    const int frames = config.matcher.groundRange ? 2 : 1;
+    for (int frame = 0; frame < frames; ++frame) {
+        (void)out.detector->process(rect.rectifiedLeft(), rect.rectifiedRight(), static_cast<std::uint64_t>(frame), 0);
+    }
     if (out.detector->status() != vision::DetectorStatus::Ok) {
         return Unexpected(Error{"detector",
                                 "the pipeline failed (status " +

@@ -66,6 +66,7 @@ struct PairDetection {
 /// @param[in] left, right  8-bit grey images of calib.imageSize
 /// @param[in] calibName    named in errors (the file, or the data set's pair)
 /// @return the detector after process() with status Ok, or what failed (rectification, ground fit, pipeline).
+/// With config.matcher.groundRange the pair is processed twice: the second frame searches from the first's ground.
 Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, const cv::Mat& left,
                                         const cv::Mat& right, const vision::DetectorConfig& config,
                                         const std::string& calibName);

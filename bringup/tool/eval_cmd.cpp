@@ -83,6 +83,7 @@ struct SimOptions {
     std::vector<double> groundRanges = {1.5, 2.5, 3.75, 5.25, 7.0, 9.0};                ///< [m] ... at these ranges
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
     bool groundPrior = false; ///< RoiMatcherConfig::groundPrior
+    bool groundRange = false; ///< RoiMatcherConfig::groundRange
     bool colour = false;      ///< --detector colour: ColourFreeSpace on the left colour image, not stereo
 };
 
@@ -106,7 +107,8 @@ const char* textureName(sim::GroundTexture t)
 /// the same sector layout and the same mount.
 class SimDetector {
 public:
-    static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior, bool colour)
+    static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior, bool groundRange,
+                                             bool colour)
     {
         const sim::Rig rig;
         vision::StereoCalibration calib = vision::makeRectifiedCalibration(
@@ -115,6 +117,7 @@ public:
         vision::DetectorConfig config = detectorConfig(DetectionOptions{});
         config.matcher.mode = matcher;
         config.matcher.groundPrior = groundPrior;
+        config.matcher.groundRange = groundRange;
         vision::RectifierConfig rectConfig;
         rectConfig.roiMarginRows = config.marginRows;
         auto rectifier = vision::Rectifier::create(calib, rectConfig);
@@ -166,6 +169,7 @@ public:
             return false;
         }
         (void)detector_.process(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), frames_++, 0);
+        searchedSum_ += detector_.searchedFraction();
         return detector_.status() == vision::DetectorStatus::Ok;
     }
     [[nodiscard]] const ObstacleSectors& sectors() const { return colour_ ? colourSectors_ : detector_.sectors(); }
@@ -175,6 +179,11 @@ public:
     [[nodiscard]] const vision::DisparityPlane& ground() const { return ground_; }
     /// Frames run so far (each one rendered and detected).
     [[nodiscard]] std::uint64_t frames() const { return frames_; }
+    /// The matcher's cost cells searched over those of the full range, mean over the frames run so far.
+    [[nodiscard]] double meanSearchedFraction() const
+    {
+        return frames_ > 0 ? searchedSum_ / static_cast<double>(frames_) : 1.0;
+    }
     /// [s] since the detector was made.
     [[nodiscard]] double seconds() const
     {
@@ -203,6 +212,7 @@ private:
     ObstacleSectors colourSectors_;
     int notGroundLike_ = 0;
     std::uint64_t frames_ = 0;
+    double searchedSum_ = 0.0; ///< sum of ObstacleDetector::searchedFraction over the frames
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
@@ -227,7 +237,7 @@ std::vector<std::string> obstacleTypes(const SimOptions& o)
 /// A fresh detector for a run (the ground estimate's smoothing starts anew); prints the error when it cannot be made.
 std::optional<SimDetector> makeSimDetector(const SimOptions& o)
 {
-    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.colour);
+    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.groundRange, o.colour);
     if (!detector) {
         std::cerr << "ugvsense eval: error: " << detector.error().message() << '\n';
         return std::nullopt;
@@ -728,7 +738,9 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
          << ", \"overhang\": " << (overhangFalseFrames == 0 ? "true" : "false")
          << ", \"doorway\": " << (doorwayOk ? "true" : "false") << "}";
     const int rc = o.groundKinds.empty() && o.obstacleGrounds.empty() ? 0 : runGroundsSuite(o, det, json);
-    json << "\n  }";
+    std::printf("matcher cost cells searched (ground range %s): %.1f %% of the full range, mean over %d frames\n",
+                o.groundRange ? "on" : "off", 100.0 * det.meanSearchedFraction(), static_cast<int>(det.frames()));
+    json << ",\n    \"searched_fraction\": " << jsonNumber(det.meanSearchedFraction()) << "\n  }";
     return rc;
 }
 
@@ -998,7 +1010,8 @@ int runEval(int argc, char** argv)
         "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
         "MODE] "
-        "[--ground-prior] [--detector stereo|colour] [--json OUT] [--data DIR] [--skip-missing]",
+        "[--ground-prior] [--ground-range on|off] [--detector stereo|colour] [--json OUT] [--data DIR] "
+        "[--skip-missing]",
         {{"sim", "",
           "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway, and the new grounds: "
           "camber, grade, kerb, photometry, paint, rails, shadows, mirrors)",
@@ -1033,6 +1046,10 @@ int runEval(int argc, char** argv)
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
          {"ground-prior", "", "simulator: census SGM's top path follows the ground (RoiMatcherConfig::groundPrior)",
+          false},
+         {"ground-range", "on|off",
+          "simulator and real: census SGM's ground-guided disparity ranges (RoiMatcherConfig::groundRange; default: "
+          "its default); real pairs are then run twice, the second frame searching from the first's ground",
           false},
          {"detector", "NAME",
           "simulator suite: stereo (default) or colour: the one-camera mode (ColourFreeSpace on the left colour "
@@ -1082,6 +1099,15 @@ int runEval(int argc, char** argv)
     if (colourDetector && (!args.has("sim") || args.has("approach") || args.has("hole-signal"))) {
         return reportUsageError("eval", Error{"ugvsense eval --detector colour", "runs with --sim only",
                                               "give --sim (the approach and hole signal are stereo measures)"});
+    }
+    bool groundRange = vision::RoiMatcherConfig{}.groundRange;
+    if (args.has("ground-range")) {
+        const std::string value = args.get("ground-range");
+        if (value != "on" && value != "off") {
+            return reportUsageError("eval", Error{"ugvsense eval --ground-range", "'" + value + "' is not on or off",
+                                                  "use --ground-range on or --ground-range off"});
+        }
+        groundRange = value == "on";
     }
     std::filesystem::path root = "../shared/data";
     if (args.has("data")) {
@@ -1168,6 +1194,7 @@ int runEval(int argc, char** argv)
         }
         o.matcher = matcher;
         o.groundPrior = args.has("ground-prior");
+        o.groundRange = groundRange;
         if (colourDetector) {
             // The grounds of issue 23's one-camera targets; the empty scenes on the same ones.
             o.colour = true;
@@ -1213,6 +1240,7 @@ int runEval(int argc, char** argv)
         real.overlayDir = args.get("overlay-dir");
         real.mount = args.get("mount");
         real.verbose = args.has("verbose");
+        real.groundRange = groundRange;
         std::stringstream list(args.get("pairs"));
         for (std::string name; std::getline(list, name, ',');) {
             real.pairs.push_back(name);

@@ -438,7 +438,8 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         mount = *parsed;
     }
     const RealScoringRules rules;
-    const vision::DetectorConfig config = detectorConfig(DetectionOptions{});
+    vision::DetectorConfig config = detectorConfig(DetectionOptions{});
+    config.matcher.groundRange = options.groundRange;
     std::printf("\nReal pairs (%s), ground %s: obstacle sectors (GT 0.25-2.5 m above the GT road within 25 m) right "
                 "within max(1 m, 10 %%); ours against OpenCV StereoSGBM + RANSAC ground + 0.25 m threshold\n",
                 options.dir.string().c_str(),
@@ -447,6 +448,8 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
                 "opencv: same");
     RealTally oursTotal;
     RealTally baseTotal;
+    double searchedSum = 0.0; // CensusSgm::searchedFraction over the pairs
+    int searchedPairs = 0;
     json << "  \"real\": {\"mount\": \"" << (mount ? options.mount : "found") << "\", \"pairs\": [";
     bool first = true;
     std::vector<std::string> done; // index.csv has a row per GT file: a pair is scored once, on its first (noc)
@@ -562,8 +565,11 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
              << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg())
              << "}, \"image_noise_grey\": " << jsonNumber(run->detector->verifier().noiseSigma())
              << ", \"verifier_contrast_grey\": " << jsonNumber(run->detector->verifier().requiredContrast())
+             << ", \"searched_fraction\": " << jsonNumber(run->detector->searchedFraction())
              << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b) << "}";
         first = false;
+        searchedSum += run->detector->searchedFraction();
+        ++searchedPairs;
         if (!options.overlayDir.empty()) {
             cv::Mat colour = readImage(pair.left, cv::IMREAD_COLOR);
             vision::RectifierConfig fullConfig;
@@ -597,6 +603,9 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         baseTotal.merge(b);
     }
     std::printf("total:\n");
+    const double searched = searchedPairs > 0 ? searchedSum / searchedPairs : 1.0;
+    std::printf("matcher cost cells searched (ground range %s): %.1f %% of the full range, mean over the pairs\n",
+                config.matcher.groundRange ? "on" : "off", 100.0 * searched);
     printTally("ours", oursTotal);
     printTally("opencv", baseTotal);
     const auto verdict = [](bool ok) { return ok ? "PASS" : "FAIL"; };

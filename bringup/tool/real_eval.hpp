@@ -103,6 +103,7 @@ struct RealEvalOptions {
     std::string mount;                ///< "" (found), or "H,PITCH,ROLL" given to every pair
     std::vector<std::string> pairs;   ///< only these pairs (empty: all)
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
+    bool groundRange = false;         ///< RoiMatcherConfig::groundRange (detectPair then runs each pair twice)
 };
 
 /// "HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.

@@ -25,6 +25,13 @@ constexpr int kMaxIntensityClip = 31;
 constexpr int kMaxDisparities = 256;
 constexpr int kPaths = 3; ///< rows kept for the top, top-left and top-right paths
 constexpr std::uint16_t kNoCost = 0xFFFF;
+/// Search ranges start at a multiple of this (the kernels run over whole 16-disparity blocks).
+constexpr int kRangeBlock = 16;
+/// Entries just below a row's first searched disparity that are set to 255 after each path step, so that the next
+/// row's top paths (which read up to 1 + 5 entries below their own first disparity: the neighbour, and the ground
+/// prior's step of at most 5) see saturated costs there, not a value left by an earlier row.
+constexpr int kRangeGuard = 8;
+static_assert(kRangeGuard <= kRangeBlock && kRangeGuard <= kPad);
 
 Error configError(const std::string& what)
 {
@@ -194,6 +201,7 @@ Result<CensusSgm, Error> CensusSgm::create(const CensusSgmConfig& config, cv::Si
     sut.sum_.assign(cols * du, 0);
     sut.disp2Cost_.assign(w, kNoCost);
     sut.disp2_.assign(w, kInvalid);
+    sut.rowLo_.assign(h, 0);
     // cv::filterSpeckles reuses a continuous buffer of at least width * height * (4 + 4 + 1) bytes.
     sut.speckleBuffer_.create(1, static_cast<int>(w * h * 9), CV_8UC1);
     return sut;
@@ -245,20 +253,22 @@ void CensusSgm::costRow(int y) noexcept
 {
     const std::uint8_t* left = leftCensus_.data() + static_cast<std::ptrdiff_t>(y) * kRowPlanes * width_;
     const std::uint8_t* right = rightCensus_.data() + static_cast<std::ptrdiff_t>(y) * kRowPlanes * width_;
+    const int lo = rowLo_[static_cast<std::size_t>(y)];
+    const int n = d_ - lo;
     for (int i = 0; i < cols_; ++i) {
         const int x = x0_ + i;
         const std::uint8_t bytes[kRowPlanes] = {left[x], left[width_ + x], left[2 * width_ + x], left[3 * width_ + x],
                                                 left[4 * width_ + x]};
         // Right column x - k is reversed index width - 1 - x + k: ascending in k.
-        const std::uint8_t* r = right + (width_ - 1 - x);
-        std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        const std::uint8_t* r = right + (width_ - 1 - x) + lo;
+        std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * n; // entry k at k - lo
 #if (CV_SIMD || CV_SIMD_SCALABLE)
         if (config_.simd) {
-            simd::costPixelSimd(bytes, r, width_, d_, config_.intensityClip, cost);
+            simd::costPixelSimd(bytes, r, width_, n, config_.intensityClip, cost);
             continue;
         }
 #endif
-        costPixelScalar(bytes, r, width_, d_, config_.intensityClip, cost);
+        costPixelScalar(bytes, r, width_, n, config_.intensityClip, cost);
     }
 }
 
@@ -274,21 +284,67 @@ void CensusSgm::setGroundPrior(double a, double b, double c) noexcept
     groundC_ = c;
 }
 
+void CensusSgm::setSearchFloor(double a, double b, double c) noexcept
+{
+    searchFloor_ = std::isfinite(a) && std::isfinite(b) && std::isfinite(c);
+    floorA_ = a;
+    floorB_ = b;
+    floorC_ = c;
+}
+
+void CensusSgm::searchRanges() noexcept
+{
+    std::int64_t searched = 0;
+    for (int y = 0; y < height_; ++y) {
+        int lo = 0;
+        if (searchFloor_) {
+            // The smallest floor over the matched columns: f is linear in x, so at one of the two ends.
+            const double atRow = floorB_ * y + floorC_ + std::min(floorA_ * x0_, floorA_ * (width_ - 1));
+            const int floorPx = static_cast<int>(std::clamp(atRow, 0.0, static_cast<double>(d_)));
+            lo = std::min(floorPx / kRangeBlock * kRangeBlock, d_ - kRangeBlock);
+        }
+        rowLo_[static_cast<std::size_t>(y)] = lo;
+        searched += d_ - lo;
+    }
+    searchedFraction_ = static_cast<double>(searched) / (static_cast<double>(d_) * height_);
+}
+
 void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int y) noexcept
 {
     const bool useSimd = config_.simd;
     const bool vertical = config_.paths >= 3;
     const bool diagonals = config_.paths == 5;
+    // This row searches [lo, d_) (searchRanges). The path entries keep the full range's layout (entry k at index k:
+    // the next row reads them at its own range); cost_ and sum_ hold only this row's n entries per column (entry k
+    // at k - lo), so that a shorter range also touches less memory.
+    const int lo = rowLo_[static_cast<std::size_t>(y)];
+    const int n = d_ - lo;
     const auto step = [&](const std::uint8_t* prev, int minPrev, const std::uint8_t* cost, std::uint8_t* out) {
 #if (CV_SIMD || CV_SIMD_SCALABLE)
         if (useSimd) {
-            return simd::pathStepSimd(prev, minPrev, cost, out, d_, config_.p1, config_.p2);
+            return simd::pathStepSimd(prev + lo, minPrev, cost, out + lo, n, config_.p1, config_.p2);
         }
 #endif
-        return pathStepScalar(prev, minPrev, cost, out, d_, config_.p1, config_.p2);
+        return pathStepScalar(prev + lo, minPrev, cost, out + lo, n, config_.p1, config_.p2);
+    };
+    const auto guard = [lo](std::uint8_t* entry) {
+        if (lo > 0) {
+            std::memset(entry + lo - kRangeGuard, 255, kRangeGuard);
+        }
     };
     const int prev = parity_;
     const int cur = 1 - parity_;
+    // A row that searches lower than the row above: the row above's entries below its range hold values of older
+    // rows. Saturate them (rare: the floor falls down the image only on a plane with b < 0).
+    const int loAbove = y > 0 ? rowLo_[static_cast<std::size_t>(y - 1)] : 0;
+    if (loAbove > lo && (vertical || diagonals)) {
+        const int from = std::max(0, lo - kRangeGuard);
+        for (int path = 0; path < kPaths; ++path) {
+            for (int e = 1; e <= cols_; ++e) {
+                std::memset(pathEntry(prev, path, e) + from, 255, static_cast<std::size_t>(loAbove - from));
+            }
+        }
+    }
     const auto minIndex = [this](int half, int path, int entry) {
         return static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
     };
@@ -301,13 +357,15 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
     const double aboveGround0 = groundB_ * (y - 1) + groundC_;
     const double tolerance16 = config_.groundPriorTolerancePx * kScale;
     const auto horizontal = [this](int i) { return horizontal_.data() + (1 + (i & 1)) * stride_ + kPad; };
+    guard(horizontal(0)); // the horizontal paths read the entry below lo of the previous column's
+    guard(horizontal(1));
 
     // Forward: left-to-right, top, top-left and top-right; their sum into sum_.
     const std::uint8_t* hPrev = border;
     int hMin = 255;
     for (int i = 0; i < cols_; ++i) {
         const int e = i + 1;
-        const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * n;
         std::uint8_t* h = horizontal(i);
         hMin = step(hPrev, hMin, cost, h);
         hPrev = h;
@@ -323,6 +381,7 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
             // Entry k continues entry k - shift of the row above; the pads (255) stand in past the range ends.
             pathMin_[minIndex(cur, 0, e)] =
                 step(pathEntry(prev, 0, e) - shift, pathMin_[minIndex(prev, 0, e)], cost, t);
+            guard(t);
             top = t;
         }
         const std::uint8_t* topLeft = zeros_.data();
@@ -334,17 +393,19 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
                 step(pathEntry(prev, 1, e - 1), pathMin_[minIndex(prev, 1, e - 1)], cost, tl);
             pathMin_[minIndex(cur, 2, e)] =
                 step(pathEntry(prev, 2, e + 1), pathMin_[minIndex(prev, 2, e + 1)], cost, tr);
+            guard(tl);
+            guard(tr);
             topLeft = tl;
             topRight = tr;
         }
-        std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * n;
 #if (CV_SIMD || CV_SIMD_SCALABLE)
         if (useSimd) {
-            simd::sumFourSimd(h, top, topLeft, topRight, sum, d_);
+            simd::sumFourSimd(h + lo, top + lo, topLeft + lo, topRight + lo, sum, n);
             continue;
         }
 #endif
-        sumFourScalar(h, top, topLeft, topRight, sum, d_);
+        sumFourScalar(h + lo, top + lo, topLeft + lo, topRight + lo, sum, n);
     }
 
     // Backward: right-to-left completes each column's sum, then the winner of that column.
@@ -353,42 +414,45 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
     hPrev = border;
     hMin = 255;
     for (int i = cols_ - 1; i >= 0; --i) {
-        const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * n;
         std::uint8_t* h = horizontal(i);
         hMin = step(hPrev, hMin, cost, h);
         hPrev = h;
-        std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+        std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * n;
         std::uint16_t minSum = 0;
 #if (CV_SIMD || CV_SIMD_SCALABLE)
         if (useSimd) {
-            minSum = simd::addAndMinSimd(h, sum, d_);
+            minSum = simd::addAndMinSimd(h + lo, sum, n);
         } else {
-            minSum = addAndMinScalar(h, sum, d_);
+            minSum = addAndMinScalar(h + lo, sum, n);
         }
 #else
-        minSum = addAndMinScalar(h, sum, d_);
+        minSum = addAndMinScalar(h + lo, sum, n);
 #endif
-        winner(i, minSum, disp);
+        winner(i, lo, minSum, disp);
     }
     parity_ = cur;
 }
 
-void CensusSgm::winner(int i, std::uint16_t minSum, std::int16_t* disp) noexcept
+void CensusSgm::winner(int i, int lo, std::uint16_t minSum, std::int16_t* disp) noexcept
 {
-    std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * d_;
+    // The row's sums: n = d_ - lo entries per column, disparity lo + j at j (only the searched ones).
+    const int n = d_ - lo;
+    std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * n;
     const int x = x0_ + i;
-    const int best = firstIndexOf(sum, d_, minSum, config_.simd);
+    const int j = firstIndexOf(sum, n, minSum, config_.simd);
+    const int best = lo + j;
     // Second best outside best +- 1: mask the three, take the minimum, restore.
-    const int lo = std::max(0, best - 1);
-    const int hi = std::min(d_ - 1, best + 1);
+    const int maskLo = std::max(0, j - 1);
+    const int maskHi = std::min(n - 1, j + 1);
     std::uint16_t saved[3] = {0, 0, 0};
-    for (int k = lo; k <= hi; ++k) {
-        saved[k - lo] = sum[k];
+    for (int k = maskLo; k <= maskHi; ++k) {
+        saved[k - maskLo] = sum[k];
         sum[k] = kNoCost;
     }
-    const std::uint16_t second = minOf(sum, d_, config_.simd);
-    for (int k = lo; k <= hi; ++k) {
-        sum[k] = saved[k - lo];
+    const std::uint16_t second = minOf(sum, n, config_.simd);
+    for (int k = maskLo; k <= maskHi; ++k) {
+        sum[k] = saved[k - maskLo];
     }
     if (static_cast<int>(second) * (100 - config_.uniquenessRatio) <= static_cast<int>(minSum) * 100) {
         disp[x] = kInvalid;
@@ -400,9 +464,9 @@ void CensusSgm::winner(int i, std::uint16_t minSum, std::int16_t* disp) noexcept
         disp2_[static_cast<std::size_t>(x2)] = static_cast<std::int16_t>(best);
     }
     int value = best * kScale;
-    if (best > 0 && best < d_ - 1) {
-        const int before = sum[best - 1];
-        const int after = sum[best + 1];
+    if (j > 0 && j < n - 1) {
+        const int before = sum[j - 1];
+        const int after = sum[j + 1];
         const int denom = std::max(before + after - 2 * static_cast<int>(minSum), 1);
         value += ((before - after) * kScale + denom) / (denom * 2);
     }
@@ -450,6 +514,7 @@ bool CensusSgm::match(ConstImageViewU8 left, ConstImageViewU8 right, cv::Mat& di
     std::fill(paths_.begin(), paths_.end(), std::uint8_t{255});
     std::fill(pathMin_.begin(), pathMin_.end(), std::uint8_t{255});
     parity_ = 0;
+    searchRanges();
     lap.to(VisionStage::Census);
     for (int y = 0; y < height_; ++y) {
         auto* disp = disp16.ptr<std::int16_t>(y);

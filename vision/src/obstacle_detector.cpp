@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <utility>
 
@@ -13,6 +14,28 @@ namespace {
 void setGroundPrior(RoiMatcher& matcher, const DisparityPlane& p, Rect roi) noexcept
 {
     matcher.setGroundPrior(p.a, p.b, p.c + p.a * roi.x + p.b * roi.y);
+}
+
+/// The matcher's search floor for the next frame from this frame's ground estimate (RoiMatcherConfig::groundRange
+/// explains the geometry): s g - m with s = h / (h + drop) and m the disparity change of a pitch and roll of
+/// margin degrees; the full range when the estimate is not reliable.
+void setSearchFloor(RoiMatcher& matcher, const GroundEstimate& estimate, const RectifiedProjection& projection,
+                    Rect roi) noexcept
+{
+    const RoiMatcherConfig& config = matcher.config();
+    const double h = estimate.plane.heightM; // [m]
+    if (!config.groundRange || !estimate.reliable || !(h > 0.0)) {
+        matcher.clearSearchFloor();
+        return;
+    }
+    constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+    const double scale = h / (h + config.groundRangeDropM);
+    // d = (B / h) (v cos(pitch) + f sin(pitch)) + roll term: a pitch change moves a row's ground by about
+    // (B / h) f per radian, a roll change by (B / h) |x - cx| with |x - cx| up to half the width.
+    const double marginPx = projection.baselineM / h * (projection.fx + 0.5 * roi.width) *
+                            std::tan(config.groundRangeMarginDeg * kRadPerDeg);
+    const DisparityPlane& g = estimate.disparity;
+    matcher.setSearchFloor(scale * g.a, scale * g.b, scale * (g.c + g.a * roi.x + g.b * roi.y) - marginPx);
 }
 
 } // namespace
@@ -110,7 +133,8 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
     StageLap lap(&times_);
     const GroundEstimate& estimate = estimator_.update(matcher_.disparityView());
     ground_ = estimate.plane;
-    setGroundPrior(matcher_, estimate.disparity, roi_); // for the next frame's top path
+    setGroundPrior(matcher_, estimate.disparity, roi_);    // for the next frame's top path
+    setSearchFloor(matcher_, estimate, projection_, roi_); // for the next frame's search ranges
     lap.to(VisionStage::Ground);
     ConstImageViewU8 labels;
     const bool warped =
@@ -147,6 +171,7 @@ const ObstacleSectors& ObstacleDetector::processGroundOnly(ConstImageViewU8 rect
     }
     times_.clear();
     StageLap lap(&times_);
+    matcher_.clearSearchFloor(); // no estimate this frame: the next dense frame searches the full range
     ground_ = configuredGround_;
     const DisparityPlane plane = ground_.disparityPlane(projection_);
     const bool warped = warpGround(rectLeftRoi, plane, roi_.y, warped_.view(), spans_) == GroundWarpStatus::Ok;

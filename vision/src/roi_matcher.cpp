@@ -8,6 +8,8 @@ namespace ugv::vision {
 namespace {
 
 constexpr int kMaxBlockSize = 11;
+constexpr double kMaxGroundRangeDropM = 10.0;     ///< [m]
+constexpr double kMaxGroundRangeMarginDeg = 10.0; ///< [deg]
 
 Error configError(const std::string& what)
 {
@@ -50,6 +52,13 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
     if (config.uniquenessRatio < 0 || config.speckleWindowSize < 0 || config.speckleRange < 0 ||
         config.preFilterCap < 1) {
         return Unexpected(configError("uniquenessRatio, speckle settings or preFilterCap out of range"));
+    }
+    if (!(config.groundRangeDropM > 0.0 && config.groundRangeDropM <= kMaxGroundRangeDropM) ||
+        !(config.groundRangeMarginDeg >= 0.0 && config.groundRangeMarginDeg <= kMaxGroundRangeMarginDeg)) {
+        return Unexpected(configError("groundRangeDropM " + std::to_string(config.groundRangeDropM) +
+                                      " (need (0, 10] m) or groundRangeMarginDeg " +
+                                      std::to_string(config.groundRangeMarginDeg) +
+                                      " (need [0, 10] deg) out of range"));
     }
     if (roiSize.width <= config.numDisparities || roiSize.height < config.blockSize) {
         return Unexpected(configError("ROI " + std::to_string(roiSize.width) + "x" + std::to_string(roiSize.height) +
@@ -99,6 +108,25 @@ void RoiMatcher::setGroundPrior(double a, double b, double c) noexcept
     if (census_ && config_.groundPrior) {
         census_->setGroundPrior(a, b, c - a * pad_); // padded column x_p = x + pad_
     }
+}
+
+void RoiMatcher::setSearchFloor(double a, double b, double c) noexcept
+{
+    if (census_ && config_.groundRange) {
+        census_->setSearchFloor(a, b, c - a * pad_); // padded column x_p = x + pad_
+    }
+}
+
+void RoiMatcher::clearSearchFloor() noexcept
+{
+    if (census_) {
+        census_->clearSearchFloor();
+    }
+}
+
+double RoiMatcher::searchedFraction() const noexcept
+{
+    return census_ ? census_->searchedFraction() : 1.0;
 }
 
 MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times) noexcept

@@ -55,7 +55,8 @@ TEST(Config, EveryKeyIsParsed)
         "camera:\n  backend: v4l2\n  left_device: /dev/video4\n  right_device: ''\n  width: 1280\n"
         "  height: 720\n  fps: 15\n  max_pair_skew_ms: 2.5\n  replay_path: /r\n  replay_pace: fixed\n  replay_fps: 60\n"
         "roi:\n  top_fraction: 0.4\n  matcher_margin_rows: 4\n"
-        "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n"
+        "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n  ground_range: false\n"
+        "  ground_range_drop_m: 0.5\n  ground_range_margin_deg: 2.5\n"
         "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
         "  min_height_m: 0.2\n  min_depth_m: 0.15\n"
         "overload:\n  policy: drop\n  deadline_factor: 2\n"
@@ -79,6 +80,9 @@ TEST(Config, EveryKeyIsParsed)
     EXPECT_EQ(sut->stereo.mode, MatcherMode::Sgbm3Way);
     EXPECT_EQ(sut->stereo.numDisparities, 64);
     EXPECT_EQ(sut->stereo.blockSize, 7);
+    EXPECT_FALSE(sut->stereo.groundRange);
+    EXPECT_DOUBLE_EQ(sut->stereo.groundRangeDropM, 0.5);
+    EXPECT_DOUBLE_EQ(sut->stereo.groundRangeMarginDeg, 2.5);
     EXPECT_EQ(sut->obstacles.detector, DetectorMode::Both);
     EXPECT_EQ(sut->obstacles.sectorCount, 32);
     EXPECT_DOUBLE_EQ(sut->obstacles.dangerDistanceM, 1.0);
@@ -169,6 +173,20 @@ TEST(Config, CrossFieldRulesAreChecked)
     EXPECT_NE(text.find("multiple of 16"), std::string::npos);
     EXPECT_NE(text.find("is even"), std::string::npos);
     EXPECT_NE(text.find("not above danger_distance_m"), std::string::npos);
+}
+
+TEST(Config, GroundRangeNeedsTheCensusMatcherAndAPositiveDrop)
+{
+    const auto on = parseConfig(std::string(kValidMinimal) + "stereo:\n  ground_range: true\n", "test.yaml", "/");
+    const auto errors = parseErrors(std::string(kValidMinimal) +
+                                    "stereo:\n  mode: sgbm\n  ground_range: true\n  ground_range_drop_m: 0\n");
+    const std::string text = joined(errors);
+
+    ASSERT_TRUE(on.has_value()) << joined(on.error());
+    EXPECT_TRUE(on->stereo.groundRange);
+    EXPECT_EQ(errors.size(), 2u) << text;
+    EXPECT_NE(text.find("stereo.ground_range_drop_m"), std::string::npos) << text;
+    EXPECT_NE(text.find("is true but stereo.mode is sgbm"), std::string::npos) << text;
 }
 
 TEST(Config, DisparityRangeMustFitTheImage)

@@ -1,7 +1,10 @@
 #include "ugv/vision/census_sgm.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <string_view>
 
 #include <gtest/gtest.h>
@@ -151,26 +154,158 @@ TEST(CensusSgm, SimdMatchesScalar)
     const cv::Mat right = frame->right(roi).clone();
     // 128 (the default, whole 256-bit blocks), and counts that end in a 128-bit block (48, 16) or are one (16):
     // the kernels must neither run past the last disparity nor skip it (ASan checks the first in its build).
+    // Ranged (setSearchFloor): a floor rising down the rows (the ground's: ranges that start at 16, 32, ... and
+    // so end in either block width), one falling down the rows (the rows above hold stale entries below their
+    // range, which must read as saturated), each also with the ground prior's shifted top path.
+    struct Floor {
+        const char* name;
+        double b; ///< [px per row] the floor d = 0.02 x + b y + c
+        double c; ///< [px]
+        bool prior;
+    };
+    constexpr Floor kFloors[] = {{"full range", 0.0, -1.0, false},
+                                 {"rising floor", 0.45, -20.0, false},
+                                 {"rising floor and prior", 0.45, -20.0, true},
+                                 {"falling floor", -0.45, 100.0, true}};
     for (const int disparities : {128, 48, 16}) {
         for (const int paths : {3, 5}) {
-            SCOPED_TRACE("numDisparities " + std::to_string(disparities) + ", paths " + std::to_string(paths));
-            CensusSgmConfig simdConfig;
-            simdConfig.numDisparities = disparities;
-            simdConfig.paths = paths;
-            CensusSgmConfig scalarConfig = simdConfig;
-            scalarConfig.simd = false;
-            auto simd = makeSut(simdConfig, roi.size());
-            auto scalar = makeSut(scalarConfig, roi.size());
-            cv::Mat a(roi.size(), CV_16SC1);
-            cv::Mat b(roi.size(), CV_16SC1);
+            for (const Floor& floor : kFloors) {
+                SCOPED_TRACE("numDisparities " + std::to_string(disparities) + ", paths " + std::to_string(paths) +
+                             ", " + floor.name);
+                CensusSgmConfig simdConfig;
+                simdConfig.numDisparities = disparities;
+                simdConfig.paths = paths;
+                CensusSgmConfig scalarConfig = simdConfig;
+                scalarConfig.simd = false;
+                auto simd = makeSut(simdConfig, roi.size());
+                auto scalar = makeSut(scalarConfig, roi.size());
+                for (CensusSgm* sut : {&simd, &scalar}) {
+                    sut->setSearchFloor(0.02, floor.b, floor.c);
+                    if (floor.prior) {
+                        sut->setGroundPrior(0.0, 0.5, -5.0);
+                    }
+                }
+                cv::Mat a(roi.size(), CV_16SC1);
+                cv::Mat b(roi.size(), CV_16SC1);
 
-            ASSERT_TRUE(simd.match(viewOf(left), viewOf(right), a));
-            ASSERT_TRUE(scalar.match(viewOf(left), viewOf(right), b));
+                ASSERT_TRUE(simd.match(viewOf(left), viewOf(right), a));
+                ASSERT_TRUE(scalar.match(viewOf(left), viewOf(right), b));
 
-            EXPECT_EQ(cv::countNonZero(a != b), 0);
-            EXPECT_GT(cv::countNonZero(a >= 0), roi.area() / 4); // a real disparity map, not two empty ones
+                EXPECT_EQ(cv::countNonZero(a != b), 0);
+                EXPECT_GT(cv::countNonZero(a >= 0), roi.area() / 4); // a real disparity map, not two empty ones
+                EXPECT_EQ(simd.searchedFraction(), scalar.searchedFraction());
+                if (disparities > 16 && floor.c > 0.0) {
+                    EXPECT_LT(simd.searchedFraction(), 1.0);
+                }
+            }
         }
     }
+}
+
+/// The simulator's box pair at the default ROI, and the floor of the default rig's ground (0.59 m, level) for
+/// drops down to 0.3 m and a margin of 6 px: the search floor ObstacleDetector derives (RoiMatcherConfig).
+struct RangedCase {
+    cv::Mat left;
+    cv::Mat right;
+    DisparityPlane floor; ///< in ROI coordinates
+};
+
+RangedCase rangedCase(const char* scene, std::uint64_t seed)
+{
+    auto made = sim::makeScene(scene, 4.0, 5.0, sim::GroundTexture::Gravel, seed);
+    EXPECT_TRUE(made.has_value());
+    auto frame = sim::render(made.value());
+    EXPECT_TRUE(frame.has_value());
+    const cv::Rect roi(0, 232, 640, 248);
+    const sim::Rig rig;
+    const DisparityPlane ground =
+        GroundPlane::fromMount(Mount{rig.heightM, rig.pitchDeg, rig.rollDeg})
+            .disparityPlane(RectifiedProjection{rig.focalPx, rig.focalPx, rig.cx(), rig.cy(), rig.baselineM});
+    const double scale = rig.heightM / (rig.heightM + 0.3);
+    return {frame->left(roi).clone(), frame->right(roi).clone(),
+            DisparityPlane{scale * ground.a, scale * ground.b, scale * (ground.c + ground.b * roi.y) - 6.0}};
+}
+
+TEST(CensusSgm, SearchFloorBelowZeroIsTheFullRange)
+{
+    const RangedCase pair = rangedCase("box", 11);
+    auto sut = makeSut(CensusSgmConfig{}, pair.left.size());
+    cv::Mat full(pair.left.size(), CV_16SC1);
+    cv::Mat floored(pair.left.size(), CV_16SC1);
+    cv::Mat cleared(pair.left.size(), CV_16SC1);
+
+    ASSERT_TRUE(sut.match(viewOf(pair.left), viewOf(pair.right), full));
+    sut.setSearchFloor(0.0, 0.0, -0.5); // below every disparity: nothing cut
+    ASSERT_TRUE(sut.match(viewOf(pair.left), viewOf(pair.right), floored));
+    const double flooredFraction = sut.searchedFraction();
+    sut.setSearchFloor(pair.floor.a, pair.floor.b, pair.floor.c);
+    sut.clearSearchFloor();
+    ASSERT_TRUE(sut.match(viewOf(pair.left), viewOf(pair.right), cleared));
+
+    EXPECT_EQ(cv::countNonZero(full != floored), 0);
+    EXPECT_EQ(cv::countNonZero(full != cleared), 0);
+    EXPECT_EQ(flooredFraction, 1.0);
+    EXPECT_EQ(sut.searchedFraction(), 1.0);
+}
+
+TEST(CensusSgm, SearchFloorCutsTheRowsBelowTheGroundAndKeepsWhatLiesAbove)
+{
+    const RangedCase pair = rangedCase("box", 11);
+    auto sut = makeSut(CensusSgmConfig{}, pair.left.size());
+    cv::Mat full(pair.left.size(), CV_16SC1);
+    cv::Mat ranged(pair.left.size(), CV_16SC1);
+    ASSERT_TRUE(sut.match(viewOf(pair.left), viewOf(pair.right), full));
+    sut.setSearchFloor(pair.floor.a, pair.floor.b, pair.floor.c);
+
+    ASSERT_TRUE(sut.match(viewOf(pair.left), viewOf(pair.right), ranged));
+
+    // The expected ranges: the floor at the row's lowest column, rounded down to 16, at most 112.
+    long long searched = 0;
+    int belowRange = 0;
+    int compared = 0;
+    int same = 0;
+    for (int y = 0; y < ranged.rows; ++y) {
+        const double atRow = pair.floor.b * y + pair.floor.c + std::min(pair.floor.a * 127, pair.floor.a * 639);
+        const int lo = std::min(static_cast<int>(std::clamp(atRow, 0.0, 128.0)) / 16 * 16, 112);
+        searched += 128 - lo;
+        for (int x = 127; x < ranged.cols; ++x) {
+            const std::int16_t d = ranged.at<std::int16_t>(y, x);
+            belowRange += d >= 0 && d < lo * CensusSgm::kScale ? 1 : 0;
+            const std::int16_t f = full.at<std::int16_t>(y, x);
+            if (f >= (lo + 2) * CensusSgm::kScale) { // the full range found it well inside this row's range
+                ++compared;
+                same += d >= 0 && std::abs(d - f) <= CensusSgm::kScale / 2 ? 1 : 0;
+            }
+        }
+    }
+    const double expectedFraction = static_cast<double>(searched) / (128.0 * ranged.rows);
+    std::printf("[ MEASURED ] default rig, drops to 0.3 m, margin 6 px: %.1f %% of the cost cells searched; %d of %d "
+                "disparities inside the range found again within 0.5 px\n",
+                100.0 * sut.searchedFraction(), same, compared);
+    EXPECT_DOUBLE_EQ(sut.searchedFraction(), expectedFraction);
+    EXPECT_LT(sut.searchedFraction(), 0.85);
+    EXPECT_EQ(belowRange, 0);
+    ASSERT_GT(compared, ranged.total() / 4);
+    EXPECT_GT(same, compared * 97 / 100);
+}
+
+TEST(CensusSgm, RangedMatchDoesNotDependOnEarlierFrames)
+{
+    const RangedCase first = rangedCase("pole", 3);
+    const RangedCase second = rangedCase("box", 11);
+    auto used = makeSut(CensusSgmConfig{.paths = 5}, first.left.size());
+    auto fresh = makeSut(CensusSgmConfig{.paths = 5}, first.left.size());
+    cv::Mat a(first.left.size(), CV_16SC1);
+    cv::Mat b(first.left.size(), CV_16SC1);
+    used.setSearchFloor(0.0, -0.45, 100.0); // a falling floor leaves other values below each row's range
+    ASSERT_TRUE(used.match(viewOf(first.left), viewOf(first.right), a));
+    used.setSearchFloor(second.floor.a, second.floor.b, second.floor.c);
+    fresh.setSearchFloor(second.floor.a, second.floor.b, second.floor.c);
+
+    ASSERT_TRUE(used.match(viewOf(second.left), viewOf(second.right), a));
+    ASSERT_TRUE(fresh.match(viewOf(second.left), viewOf(second.right), b));
+
+    EXPECT_EQ(cv::countNonZero(a != b), 0);
 }
 
 /// Mean error [px] of `disp` against the simulator's truth over ground pixels of full-frame rows [y0, y1).
@@ -233,6 +368,12 @@ TEST(CensusSgm, NoAllocationPerMatch)
 
     const test::AllocationScope scope;
     for (int i = 0; i < 20; ++i) {
+        // Full range, then ranged (rising and falling floors), then the full range again.
+        if (i % 3 == 0) {
+            sut.clearSearchFloor();
+        } else {
+            sut.setSearchFloor(0.01, i % 3 == 1 ? 0.3 : -0.3, i % 3 == 1 ? -10.0 : 90.0);
+        }
         ASSERT_TRUE(sut.match(viewOf(left), viewOf(right), disp));
     }
 

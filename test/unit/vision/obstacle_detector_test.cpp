@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -281,10 +282,13 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
         }
         return scope.count();
     };
-    for (const MatcherMode mode : {MatcherMode::CensusSgm, MatcherMode::Sgbm3Way}) {
+    for (const auto& [mode, ranged] :
+         {std::pair{MatcherMode::CensusSgm, false}, std::pair{MatcherMode::CensusSgm, true},
+          std::pair{MatcherMode::Sgbm3Way, false}}) {
         frames = mode == MatcherMode::CensusSgm ? 300 : 60;
         DetectorConfig config;
         config.matcher.mode = mode;
+        config.matcher.groundRange = ranged;
         auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
         auto matcher = RoiMatcher::create(config.matcher, cv::Size(kRoi.width, kRoi.height)).value();
         (void)sut.process(roiView(a.left), roiView(a.right), 0U, 0);
@@ -297,9 +301,9 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
             (void)matcher.match(roiView(frame.left), roiView(frame.right));
         });
 
-        std::printf("[ MEASURED ] matcher mode %d, %d frames: detector %zu allocations (%.1f per frame), bare "
+        std::printf("[ MEASURED ] matcher mode %d%s, %d frames: detector %zu allocations (%.1f per frame), bare "
                     "matcher %zu\n",
-                    static_cast<int>(mode), frames, detectorAllocations,
+                    static_cast<int>(mode), ranged ? " ranged" : "", frames, detectorAllocations,
                     static_cast<double>(detectorAllocations) / frames, matcherAllocations);
         EXPECT_EQ(sut.status(), DetectorStatus::Ok);
         EXPECT_EQ(detectorAllocations, matcherAllocations);
@@ -326,6 +330,34 @@ float nearestInTruthSectors(const ObstacleSectors& got, const ObstacleSectors& t
         }
     }
     return nearest;
+}
+
+TEST(ObstacleDetector, GroundRangeFollowsThePreviousFramesReliableGround)
+{
+    DetectorConfig config;
+    config.matcher.groundRange = true;
+    auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
+    const auto frame = renderScene("pole", 4.0, 0.0);
+
+    const ObstacleSectors first = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    const double firstSearched = sut.searchedFraction();
+    const bool reliable = sut.groundEstimate().reliable;
+    const ObstacleSectors second = sut.process(roiView(frame.left), roiView(frame.right), 2U, 0);
+    const double secondSearched = sut.searchedFraction();
+    (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 3U, 0);
+    (void)sut.process(roiView(frame.left), roiView(frame.right), 4U, 0);
+    const double afterGroundOnly = sut.searchedFraction();
+
+    std::printf("[ MEASURED ] pole at 4 m, default rig: %.1f %% of the cost cells searched with the ground range; "
+                "nearest %.3f m (full range %.3f m)\n",
+                100.0 * secondSearched, nearestInTruthSectors(second, frame.sectors),
+                nearestInTruthSectors(first, frame.sectors));
+    EXPECT_EQ(firstSearched, 1.0); // no previous frame: the full range
+    ASSERT_TRUE(reliable);
+    EXPECT_LT(secondSearched, 0.9);
+    EXPECT_GT(secondSearched, 0.5);
+    EXPECT_EQ(afterGroundOnly, 1.0); // the ground-only frame has no estimate: the full range again
+    EXPECT_NEAR(nearestInTruthSectors(second, frame.sectors), 4.0, 0.12);
 }
 
 TEST(ObstacleDetector, GroundOnlyPathFindsObstaclesIsNeverClearAndIsFlaggedDegraded)

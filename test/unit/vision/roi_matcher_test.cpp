@@ -53,10 +53,16 @@ TEST(RoiMatcher, CreateRejectsInvalidConfig)
     evenBlock.blockSize = 4;
     RoiMatcherConfig negativeUniqueness;
     negativeUniqueness.uniquenessRatio = -1;
+    RoiMatcherConfig noDrop;
+    noDrop.groundRangeDropM = 0.0;
+    RoiMatcherConfig nanMargin;
+    nanMargin.groundRangeMarginDeg = std::nan("");
 
     EXPECT_FALSE(RoiMatcher::create(notMultipleOf16, cv::Size(kWidth, kRoiHeight)).has_value());
     EXPECT_FALSE(RoiMatcher::create(evenBlock, cv::Size(kWidth, kRoiHeight)).has_value());
     EXPECT_FALSE(RoiMatcher::create(negativeUniqueness, cv::Size(kWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(noDrop, cv::Size(kWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(nanMargin, cv::Size(kWidth, kRoiHeight)).has_value());
     EXPECT_FALSE(RoiMatcher::create(RoiMatcherConfig{}, cv::Size(100, kRoiHeight)).has_value()); // width <= D
 }
 

@@ -58,6 +58,11 @@ struct StereoConfig {
     MatcherMode mode = MatcherMode::CensusSgm; ///< the detector's default (vision/roi_matcher.hpp)
     int numDisparities = 128;                  ///< [px] multiple of 16
     int blockSize = 5;                         ///< [px] odd
+    /// Ground-guided disparity ranges of the census SGM: vision::RoiMatcherConfig::groundRange and its two
+    /// parameters, with the same defaults (test unit-bringup-config: DefaultsMatchTheDetectors).
+    bool groundRange = false;
+    double groundRangeDropM = 0.3;     ///< [m]
+    double groundRangeMarginDeg = 1.5; ///< [deg]
 };
 
 struct ObstacleConfig {

@@ -11,6 +11,9 @@
 /// Output convention: CV_16S, d * 16, invalid = -16; columns x < numDisparities - 1 (whose search range
 /// leaves the right image) are invalid, as in OpenCV.
 ///
+/// Optionally each row searches only [floor(y), numDisparities) (setSearchFloor: ground-guided ranges); the
+/// buffers keep the full range's layout, and the kernels run over the searched 16-disparity blocks only.
+///
 /// Vectorised with OpenCV universal intrinsics (census_sgm.simd.hpp); a scalar reference (config.simd = false)
 /// gives bit-identical results (test unit-vision-detect CensusSgm.SimdMatchesScalar).
 
@@ -78,6 +81,21 @@ public:
     /// Non-finite values (or |b| > 4 px per row) turn the prior off: the plain top path.
     void setGroundPrior(double a, double b, double c) noexcept;
 
+    /// Ground-guided search ranges: row y searches only the disparities d >= floor(y), where floor(y) is the
+    /// smallest value over the matched columns of f(x, y) = a x + b y + c [px], rounded down to a multiple of 16
+    /// (the kernels' block) and at most numDisparities - 16; rows where f <= 0 search the full range. The caller
+    /// derives f from the ground (ObstacleDetector: RoiMatcherConfig::groundRange). Path costs of the disparities
+    /// a row does not search count as saturated (255) for the next row's top paths; the winner, uniqueness test,
+    /// sub-pixel fit and left-right check see only the searched disparities, so a point whose disparity lies
+    /// below the floor is reported at the floor or invalid. RT-safe; takes effect from the next match().
+    /// Non-finite values clear the floor (the full range).
+    void setSearchFloor(double a, double b, double c) noexcept;
+    /// The full range in every row from the next match() on.
+    void clearSearchFloor() noexcept { searchFloor_ = false; }
+    /// Cost cells (columns x disparities) searched by the last match() over those of the full range: 1 without a
+    /// floor.
+    [[nodiscard]] double searchedFraction() const noexcept { return searchedFraction_; }
+
     [[nodiscard]] cv::Size size() const noexcept { return {width_, height_}; }
     [[nodiscard]] const CensusSgmConfig& config() const noexcept { return config_; }
 
@@ -85,9 +103,10 @@ private:
     CensusSgm() = default;
 
     void census(ConstImageViewU8 image, std::uint8_t* planes, bool reversed) noexcept;
+    void searchRanges() noexcept;
     void costRow(int y) noexcept;
     void aggregateRow(std::int16_t* disp, const std::int16_t* above, int y) noexcept;
-    void winner(int i, std::uint16_t minSum, std::int16_t* disp) noexcept;
+    void winner(int i, int lo, std::uint16_t minSum, std::int16_t* disp) noexcept;
     void leftRightCheck(std::int16_t* disp) const noexcept;
     [[nodiscard]] std::uint8_t* pathEntry(int half, int path, int entry) noexcept;
 
@@ -103,20 +122,26 @@ private:
     std::vector<std::uint8_t> censusRow_;   ///< 4 planes of one row before they are stored (maybe reversed)
     std::vector<std::uint8_t> leftCensus_;  ///< 5 byte planes per row (census 4, intensity 1): [y][plane][x]
     std::vector<std::uint8_t> rightCensus_; ///< same, columns reversed (x -> width - 1 - x)
-    std::vector<std::uint8_t> cost_;        ///< cols x d: Hamming cost of the current row
+    std::vector<std::uint8_t> cost_;        ///< cols x d: cost of the current row (cols x n when ranged)
     std::vector<std::uint8_t> paths_;       ///< prev/cur rows of the top, top-left, top-right paths
     std::vector<std::uint8_t> pathMin_;     ///< min over d of each entry in paths_
     std::vector<std::uint8_t> horizontal_;  ///< border + two entries: left-to-right and right-to-left path
     std::vector<std::uint8_t> zeros_;       ///< d zeros: the diagonals' term of the sum with 3 paths
-    std::vector<std::uint16_t> sum_;        ///< cols x d: sum of the five paths
+    std::vector<std::uint16_t> sum_;        ///< cols x d: sum of the five paths (cols x n when ranged)
     std::vector<std::uint16_t> disp2Cost_;  ///< width: best cost seen for each right-image column
     std::vector<std::int16_t> disp2_;       ///< width: its disparity (left-right check)
+    std::vector<int> rowLo_;                ///< height: first disparity searched in each row (setSearchFloor)
     cv::Mat speckleBuffer_;                 ///< cv::filterSpeckles work buffer, sized once
     int parity_ = 0;                        ///< which half of paths_ is the previous row
     bool groundPrior_ = false;              ///< setGroundPrior() was called
     double groundA_ = 0.0;                  ///< the prior: d = a x + b y + c [px]
     double groundB_ = 0.0;
     double groundC_ = 0.0;
+    bool searchFloor_ = false; ///< setSearchFloor() was called with finite values
+    double floorA_ = 0.0;      ///< the floor: d = a x + b y + c [px]
+    double floorB_ = 0.0;
+    double floorC_ = 0.0;
+    double searchedFraction_ = 1.0;
 };
 
 } // namespace ugv::vision

@@ -103,6 +103,8 @@ public:
     }
     /// Intermediate buffers of the last frame, read-only (tools, overlays).
     [[nodiscard]] const cv::Mat& disparity16() const noexcept { return matcher_.disparity16(); }
+    /// Cost cells the last frame's matcher searched over those of the full range (RoiMatcherConfig::groundRange).
+    [[nodiscard]] double searchedFraction() const noexcept { return matcher_.searchedFraction(); }
     /// The disparity the sectors were built from: the matcher's, less the pixels the verifier rejected.
     [[nodiscard]] const ObstacleVerifier& verifier() const noexcept { return verifier_; }
     /// Obstacle labels (GroundLabel values) of the ground-mismatch stage on the left image's ROI grid.
