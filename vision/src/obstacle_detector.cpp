@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <string>
 #include <utility>
+
+#include "ugv/platform/angles.hpp"
 
 namespace ugv::vision {
 
@@ -28,12 +29,11 @@ void setSearchFloor(RoiMatcher& matcher, const GroundEstimate& estimate, const R
         matcher.clearSearchFloor();
         return;
     }
-    constexpr double kRadPerDeg = std::numbers::pi / 180.0;
     const double scale = h / (h + config.groundRangeDropM);
     // d = (B / h) (v cos(pitch) + f sin(pitch)) + roll term: a pitch change moves a row's ground by about
     // (B / h) f per radian, a roll change by (B / h) |x - cx| with |x - cx| up to half the width.
     const double marginPx = projection.baselineM / h * (projection.fx + 0.5 * roi.width) *
-                            std::tan(config.groundRangeMarginDeg * kRadPerDeg);
+                            std::tan(config.groundRangeMarginDeg * kDegToRad);
     const DisparityPlane& g = estimate.disparity;
     matcher.setSearchFloor(scale * g.a, scale * g.b, scale * (g.c + g.a * roi.x + g.b * roi.y) - marginPx);
 }
