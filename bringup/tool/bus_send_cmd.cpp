@@ -102,7 +102,7 @@ Result<std::vector<Line>, Error> readInput(const std::string& path, std::size_t&
 }
 
 /// --input: every line on its topic, paced by --rate.
-int sendInput(dds::Bus& bus, const Args& args, double rateHz, int waitReaders, double lingerS)
+int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderWait& wait, double lingerS)
 {
     const std::string path = args.get("input");
     const std::string source = args.get("source", "bus-send");
@@ -139,7 +139,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, int waitReaders, d
         return fail(writers.error());
     }
     InputWriters& w = *writers;
-    bus::waitForReaders(w.observations, waitReaders, dds::topicName(dds::TopicId::Observation, bus.config()), kCommand);
+    bus::waitForReaders(w.observations, wait, dds::topicName(dds::TopicId::Observation, bus.config()), kCommand);
     std::printf("sending %zu message(s) to %d reader(s)\n", lines->size(), w.observations.matched());
     std::fflush(stdout);
     const auto start = Clock::now();
@@ -196,14 +196,14 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, int waitReaders, d
 }
 
 /// --poses: a vehicle on a 10 m circle, heading along it, at --rate for --duration.
-int sendPoses(dds::Bus& bus, const std::string& vehicle, double rateHz, double durationS, int waitReaders,
+int sendPoses(dds::Bus& bus, const std::string& vehicle, double rateHz, double durationS, const bus::ReaderWait& wait,
               double lingerS)
 {
     auto writer = bus.writer<msg::VehiclePose>();
     if (!writer) {
         return fail(writer.error());
     }
-    bus::waitForReaders(*writer, waitReaders, dds::topicName(dds::TopicId::Pose, bus.config()), kCommand);
+    bus::waitForReaders(*writer, wait, dds::topicName(dds::TopicId::Pose, bus.config()), kCommand);
     const correlator::LocalFrame frame(kCircleCentreLat, kCircleCentreLon);
     const auto count = static_cast<std::uint64_t>(std::floor(durationS * rateHz)) + 1;
     const double omega = kCircleSpeedMps / kCircleRadiusM; // [rad/s], counter-clockwise seen from above
@@ -269,15 +269,16 @@ int runBusSend(int argc, char** argv)
         {"rate", "HZ", "--input: messages per second, default as fast as the writers accept; --poses: default 10",
          false},
         {"duration", "S", "--poses: how long, default 10", false},
-        {"wait-readers", "N", "wait up to 20 s for N readers of the observation (--poses: pose) topic, default 1",
+        {"wait-readers", "N", "wait for N readers of the observation (--poses: pose) topic before sending, default 1",
          false},
+        {"wait-timeout", "S", "wait at most S seconds for them (then send anyway, with a warning), default 20", false},
         {"linger", "S", "stay S more seconds after the acknowledgements (late readers get the history)", false}};
     for (auto& spec : bus::options()) {
         specs.push_back(std::move(spec));
     }
     Args args(kCommand,
               "(--input OBS.jsonl [--source NAME] [--only-ugv NAME] [--rate HZ] | --poses VEHICLE [--rate HZ] "
-              "[--duration S]) [--wait-readers N] [--linger S] [--domain N] "
+              "[--duration S]) [--wait-readers N] [--wait-timeout S] [--linger S] [--domain N] "
               "[--partition P] [--ros-namespace NS] [--discovery-server LIST]\n"
               "  A test sender for the DDS bus. --input publishes each line of a correlator input file on its topic\n"
               "  (observations, uav, confirmations, pose_corrections) with sequence_number = its line number, so a\n"
@@ -323,7 +324,8 @@ int runBusSend(int argc, char** argv)
     const auto duration = args.number("duration", kDefaultPoseDurationS, 0.0, 1e7);
     const auto linger = args.number("linger", 0.0, 0.0, kMaxLingerS);
     const auto readers = args.wholeNumber("wait-readers", 1, 0, kMaxReaders);
-    for (const auto* n : {&rate, &duration, &linger, &readers}) {
+    const auto waitTimeout = args.number("wait-timeout", bus::kDefaultWaitReadersS, 0.0, kMaxLingerS);
+    for (const auto* n : {&rate, &duration, &linger, &readers, &waitTimeout}) {
         if (!*n) {
             return reportUsageError(kCommand, n->error());
         }
@@ -338,11 +340,11 @@ int runBusSend(int argc, char** argv)
         return fail(created.error());
     }
     dds::Bus& b = **created;
-    const int waitReaders = static_cast<int>(*readers);
+    const bus::ReaderWait wait{static_cast<int>(*readers), *waitTimeout};
     if (args.has("input")) {
-        return sendInput(b, args, args.has("rate") ? *rate : 0.0, waitReaders, *linger);
+        return sendInput(b, args, args.has("rate") ? *rate : 0.0, wait, *linger);
     }
-    return sendPoses(b, args.get("poses"), *rate, *duration, waitReaders, *linger);
+    return sendPoses(b, args.get("poses"), *rate, *duration, wait, *linger);
 }
 
 } // namespace ugv::tool

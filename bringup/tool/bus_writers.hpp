@@ -22,7 +22,7 @@ namespace ugv::tool::bus {
 
 using Clock = std::chrono::steady_clock;
 
-inline constexpr auto kWaitReadersTimeout = std::chrono::seconds(20);
+inline constexpr double kDefaultWaitReadersS = 20.0; ///< bus-send's --wait-timeout default
 inline constexpr auto kAckTimeout = std::chrono::seconds(60);
 inline constexpr auto kRefusedWriteTimeout = std::chrono::seconds(30); ///< a writer refusing every sample this long
 // Adelaide, the MAGIC 2010 site: where the senders' vehicles drive and their objects stand.
@@ -35,20 +35,28 @@ int fail(const std::string& command, const Error& error);
 /// Sleeps until `until` in short slices; false when a signal stopped it first.
 bool sleepUntil(Clock::time_point until);
 
-/// Waits up to kWaitReadersTimeout for `wanted` matched readers of `writer`; a warning on stderr if fewer came.
+/// How many matched readers a sender waits for before it sends, and for how long at most.
+struct ReaderWait {
+    int readers = 1;
+    double timeoutS = kDefaultWaitReadersS;
+};
+
+/// Waits up to wait.timeoutS for wait.readers matched readers of `writer`; a warning on stderr if fewer came.
 template <class T>
-void waitForReaders(const ipc::dds::Writer<T>& writer, int wanted, const std::string& topic, const std::string& command)
+void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, const std::string& topic,
+                    const std::string& command)
 {
-    if (wanted <= 0) {
+    if (wait.readers <= 0) {
         return;
     }
-    const auto until = Clock::now() + kWaitReadersTimeout;
-    while (writer.matched() < wanted && Clock::now() < until && !g_stop.load()) {
+    const auto until =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait.timeoutS));
+    while (writer.matched() < wait.readers && Clock::now() < until && !g_stop.load()) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
-    if (writer.matched() < wanted && !g_stop.load()) {
-        std::cerr << "ugvsense " << command << ": warning: " << writer.matched() << " of " << wanted << " reader(s) of "
-                  << topic << " after " << kWaitReadersTimeout.count()
+    if (writer.matched() < wait.readers && !g_stop.load()) {
+        std::cerr << "ugvsense " << command << ": warning: " << writer.matched() << " of " << wait.readers
+                  << " reader(s) of " << topic << " after " << wait.timeoutS
                   << " s; sending anyway (late reliable readers get the history while this process lives)\n";
     }
 }

@@ -85,14 +85,15 @@ l3=$last
 # 1. The positive control. A certified viewer (correlate --from-dds) takes the team's inputs too; it starts first
 # and ugv-1 waits for both readers (the station's and the viewer's), so that neither depends on a late joiner getting
 # the writer's history (Fast DDS 2.9 sometimes gives a late-joining reader none of it: eProsima/Fast-DDS#3822).
-# 25 s: the secured handshakes of eight participants at once took more than 5 s on a slow CI run.
+# 35 s: the secured handshakes of eight participants at once took more than 5 s on a slow CI run, and ugv-1 waits up
+# to 30 s for its readers.
 background viewer "$tool" correlate --from-dds --domain "$domain" --partition "$partition" \
-    --security "$work/team/ugv-2" --duration 25 --output "$work/viewer.jsonl"
+    --security "$work/team/ugv-2" --duration 35 --output "$work/viewer.jsonl"
 v1=$last
 "$tool" bus-send --input "$work/ugv-1.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
-    --wait-readers 2 --linger 20 >"$work/ugv-1.log" 2>&1 &
+    --wait-readers 2 --wait-timeout 30 --linger 20 >"$work/ugv-1.log" 2>&1 &
 pids+=($!)
-for _ in $(seq 300); do grep -q "acknowledged" "$work/ugv-1.log" && break; sleep 0.1; done
+for _ in $(seq 600); do grep -q "acknowledged" "$work/ugv-1.log" && break; sleep 0.1; done
 grep -q " acknowledged by 2 reader" "$work/ugv-1.log" ||
     fail "certified ugv-1's observations were not acknowledged by the station and the viewer"
 # 2. Injection without a valid certificate (their writers keep their histories while they linger).
@@ -102,12 +103,13 @@ i1=$last
 background inject-rogue "$tool" bus-send --input "$work/others.jsonl" "${bus[@]}" --source ugv-2 --wait-readers 0 \
     --linger 4 --security "$work/rogue/ugv-2"
 i2=$last
-# 4. Writing as another vehicle. A certified listener (gcs's files) refuses each sample too; the writer lingers so
-# that its history reaches the listener however late their handshake ends.
-background listen-impersonated "$tool" listen observations "${bus[@]}" --security "$work/team/gcs" --timeout 14
+# 4. Writing as another vehicle. A certified listener (gcs's files) refuses each sample too. The writer waits up to
+# 60 s for two readers (the station's, the listener's; a loaded CI machine once took more than 20 s to end the
+# handshakes) and lingers so that its history reaches a late one; the listener is stopped once it has gone.
+background listen-impersonated "$tool" listen observations "${bus[@]}" --security "$work/team/gcs" --timeout 120
 l4=$last
-"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 --linger 10 \
-    >"$work/impersonate.log" 2>&1 &
+"$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --source ugv-1 \
+    --wait-readers 2 --wait-timeout 60 --linger 10 >"$work/impersonate.log" 2>&1 &
 pids+=($!)
 impersonate=$!
 "$tool" bus-send --input "$work/ugv-2.jsonl" "${bus[@]}" --security "$work/team/ugv-1" --identity ugv-2 \
@@ -117,10 +119,13 @@ grep -q "cannot create the writer" "$work/other-partition.log" || fail "ugv-1 in
     --wait-readers 0 >"$work/mixed.log" 2>&1 && fail "ugv-1's certificate joined with ugv-2's permissions"
 grep -q "cannot create the DDS participant" "$work/mixed.log" || fail "ugv-1 with ugv-2's permissions: no error"
 # 3. A certified reader gets the list.
-"$tool" listen correlated "${bus[@]}" --security "$work/team/ugv-2" --count 1 --timeout 15 >"$work/listen-ok.log" \
+"$tool" listen correlated "${bus[@]}" --security "$work/team/ugv-2" --count 1 --timeout 40 >"$work/listen-ok.log" \
     2>&1 || fail "certified ugv-2 got no correlated list"
-for p in "$l1" "$l2" "$l3" "$l4" "$i1" "$i2"; do wait "$p"; done
+for p in "$l1" "$l2" "$l3" "$i1" "$i2"; do wait "$p"; done
 wait "$impersonate" || fail "certified ugv-1 could not send (its samples naming ugv-2)"
+grep -q "^sending [0-9]* message(s) to 0 reader" "$work/impersonate.log" &&
+    fail "certified ugv-1 (sending as ugv-2) matched no reader in 60 s: the secured discovery did not end"
+kill -INT "$l4" 2>/dev/null; wait "$l4"
 wait "$v1" || fail "correlate --from-dds on the secured bus"
 sleep 1 # the reorder window
 kill -TERM "$gcs"

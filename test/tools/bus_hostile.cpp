@@ -41,7 +41,8 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
         return bus::fail(kCommand, writers.error());
     }
     bus::InputWriters& w = *writers;
-    bus::waitForReaders(w.observations, waitReaders, dds::topicName(dds::TopicId::Observation, bus.config()), kCommand);
+    bus::waitForReaders(w.observations, bus::ReaderWait{waitReaders},
+                        dds::topicName(dds::TopicId::Observation, bus.config()), kCommand);
     constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
     std::uint64_t sequence = 0;
     double t = 1.0;
