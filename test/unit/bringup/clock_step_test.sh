@@ -6,9 +6,9 @@
 # FrameSubscriber::wake, unit test IceoryxRings.WakeEndsAWaitOfAnHourAtOnce). Steps beyond the true time are left
 # out: files written then would carry future times and mislead make-like tools on the machine. Needs CAP_SYS_TIME
 # (root): skipped with a message otherwise. Run alone (ctest RUN_SERIAL): it moves the machine's clock.
-# Usage: clock_step_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR
+# Usage: clock_step_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR RECORDING
 set -u
-tool=$1 service=$2 config=$3 work=$4
+tool=$1 service=$2 config=$3 work=$4 recording=$5
 rm -rf "$work" && mkdir -p "$work"
 # The offset of the wall clock from the monotonic one, kept in a file: whatever happens, the clock is put back.
 python3 - "$work/offset" <<'PY' || { echo "SKIP: cannot set the clock here (needs root / CAP_SYS_TIME)"; exit 77; }
@@ -19,14 +19,13 @@ PY
 step() { python3 -c "import time; time.clock_settime(time.CLOCK_REALTIME, time.time() + $1)"; }
 restore() { python3 -c "import time; time.clock_settime(time.CLOCK_REALTIME, time.monotonic() + float(open('$work/offset').read()))"; }
 if pgrep -x iox-roudi >/dev/null; then echo "another iox-roudi runs: this test needs its own"; exit 1; fi
-"$tool" sim --course default --frames 6 --out "$work/drive.ugvrec" >/dev/null || exit 1
 iox-roudi -c "$config" -l warning >"$work/roudi.log" 2>&1 &
 roudi=$!
 svc=""
 trap 'restore; [ -n "$svc" ] && kill -9 $svc 2>/dev/null; kill $roudi 2>/dev/null; wait 2>/dev/null' EXIT
 for _ in $(seq 100); do [ -S /tmp/roudi ] && break; sleep 0.1; done
 sleep 0.3
-"$service" --replay "$work/drive.ugvrec" --loop --print-every 1 >"$work/service.log" 2>&1 &
+"$service" --replay "$recording" --loop --print-every 1 >"$work/service.log" 2>&1 &
 svc=$!
 published() { grep -c "^frame " "$work/service.log"; }
 wait_for_more() { # $1: what happened; fails when no new frame comes within 200 polls

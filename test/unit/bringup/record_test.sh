@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # `ugvsense record` against the running service, three processes as on the vehicle: iox-roudi (bringup/roudi.toml),
 # ugvsensed replaying a 12-frame simulator course, and the recorder writing the first 8 pairs it sees; the written
-# recording must hold 8 complete frames in sequence. Usage: record_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR
+# recording must hold 8 complete frames in sequence. Usage: record_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR RECORDING
 set -u
-tool=$1 service=$2 config=$3 work=$4
+tool=$1 service=$2 config=$3 work=$4 recording=$5
 rm -rf "$work" && mkdir -p "$work"
 command -v iox-roudi >/dev/null || { echo "iox-roudi not installed (package iceoryx)"; exit 1; }
 if pgrep -x iox-roudi >/dev/null; then echo "another iox-roudi runs: this test needs its own"; exit 1; fi
@@ -11,13 +11,12 @@ iox-roudi -c "$config" -l warning >"$work/roudi.log" 2>&1 &
 roudi=$!
 trap 'kill $roudi 2>/dev/null; wait $roudi 2>/dev/null' EXIT
 for _ in $(seq 50); do [ -S /tmp/roudi ] && break; sleep 0.1; done
-"$tool" sim --course default --frames 12 --out "$work/drive.ugvrec" >/dev/null || exit 1
-"$tool" recording export "$work/drive.ugvrec" --frame 0 --out "$work/f0" >/dev/null || exit 1
+"$tool" recording export "$recording" --frame 0 --out "$work/f0" >/dev/null || exit 1
 "$tool" record --out "$work/recorded.ugvrec" --calib "$work/f0/calibration.yaml" --frames 8 --seconds 60 \
     >"$work/record.log" 2>&1 &
 recorder=$!
 sleep 1.5 # the recorder subscribes before the service publishes its first pair
-"$service" --replay "$work/drive.ugvrec" --print-every 0 >"$work/service.log" 2>&1 || { cat "$work/service.log"; exit 1; }
+"$service" --replay "$recording" --print-every 0 >"$work/service.log" 2>&1 || { cat "$work/service.log"; exit 1; }
 wait $recorder || { echo "record failed:"; cat "$work/record.log"; exit 1; }
 cat "$work/record.log"
 info=$("$tool" recording info "$work/recorded.ugvrec") || { echo "$info"; exit 1; }

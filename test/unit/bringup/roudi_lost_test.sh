@@ -1,11 +1,10 @@
 #!/usr/bin/env bash
 # RouDi crashing under a running ugvsensed: the service stops with a clear error and exit code 1 (systemd restarts
-# it), and once RouDi runs again a new service works. Usage: roudi_lost_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR
+# it), and once RouDi runs again a new service works. Usage: roudi_lost_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR RECORDING
 set -u
-tool=$1 service=$2 config=$3 work=$4
+tool=$1 service=$2 config=$3 work=$4 recording=$5
 rm -rf "$work" && mkdir -p "$work"
 if pgrep -x iox-roudi >/dev/null; then echo "another iox-roudi runs: this test needs its own"; exit 1; fi
-"$tool" sim --course default --frames 6 --out "$work/drive.ugvrec" >/dev/null || exit 1
 start_roudi() {
     # A RouDi killed with -9 leaves its socket file: wait for the new RouDi's own (another inode), not the stale one.
     local stale
@@ -19,7 +18,7 @@ start_roudi() {
 }
 trap 'kill $roudi 2>/dev/null; wait $roudi 2>/dev/null' EXIT # TERM: RouDi cleans its shared memory up
 start_roudi
-"$service" --replay "$work/drive.ugvrec" --loop --print-every 0 >"$work/service.log" 2>&1 &
+"$service" --replay "$recording" --loop --print-every 0 >"$work/service.log" 2>&1 &
 svc=$!
 sleep 3
 kill -9 $roudi # a crash: RouDi cannot tell the service
@@ -33,7 +32,7 @@ start_roudi
 # --loop: a slow (sanitizer) build drops frames by latest-frame-wins and needs more than one pass for 4. On a loaded
 # machine the new RouDi may not listen yet (its socket path can even reuse the killed one's inode): try again then.
 for attempt in $(seq 20); do
-    "$service" --replay "$work/drive.ugvrec" --loop --frames 4 --print-every 0 >"$work/again.log" 2>&1 && break
+    "$service" --replay "$recording" --loop --frames 4 --print-every 0 >"$work/again.log" 2>&1 && break
     grep -q "no RouDi is running" "$work/again.log" || { cat "$work/again.log"; exit 1; }
     [ "$attempt" -lt 20 ] || { cat "$work/again.log"; exit 1; }
     sleep 0.5

@@ -1,11 +1,10 @@
 #!/usr/bin/env bash
 # ugvsensed speaks systemd's notification protocol: READY=1 after start, WATCHDOG=1 while frames flow (the unit's
 # WatchdogSec restarts a stalled service), STOPPING=1 at the end. A python3 datagram socket plays systemd.
-# Usage: watchdog_test.sh UGVSENSE UGVSENSED WORKDIR
+# Usage: watchdog_test.sh UGVSENSE UGVSENSED WORKDIR RECORDING
 set -u
-tool=$1 service=$2 work=$3
+tool=$1 service=$2 work=$3 recording=$4
 rm -rf "$work" && mkdir -p "$work"
-"$tool" sim --course default --frames 15 --out "$work/drive.ugvrec" >/dev/null || exit 1
 python3 - "$work/notify.sock" "$work/messages.txt" <<'PY' &
 import socket, sys
 s = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
@@ -23,7 +22,7 @@ with open(sys.argv[2], "w") as out:
 PY
 listener=$!
 for _ in $(seq 50); do [ -S "$work/notify.sock" ] && break; sleep 0.1; done
-NOTIFY_SOCKET="$work/notify.sock" WATCHDOG_USEC=400000 "$service" --replay "$work/drive.ugvrec" --embedded-roudi \
+NOTIFY_SOCKET="$work/notify.sock" WATCHDOG_USEC=400000 "$service" --replay "$recording" --embedded-roudi \
     --print-every 0 >"$work/service.log" 2>&1 || { cat "$work/service.log"; exit 1; }
 wait $listener
 cat "$work/messages.txt"

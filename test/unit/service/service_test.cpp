@@ -52,7 +52,10 @@ ConstImageViewU8 viewOf(const cv::Mat& m)
 }
 
 /// The first `frames` frames of the default course at 10 fps, as a recording in `dir`.
-Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::size_t firstFrame = 0)
+/// A recording of `frames` pairs of the default course from `firstFrame`. With `distinct` > 0 only that many are
+/// rendered and repeated (for tests about the service's tasks, not the images: rendering is most of their time).
+Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::size_t firstFrame = 0,
+                   std::size_t distinct = 0)
 {
     Course out;
     auto course = sim::makeCourse("default", 1.5, 10.0);
@@ -65,12 +68,18 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
         hal::RecordingWriter::create(out.path, static_cast<std::uint32_t>(course->scene.rig.width),
                                      static_cast<std::uint32_t>(course->scene.rig.height), out.calibration, options);
     EXPECT_TRUE(writer.has_value());
-    for (std::size_t k = 0; k < frames; ++k) {
+    const std::size_t rendered = distinct > 0 ? std::min(distinct, frames) : frames;
+    std::vector<sim::RenderResult> pairs;
+    for (std::size_t k = 0; k < rendered; ++k) {
         auto frame = sim::renderCourseFrame(*course, firstFrame + k);
         EXPECT_TRUE(frame.has_value());
+        pairs.push_back(frame ? std::move(*frame) : sim::RenderResult{});
+    }
+    for (std::size_t k = 0; k < frames; ++k) {
+        const sim::RenderResult& frame = pairs[k % rendered];
         const auto stamp = static_cast<std::int64_t>(k) * 100'000'000;
-        EXPECT_TRUE(writer->append(k, stamp, stamp, viewOf(frame->left), viewOf(frame->right)).has_value());
-        out.truth.push_back(frame->sectors);
+        EXPECT_TRUE(writer->append(k, stamp, stamp, viewOf(frame.left), viewOf(frame.right)).has_value());
+        out.truth.push_back(frame.sectors);
     }
     return out;
 }
@@ -250,7 +259,7 @@ TEST_F(ServiceTest, AStalledBusNeverHoldsUpAFrame)
     // The bus task blocks in its first onFrame() for the whole run: every frame is still processed and published on
     // iceoryx, the bus's ring fills and the rest are counted as bus drops. Nothing here is timed.
     constexpr std::size_t kFrames = 40;
-    const Course course = writeCourse(dir_, kFrames);
+    const Course course = writeCourse(dir_, kFrames, 0, 4);
     hal::ReplayOptions replay;
     replay.pace = hal::ReplayPace::Forced;
     replay.forcedFps = 10.0;
@@ -313,7 +322,7 @@ TEST_F(ServiceTest, ABusTaskThatThrowsIsLoggedAndDisabledWhileEveryFrameIsStillP
     // logged, the bus task restarts twice, then is disabled; every frame is still processed. Nothing here is timed.
     constexpr std::size_t kFrames = 20;
     constexpr int kMaxRestarts = 2;
-    const Course course = writeCourse(dir_, kFrames);
+    const Course course = writeCourse(dir_, kFrames, 0, 4);
     hal::ReplayOptions replay;
     replay.pace = hal::ReplayPace::Forced;
     replay.forcedFps = 10.0;
