@@ -181,7 +181,10 @@ Result<bringup::ServiceConfig, Error> withEnvironment(bringup::ServiceConfig con
     return config;
 }
 
-Result<RunResult, Error> runService(const RunOptions& options)
+namespace {
+
+/// The config file's settings (the defaults without one) with the environment's overrides.
+Result<bringup::ServiceConfig, Error> effectiveConfig(const RunOptions& options)
 {
     bringup::ServiceConfig config;
     if (!options.configPath.empty()) {
@@ -191,32 +194,23 @@ Result<RunResult, Error> runService(const RunOptions& options)
         }
         config = std::move(*loaded);
     }
-    auto effective = withEnvironment(std::move(config));
-    if (!effective) {
-        return Unexpected(effective.error());
-    }
-    config = std::move(*effective);
-    std::unique_ptr<ipc::dds::Bus> bus;
-    if (config.dds.enabled) {
-        auto created = ipc::dds::Bus::create(busConfig(config));
-        if (!created) {
-            return Unexpected(created.error());
-        }
-        bus = std::move(*created);
-    }
-    if (!config.visionEnabled) {
-        return runCorrelatorOnly(config, options, *bus);
-    }
-    if (options.pinAllTasksTo >= 0) {
-        for (rt::TaskSpec& task : config.tasks) {
-            task.cpu = options.pinAllTasksTo;
-        }
-    }
+    return withEnvironment(std::move(config));
+}
+
+/// The camera (or recording) and the calibration it is used with.
+struct CameraAndCalibration {
+    std::unique_ptr<hal::StereoCamera> camera;
+    vision::StereoCalibration calibration;
+};
+
+/// Opens the camera; a recording carries its calibration, a live camera uses the config's (or --calib).
+Result<CameraAndCalibration, Error> openCameraAndCalibration(const bringup::ServiceConfig& config,
+                                                             const RunOptions& options)
+{
     auto camera = bringup::openCamera(config, options.replayPath, options.replay);
     if (!camera) {
         return Unexpected(camera.error());
     }
-    // A recording carries its calibration; a live camera uses the config's (or --calib).
     const auto* replay = dynamic_cast<const hal::ReplayCamera*>(camera->get());
     if (replay != nullptr && replay->truncated()) {
         UGV_LOG(Hal, Warn) << replay->description() << ": the recording ends in a cut-off frame; replaying its "
@@ -231,93 +225,90 @@ Result<RunResult, Error> runService(const RunOptions& options)
     if (!calibration) {
         return Unexpected(calibration.error());
     }
+    return CameraAndCalibration{std::move(*camera), std::move(*calibration)};
+}
 
-    std::unique_ptr<ipc::EmbeddedRouDi> roudi;
-    const bool embedded =
-        options.roudi == RouDiMode::Embedded || (options.roudi == RouDiMode::Auto && !ipc::roudiReachable());
+/// iceoryx for frames of `camera`'s size: an embedded RouDi (returned), or the system's, which under systemd may
+/// still be setting up when this unit starts, waited for up to options.roudiWait (nullptr returned).
+Result<std::unique_ptr<ipc::EmbeddedRouDi>, Error> connectIceoryx(const RunOptions& options,
+                                                                  const hal::StereoCamera& camera, bool embedded)
+{
     if (embedded) {
-        auto started =
-            ipc::EmbeddedRouDi::start(options.appName, ipc::frameBytes((*camera)->width(), (*camera)->height()));
-        if (!started) {
-            return Unexpected(started.error());
-        }
-        roudi = std::move(*started);
-    } else {
-        // Under systemd the RouDi unit may still be setting up when this one starts: give it roudiWait.
-        const std::int64_t waitUntilNs = MonotonicClock::nowNs() + std::chrono::nanoseconds(options.roudiWait).count();
-        while (!ipc::roudiReachable() && MonotonicClock::nowNs() < waitUntilNs &&
-               !(options.stop != nullptr && options.stop->load())) {
-            sleepMs(kMonitorPoll);
-        }
-        if (auto runtime = ipc::startRuntime(options.appName); !runtime) {
-            return Unexpected(runtime.error());
-        }
+        return ipc::EmbeddedRouDi::start(options.appName, ipc::frameBytes(camera.width(), camera.height()));
     }
-
-    RunResult result;
-    const rt::MemoryReport memory = rt::lockMemory();
-    for (const std::string& warning : memory.warnings) {
-        UGV_LOG(Rt, Warn) << warning;
+    const std::int64_t waitUntilNs = MonotonicClock::nowNs() + std::chrono::nanoseconds(options.roudiWait).count();
+    while (!ipc::roudiReachable() && MonotonicClock::nowNs() < waitUntilNs &&
+           !(options.stop != nullptr && options.stop->load())) {
+        sleepMs(kMonitorPoll);
     }
-    result.extras.lockedBytes = memory.lockedBytes;
+    if (auto runtime = ipc::startRuntime(options.appName); !runtime) {
+        return Unexpected(runtime.error());
+    }
+    return std::unique_ptr<ipc::EmbeddedRouDi>{};
+}
 
+/// The service's options: the caller's, with the config file's overload policy and hand-over spin when one was given.
+ServiceOptions serviceOptionsFor(const bringup::ServiceConfig& config, const RunOptions& options)
+{
     ServiceOptions serviceOptions = options.service;
-    if (options.configPath.empty() == false) {
+    if (!options.configPath.empty()) {
         serviceOptions.overload =
             config.overload.policy == bringup::OverloadChoice::Drop ? OverloadPolicy::Drop : OverloadPolicy::Degrade;
         serviceOptions.deadlineFactor = config.overload.deadlineFactor;
         serviceOptions.spinBeforeFrame = std::chrono::microseconds(config.handover.spinUs);
     }
+    return serviceOptions;
+}
+
+/// The service's tasks on the DDS bus: the bridge (sectors, poses) and the correlator when the config enables it.
+struct BusTasks {
     std::unique_ptr<DdsBridge> bridge;
-    if (bus) {
-        auto created = DdsBridge::create(*bus, config, (*camera)->period());
-        if (!created) {
-            return Unexpected(created.error());
-        }
-        bridge = std::move(*created);
-        serviceOptions.bus = bridge.get();
+    std::unique_ptr<CorrelatorTask> correlator;
+};
+
+Result<BusTasks, Error> createBusTasks(ipc::dds::Bus* bus, const bringup::ServiceConfig& config,
+                                       std::chrono::nanoseconds period)
+{
+    BusTasks tasks;
+    if (bus == nullptr) {
+        return tasks;
     }
-    std::unique_ptr<CorrelatorTask> correlatorTask;
+    auto bridge = DdsBridge::create(*bus, config, period);
+    if (!bridge) {
+        return Unexpected(bridge.error());
+    }
+    tasks.bridge = std::move(*bridge);
     if (config.correlator.enabled) {
         auto created =
             CorrelatorTask::create(*bus, correlatorOptions(config), *rt::findTask(config.tasks, "correlator"));
         if (!created) {
             return Unexpected(created.error());
         }
-        correlatorTask = std::move(*created);
+        tasks.correlator = std::move(*created);
     }
-    if (bus) {
-        // ROS 2 tools list the service as the node /<namespace>/ugvsense (ros_discovery_info). A bus that refuses it
-        // (a secured bus whose permissions predate it) costs only that.
-        if (auto shown = bus->announceRosNode("ugvsense"); !shown) {
-            UGV_LOG(Ipc, Warn) << "not visible to ROS 2 tools: " << shown.error().message();
-        }
+    // ROS 2 tools list the service as the node /<namespace>/ugvsense (ros_discovery_info). A bus that refuses it (a
+    // secured bus whose permissions predate it) costs only that.
+    if (auto shown = bus->announceRosNode("ugvsense"); !shown) {
+        UGV_LOG(Ipc, Warn) << "not visible to ROS 2 tools: " << shown.error().message();
     }
-    auto service = Service::create(config, *calibration, std::move(*camera), serviceOptions);
-    if (!service) {
-        return Unexpected(service.error());
-    }
-    for (const std::string& warning : (*service)->startReport().warnings) {
-        UGV_LOG(Rt, Warn) << warning;
-    }
-    result.extras.threadCount = processThreadCount();
-    (*service)->start();
-    if (correlatorTask) {
-        correlatorTask->start();
-    }
-    const hal::SystemdNotifier systemd;
-    systemd.ready();
-    systemd.status("replaying " + options.replayPath);
-    // The watchdog is pinged at half its interval, and only when frames were published since the last ping: a
-    // stalled camera or pipeline stops the pings and systemd restarts the service.
+    return tasks;
+}
+
+/// Until a stop, the service's end or RouDi's loss (result.roudiLost; only checked when it is not embedded): the
+/// published frames to options.onPublished and the console, and the watchdog pinged at half its interval, only
+/// when frames were published since the last ping (a stalled camera or pipeline stops the pings and systemd
+/// restarts the service).
+void monitor(Service& service, const RunOptions& options, const hal::SystemdNotifier& systemd, bool embedded,
+             RunResult& result)
+{
     const std::chrono::nanoseconds pingEvery = systemd.watchdogInterval() / 2;
     std::int64_t lastPingNs = 0;
     bool framesSincePing = false;
     PublishedFrame frame;
     std::uint64_t seen = 0;
     std::int64_t lastRoudiCheckNs = 0;
-    while (!(options.stop != nullptr && options.stop->load()) && !(*service)->finished()) {
-        while ((*service)->nextPublished(frame)) {
+    while (!(options.stop != nullptr && options.stop->load()) && !service.finished()) {
+        while (service.nextPublished(frame)) {
             ++seen;
             framesSincePing = true;
             if (options.onPublished) {
@@ -340,21 +331,88 @@ Result<RunResult, Error> runService(const RunOptions& options)
             lastRoudiCheckNs = now;
             if (!ipc::roudiReachable()) {
                 result.roudiLost = true;
-                break;
+                return;
             }
         }
         sleepMs(kMonitorPoll);
     }
+}
+
+} // namespace
+
+Result<RunResult, Error> runService(const RunOptions& options)
+{
+    auto effective = effectiveConfig(options);
+    if (!effective) {
+        return Unexpected(effective.error());
+    }
+    bringup::ServiceConfig config = std::move(*effective);
+    std::unique_ptr<ipc::dds::Bus> bus;
+    if (config.dds.enabled) {
+        auto created = ipc::dds::Bus::create(busConfig(config));
+        if (!created) {
+            return Unexpected(created.error());
+        }
+        bus = std::move(*created);
+    }
+    if (!config.visionEnabled) {
+        return runCorrelatorOnly(config, options, *bus);
+    }
+    if (options.pinAllTasksTo >= 0) {
+        for (rt::TaskSpec& task : config.tasks) {
+            task.cpu = options.pinAllTasksTo;
+        }
+    }
+    auto opened = openCameraAndCalibration(config, options);
+    if (!opened) {
+        return Unexpected(opened.error());
+    }
+    const bool embedded =
+        options.roudi == RouDiMode::Embedded || (options.roudi == RouDiMode::Auto && !ipc::roudiReachable());
+    auto roudi = connectIceoryx(options, *opened->camera, embedded);
+    if (!roudi) {
+        return Unexpected(roudi.error());
+    }
+
+    RunResult result;
+    const rt::MemoryReport memory = rt::lockMemory();
+    for (const std::string& warning : memory.warnings) {
+        UGV_LOG(Rt, Warn) << warning;
+    }
+    result.extras.lockedBytes = memory.lockedBytes;
+
+    ServiceOptions serviceOptions = serviceOptionsFor(config, options);
+    auto busTasks = createBusTasks(bus.get(), config, opened->camera->period());
+    if (!busTasks) {
+        return Unexpected(busTasks.error());
+    }
+    serviceOptions.bus = busTasks->bridge.get();
+    auto service = Service::create(config, opened->calibration, std::move(opened->camera), serviceOptions);
+    if (!service) {
+        return Unexpected(service.error());
+    }
+    for (const std::string& warning : (*service)->startReport().warnings) {
+        UGV_LOG(Rt, Warn) << warning;
+    }
+    result.extras.threadCount = processThreadCount();
+    (*service)->start();
+    if (busTasks->correlator) {
+        busTasks->correlator->start();
+    }
+    const hal::SystemdNotifier systemd;
+    systemd.ready();
+    systemd.status("replaying " + options.replayPath);
+    monitor(**service, options, systemd, embedded, result);
     systemd.stopping();
     (*service)->stop();
     result.report = (*service)->report();
     result.visionRan = true;
-    if (bridge) {
-        result.bus = bridge->stats();
+    if (busTasks->bridge) {
+        result.bus = busTasks->bridge->stats();
     }
-    if (correlatorTask) {
-        correlatorTask->stop();
-        result.correlator = correlatorTask->stats();
+    if (busTasks->correlator) {
+        busTasks->correlator->stop();
+        result.correlator = busTasks->correlator->stats();
     }
     if (!result.roudiLost) {
         service->reset(); // threads and iceoryx ports go before the runtime

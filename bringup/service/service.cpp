@@ -259,97 +259,108 @@ void Service::busBody(void* self, const std::atomic<bool>& stop)
 void Service::captureLoop(const std::atomic<bool>& stop) noexcept
 {
     hal::CameraFrame frame;
-    std::chrono::nanoseconds backoff = kMinBackoff;
-    std::chrono::nanoseconds sinceFrame{0};
+    CaptureState state;
+    state.backoff = kMinBackoff;
     const std::chrono::nanoseconds stall = period_ * options_.stallPeriods;
-    std::uint64_t frames = 0;
-    bool steady = false;
-    bool stalled = false;      // logged as stalled, not yet logged as flowing again
-    std::int64_t attempts = 0; // reconnect attempts since the camera went away
     while (!stop.load(std::memory_order_relaxed) && !cameraEnded_.load(std::memory_order_relaxed)) {
-        const hal::GrabStatus status = camera_->grab(frame, std::min<std::chrono::nanoseconds>(kWaitSlice, stall));
-        switch (status) {
-        case hal::GrabStatus::Frame: {
-            sinceFrame = {};
-            backoff = kMinBackoff;
-            cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Streaming), std::memory_order_relaxed);
-            const hal::CameraStats stats = camera_->stats();
-            cameraGaps_.store(stats.sequenceGaps, std::memory_order_relaxed);
-            if (stalled) {
-                captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: frames again (sequence %lld)",
-                                static_cast<std::int64_t>(frame.sequence));
-                stalled = false;
-            }
-            // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written
-            // before the frame becomes visible to the vision task.
-            if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
-                                    &ringStampNs_[frame.sequence % kPublishSlots])) {
-                lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
-                inRing_.fetch_add(1, std::memory_order_relaxed);
-            } else {
-                const std::uint64_t refused = framesOut_->loanFailures();
-                loanFailures_.store(refused, std::memory_order_relaxed); // e.g. a wrong size
-                if (isPowerOfTwo(refused)) {
-                    captureLog_.log(LogLevel::Warn, LogCategory::Hal,
-                                    "frame %lld: the frame ring refused the pair (%lldx%lld: wrong size, or no free "
-                                    "chunk); %lld refused so far",
-                                    static_cast<std::int64_t>(frame.sequence), frame.left.width(), frame.left.height(),
-                                    static_cast<std::int64_t>(refused));
-                }
-            }
-            captured_.fetch_add(1, std::memory_order_release);
-            probeSteady("capture", ++frames, steady);
+        switch (camera_->grab(frame, std::min<std::chrono::nanoseconds>(kWaitSlice, stall))) {
+        case hal::GrabStatus::Frame:
+            onFrame(frame, state);
             break;
-        }
         case hal::GrabStatus::Timeout:
-            sinceFrame += kWaitSlice;
-            if (sinceFrame >= stall) {
-                cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting),
-                                   std::memory_order_relaxed);
-                if (!stalled) {
-                    captureLog_.log(LogLevel::Warn, LogCategory::Hal, "camera: no frame for %lld ms (stalled)",
-                                    std::chrono::duration_cast<std::chrono::milliseconds>(sinceFrame).count());
-                    stalled = true;
-                }
-            }
+            onNoFrame(stall, state);
             break;
-        case hal::GrabStatus::BadFrame: {
-            const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
-            if (isPowerOfTwo(bad)) {
-                captureLog_.log(LogLevel::Warn, LogCategory::Hal, "camera: a bad frame (%lld so far)",
-                                static_cast<std::int64_t>(bad));
-            }
+        case hal::GrabStatus::BadFrame:
+            onBadFrame();
             break;
-        }
         case hal::GrabStatus::End:
             cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Stopped), std::memory_order_relaxed);
             cameraEnded_.store(true, std::memory_order_release);
             captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: end of stream after %lld frame(s)",
-                            static_cast<std::int64_t>(frames));
+                            static_cast<std::int64_t>(state.frames));
             break;
         case hal::GrabStatus::Disconnected:
-            cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting), std::memory_order_relaxed);
-            if (attempts == 0) {
-                captureLog_.log(LogLevel::Error, LogCategory::Hal,
-                                "camera: disconnected after frame %lld; reconnecting (backoff %lld..%lld ms)",
-                                static_cast<std::int64_t>(frame.sequence), kMinBackoff.count(), kMaxBackoff.count());
-            }
-            sleepFor(backoff);
-            ++attempts;
-            if (camera_->reconnect()) {
-                reconnects_.fetch_add(1, std::memory_order_relaxed);
-                captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: reconnected after %lld attempt(s)",
-                                attempts);
-                attempts = 0;
-                backoff = kMinBackoff;
-            } else {
-                backoff = std::min<std::chrono::nanoseconds>(backoff * 2, kMaxBackoff);
-            }
+            onDisconnected(frame.sequence, state);
             break;
         }
     }
     probeStopping("capture");
     cpuSeconds_[0].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+void Service::onFrame(const hal::CameraFrame& frame, CaptureState& state) noexcept
+{
+    state.sinceFrame = {};
+    state.backoff = kMinBackoff;
+    cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Streaming), std::memory_order_relaxed);
+    cameraGaps_.store(camera_->stats().sequenceGaps, std::memory_order_relaxed);
+    if (state.stalled) {
+        captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: frames again (sequence %lld)",
+                        static_cast<std::int64_t>(frame.sequence));
+        state.stalled = false;
+    }
+    // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written before the
+    // frame becomes visible to the vision task.
+    if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
+                            &ringStampNs_[frame.sequence % kPublishSlots])) {
+        lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
+        inRing_.fetch_add(1, std::memory_order_relaxed);
+    } else {
+        const std::uint64_t refused = framesOut_->loanFailures();
+        loanFailures_.store(refused, std::memory_order_relaxed); // e.g. a wrong size
+        if (isPowerOfTwo(refused)) {
+            captureLog_.log(LogLevel::Warn, LogCategory::Hal,
+                            "frame %lld: the frame ring refused the pair (%lldx%lld: wrong size, or no free chunk); "
+                            "%lld refused so far",
+                            static_cast<std::int64_t>(frame.sequence), frame.left.width(), frame.left.height(),
+                            static_cast<std::int64_t>(refused));
+        }
+    }
+    captured_.fetch_add(1, std::memory_order_release);
+    probeSteady("capture", ++state.frames, state.steady);
+}
+
+void Service::onNoFrame(std::chrono::nanoseconds stall, CaptureState& state) noexcept
+{
+    state.sinceFrame += kWaitSlice;
+    if (state.sinceFrame < stall) {
+        return;
+    }
+    cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting), std::memory_order_relaxed);
+    if (!state.stalled) {
+        captureLog_.log(LogLevel::Warn, LogCategory::Hal, "camera: no frame for %lld ms (stalled)",
+                        std::chrono::duration_cast<std::chrono::milliseconds>(state.sinceFrame).count());
+        state.stalled = true;
+    }
+}
+
+void Service::onBadFrame() noexcept
+{
+    const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (isPowerOfTwo(bad)) {
+        captureLog_.log(LogLevel::Warn, LogCategory::Hal, "camera: a bad frame (%lld so far)",
+                        static_cast<std::int64_t>(bad));
+    }
+}
+
+void Service::onDisconnected(std::uint64_t lastSequence, CaptureState& state) noexcept
+{
+    cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Reconnecting), std::memory_order_relaxed);
+    if (state.attempts == 0) {
+        captureLog_.log(LogLevel::Error, LogCategory::Hal,
+                        "camera: disconnected after frame %lld; reconnecting (backoff %lld..%lld ms)",
+                        static_cast<std::int64_t>(lastSequence), kMinBackoff.count(), kMaxBackoff.count());
+    }
+    sleepFor(state.backoff);
+    ++state.attempts;
+    if (camera_->reconnect()) {
+        reconnects_.fetch_add(1, std::memory_order_relaxed);
+        captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: reconnected after %lld attempt(s)", state.attempts);
+        state.attempts = 0;
+        state.backoff = kMinBackoff;
+    } else {
+        state.backoff = std::min<std::chrono::nanoseconds>(state.backoff * 2, kMaxBackoff);
+    }
 }
 
 void Service::spinUntilFrame(std::int64_t lastRingNs, const std::atomic<bool>& stop) noexcept
@@ -377,98 +388,44 @@ void Service::spinUntilFrame(std::int64_t lastRingNs, const std::atomic<bool>& s
 
 void Service::visionLoop(const std::atomic<bool>& stop) noexcept
 {
-    std::int64_t lastRingNs = 0;
     ipc::TakenFrame frame;
     Handover out;
-    bool haveLast = false;
-    std::uint64_t lastSequence = 0;
-    std::uint64_t frames = 0;
-    bool steady = false;
-    double fullMeanNs = 0.0; // running mean of the full pipeline's time (rectified -> detected) [ns]
-    int degradedInARow = 0;
-    bool overloaded = false;         // in the degraded mode (logged on entering and leaving)
-    std::uint64_t overloadStart = 0; // degraded_ when the mode began
+    VisionState state;
     while (!stop.load(std::memory_order_relaxed)) {
-        spinUntilFrame(lastRingNs, stop);
-        const ipc::TakeStatus status = framesIn_->take(frame, kWaitSlice);
-        if (status == ipc::TakeStatus::Timeout) {
-            continue;
-        }
-        if (status == ipc::TakeStatus::Malformed) {
-            const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
-            if (isPowerOfTwo(bad)) {
-                visionLog_.log(LogLevel::Warn, LogCategory::Ipc, "frame ring: a malformed frame (%lld bad so far)",
-                               static_cast<std::int64_t>(bad));
-            }
+        spinUntilFrame(state.lastRingNs, stop);
+        if (!takeFrame(frame)) {
             continue;
         }
         const std::int64_t takenNs = MonotonicClock::nowNs();
         const FrameHeader h = frame.header; // a copy: release() clears the frame
-        if (haveLast && h.sequence > lastSequence + 1) {
+        if (state.haveLast && h.sequence > state.lastSequence + 1) {
             // Pairs the vision task never saw: replaced by newer ones in its queue of one, or lost by the camera.
-            dropped_.fetch_add(h.sequence - lastSequence - 1, std::memory_order_relaxed);
+            dropped_.fetch_add(h.sequence - state.lastSequence - 1, std::memory_order_relaxed);
         }
-        haveLast = true;
-        lastSequence = h.sequence;
-        const bool late = fullMeanNs > 0.0 && static_cast<double>(takenNs - h.leftStampNs) + fullMeanNs >
-                                                  static_cast<double>(deadline_.count());
+        state.haveLast = true;
+        state.lastSequence = h.sequence;
+        const bool late = state.fullMeanNs > 0.0 && static_cast<double>(takenNs - h.leftStampNs) + state.fullMeanNs >
+                                                        static_cast<double>(deadline_.count());
         const bool groundOnly =
-            options_.overload == OverloadPolicy::Degrade && late && degradedInARow < options_.fullFrameEvery;
+            options_.overload == OverloadPolicy::Degrade && late && state.degradedInARow < options_.fullFrameEvery;
         std::int64_t rectifiedNs = 0;
         const PipelineStatus done =
             pipeline_->process(frame.views.left, frame.views.right, h.sequence, h.leftStampNs, rectifiedNs, groundOnly);
         const std::int64_t detectedNs = MonotonicClock::nowNs();
-        if (groundOnly && !overloaded) {
-            visionLog_.log(LogLevel::Warn, LogCategory::Vision,
-                           "frame %lld: the full pipeline would miss the %lld ms deadline: ground-plane-only "
-                           "sectors (degraded) until it catches up",
-                           static_cast<std::int64_t>(h.sequence),
-                           std::chrono::duration_cast<std::chrono::milliseconds>(deadline_).count());
-            overloaded = true;
-            overloadStart = degraded_.load(std::memory_order_relaxed);
-        } else if (!late && overloaded) {
-            visionLog_.log(LogLevel::Info, LogCategory::Vision,
-                           "frame %lld: full pipeline again after %lld degraded frame(s)",
-                           static_cast<std::int64_t>(h.sequence),
-                           static_cast<std::int64_t>(degraded_.load(std::memory_order_relaxed) - overloadStart));
-            overloaded = false;
-        }
+        logOverload(h.sequence, late, groundOnly, state);
         if (groundOnly) {
-            ++degradedInARow;
+            ++state.degradedInARow;
         } else {
-            degradedInARow = 0;
+            state.degradedInARow = 0;
             const auto took = static_cast<double>(detectedNs - rectifiedNs);
-            fullMeanNs = fullMeanNs > 0.0 ? 0.8 * fullMeanNs + 0.2 * took : took;
-            if (done == PipelineStatus::Ok && frames >= static_cast<std::uint64_t>(options_.warmupFrames)) {
+            state.fullMeanNs = state.fullMeanNs > 0.0 ? 0.8 * state.fullMeanNs + 0.2 * took : took;
+            if (done == PipelineStatus::Ok && state.frames >= static_cast<std::uint64_t>(options_.warmupFrames)) {
                 recordDetectStages(pipeline_->detector().stageTimes());
             }
         }
-        const vision::GroundEstimate& ground = pipeline_->detector().groundEstimate();
-        out.groundReliable = ground.reliable;
-        out.groundPitchDeg = static_cast<float>(ground.plane.pitchDeg());
-        out.groundRollDeg = static_cast<float>(ground.plane.rollDeg());
-        out.cameraHeightM = static_cast<float>(ground.plane.heightM);
-        if (done == PipelineStatus::Ok) {
-            out.sectors = pipeline_->sectors();
-            if (out.sectors.degraded) {
-                degraded_.fetch_add(1, std::memory_order_relaxed);
-            }
-        } else {
-            const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
-            if (isPowerOfTwo(bad)) {
-                visionLog_.log(LogLevel::Error, LogCategory::Vision,
-                               "frame %lld: the pipeline refused the pair (status %lld); published as unknown "
-                               "(%lld bad frame(s) so far)",
-                               static_cast<std::int64_t>(h.sequence), static_cast<std::int64_t>(done),
-                               static_cast<std::int64_t>(bad));
-            }
-            out.sectors = unknownSectors_;
-            out.sectors.sequence = h.sequence;
-            out.sectors.captureStampNs = h.leftStampNs;
-            degraded_.fetch_add(1, std::memory_order_relaxed);
-        }
-        lastRingNs = ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire);
-        out.stampNs = {h.leftStampNs, lastRingNs, takenNs, rectifiedNs, detectedNs};
+        fillHandover(done, h, out);
+        state.lastRingNs = ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire);
+        out.stampNs = {h.leftStampNs, state.lastRingNs, takenNs, rectifiedNs, detectedNs};
         framesIn_->release(frame);
         if (toPublish_.tryPush(out)) {
             ::sem_post(&published_);
@@ -477,10 +434,70 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
         }
         lastProcessedSeq_.store(h.sequence, std::memory_order_relaxed);
         processed_.fetch_add(1, std::memory_order_release);
-        probeSteady("vision", ++frames, steady);
+        probeSteady("vision", ++state.frames, state.steady);
     }
     probeStopping("vision");
     cpuSeconds_[1].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+bool Service::takeFrame(ipc::TakenFrame& frame) noexcept
+{
+    const ipc::TakeStatus status = framesIn_->take(frame, kWaitSlice);
+    if (status == ipc::TakeStatus::Malformed) {
+        const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
+        if (isPowerOfTwo(bad)) {
+            visionLog_.log(LogLevel::Warn, LogCategory::Ipc, "frame ring: a malformed frame (%lld bad so far)",
+                           static_cast<std::int64_t>(bad));
+        }
+    }
+    return status != ipc::TakeStatus::Timeout && status != ipc::TakeStatus::Malformed;
+}
+
+void Service::logOverload(std::uint64_t sequence, bool late, bool groundOnly, VisionState& state) noexcept
+{
+    if (groundOnly && !state.overloaded) {
+        visionLog_.log(LogLevel::Warn, LogCategory::Vision,
+                       "frame %lld: the full pipeline would miss the %lld ms deadline: ground-plane-only sectors "
+                       "(degraded) until it catches up",
+                       static_cast<std::int64_t>(sequence),
+                       std::chrono::duration_cast<std::chrono::milliseconds>(deadline_).count());
+        state.overloaded = true;
+        state.overloadStart = degraded_.load(std::memory_order_relaxed);
+    } else if (!late && state.overloaded) {
+        visionLog_.log(LogLevel::Info, LogCategory::Vision,
+                       "frame %lld: full pipeline again after %lld degraded frame(s)",
+                       static_cast<std::int64_t>(sequence),
+                       static_cast<std::int64_t>(degraded_.load(std::memory_order_relaxed) - state.overloadStart));
+        state.overloaded = false;
+    }
+}
+
+void Service::fillHandover(PipelineStatus done, const FrameHeader& h, Handover& out) noexcept
+{
+    const vision::GroundEstimate& ground = pipeline_->detector().groundEstimate();
+    out.groundReliable = ground.reliable;
+    out.groundPitchDeg = static_cast<float>(ground.plane.pitchDeg());
+    out.groundRollDeg = static_cast<float>(ground.plane.rollDeg());
+    out.cameraHeightM = static_cast<float>(ground.plane.heightM);
+    if (done == PipelineStatus::Ok) {
+        out.sectors = pipeline_->sectors();
+        if (out.sectors.degraded) {
+            degraded_.fetch_add(1, std::memory_order_relaxed);
+        }
+        return;
+    }
+    const std::uint64_t bad = badFrames_.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (isPowerOfTwo(bad)) {
+        visionLog_.log(LogLevel::Error, LogCategory::Vision,
+                       "frame %lld: the pipeline refused the pair (status %lld); published as unknown (%lld bad "
+                       "frame(s) so far)",
+                       static_cast<std::int64_t>(h.sequence), static_cast<std::int64_t>(done),
+                       static_cast<std::int64_t>(bad));
+    }
+    out.sectors = unknownSectors_;
+    out.sectors.sequence = h.sequence;
+    out.sectors.captureStampNs = h.leftStampNs;
+    degraded_.fetch_add(1, std::memory_order_relaxed);
 }
 
 ipc::HealthRecord Service::health() const noexcept

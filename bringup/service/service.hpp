@@ -197,8 +197,38 @@ private:
     static void publishBody(void* self, const std::atomic<bool>& stop);
     static void busBody(void* self, const std::atomic<bool>& stop);
     void busLoop(const std::atomic<bool>& stop); // may throw: see BusSink
+    /// The capture task's own state between grabs.
+    struct CaptureState {
+        std::chrono::nanoseconds backoff{};    ///< the next reconnect attempt's wait
+        std::chrono::nanoseconds sinceFrame{}; ///< time without a frame
+        std::uint64_t frames = 0;
+        bool steady = false;
+        bool stalled = false;      ///< logged as stalled, not yet logged as flowing again
+        std::int64_t attempts = 0; ///< reconnect attempts since the camera went away
+    };
     void captureLoop(const std::atomic<bool>& stop) noexcept;
+    void onFrame(const hal::CameraFrame& frame, CaptureState& state) noexcept;
+    void onNoFrame(std::chrono::nanoseconds stall, CaptureState& state) noexcept;
+    void onBadFrame() noexcept;
+    void onDisconnected(std::uint64_t lastSequence, CaptureState& state) noexcept;
+
+    /// The vision task's own state between frames.
+    struct VisionState {
+        std::int64_t lastRingNs = 0; ///< when the last frame entered the ring [ns, monotonic]
+        bool haveLast = false;
+        std::uint64_t lastSequence = 0;
+        std::uint64_t frames = 0;
+        bool steady = false;
+        double fullMeanNs = 0.0; ///< running mean of the full pipeline's time (rectified -> detected) [ns]
+        int degradedInARow = 0;
+        bool overloaded = false;         ///< in the degraded mode (logged on entering and leaving)
+        std::uint64_t overloadStart = 0; ///< degraded_ when the mode began
+    };
     void visionLoop(const std::atomic<bool>& stop) noexcept;
+    /// The next frame of the ring; false on a timeout or a malformed frame (counted and logged).
+    bool takeFrame(ipc::TakenFrame& frame) noexcept;
+    /// Logs entering and leaving the degraded (ground-plane-only) mode.
+    void logOverload(std::uint64_t sequence, bool late, bool groundOnly, VisionState& state) noexcept;
     void publishLoop(const std::atomic<bool>& stop) noexcept;
     ipc::HealthRecord health() const noexcept;
     /// Calls the probe for `task` once its frame count reaches the warm-up.
@@ -213,6 +243,8 @@ private:
         float cameraHeightM = 0.0F;
         std::array<std::int64_t, 5> stampNs{}; ///< exposure, ring publish, taken, rectified, detected [ns]
     };
+    /// The frame's ground estimate and sectors (or Unknown ones when the pipeline refused the pair) into `out`.
+    void fillHandover(PipelineStatus done, const FrameHeader& h, Handover& out) noexcept;
     static constexpr std::size_t kPublishSlots = 64; ///< capture's ring-publish time per sequence % slots
 
     ServiceOptions options_;

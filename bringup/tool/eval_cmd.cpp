@@ -455,6 +455,112 @@ bool isNegativeType(const std::string& type)
     return type == "trench" || type == "hole" || type == "hole_square";
 }
 
+/// One row of the one-camera table: an obstacle type, or the box painted the ground's own colour.
+struct ColourRow {
+    std::string label;
+    std::string type;
+    bool groundColoured; ///< the obstacle takes the ground's chroma (the hard case)
+};
+
+/// One row on one ground at 1-6 m, printed and into `json`. nullopt on a render/detector failure, else whether the
+/// row meets the detection target (true for a negative type, which has none).
+std::optional<bool> runColourRow(const SimOptions& o, SimDetector& det, sim::GroundTexture texture,
+                                 const ColourRow& row, std::ostringstream& json, bool& firstRow)
+{
+    std::vector<BandStats> stats(kBandCount);
+    const int refBefore = det.notGroundLikeFrames();
+    std::size_t cases = 0;
+    for (int b = 0; b < kBandCount && kBands[b].hi <= kColourMaxRangeM; ++b) {
+        for (const double fraction : o.rangesPerBand) {
+            const double range = kBands[b].lo + fraction * (kBands[b].hi - kBands[b].lo);
+            const double bearing = o.bearings[cases++ % o.bearings.size()];
+            const ObstacleCase c{row.type,
+                                 range,
+                                 bearing,
+                                 texture,
+                                 "",
+                                 0,
+                                 row.groundColoured ? std::optional(sim::groundChroma(texture)) : std::nullopt};
+            if (!runObstacleCase(o, det, c, stats)) {
+                return std::nullopt;
+            }
+        }
+    }
+    const int refBad = det.notGroundLikeFrames() - refBefore;
+    BandStats all;
+    for (int b = 0; b < kBandCount && kBands[b].hi <= kColourMaxRangeM; ++b) {
+        const BandStats& s = stats[static_cast<std::size_t>(b)];
+        all.frames += s.frames;
+        all.gtFrames += s.gtFrames;
+        all.detected += s.detected;
+        all.spill += s.spill;
+        all.falseClear += s.falseClear;
+        all.errors.insert(all.errors.end(), s.errors.begin(), s.errors.end());
+    }
+    const bool target = !isNegativeType(row.type);
+    const bool pass = all.gtFrames > 0 && all.rate() >= kColourTargetDetection;
+    char p95Text[24] = "-";
+    if (!all.errors.empty()) {
+        std::snprintf(p95Text, sizeof(p95Text), "%.3f", quantile(all.errors, 0.95));
+    }
+    std::printf("%-*s %-8s %6d %6d %7.1f %7.1f %7.1f %10s %7d %11.2f %11.2f %s\n", kColourLabelColumn,
+                row.label.c_str(), textureName(texture), all.frames, all.gtFrames, 100.0 * stats[0].rate(),
+                100.0 * stats[1].rate(), 100.0 * all.rate(), p95Text, refBad,
+                all.frames > 0 ? double(all.spill) / all.frames : 0.0,
+                all.frames > 0 ? double(all.falseClear) / all.frames : 0.0,
+                target ? (pass ? "PASS" : "FAIL") : "(negative: no target)");
+    json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << row.label << "\", \"ground\": \""
+         << textureName(texture) << "\", \"frames\": " << all.frames << ", \"gt_frames\": " << all.gtFrames
+         << ", \"detected\": " << all.detected << ", \"detection_rate_1_3\": " << jsonNumber(stats[0].rate())
+         << ", \"detection_rate_3_6\": " << jsonNumber(stats[1].rate())
+         << ", \"detection_rate\": " << jsonNumber(all.rate())
+         << ", \"range_error_p95_m\": " << jsonNumber(all.errors.empty() ? NAN : quantile(all.errors, 0.95))
+         << ", \"reference_not_ground_like_frames\": " << refBad << ", \"spill_sectors\": " << all.spill
+         << ", \"false_clear_sectors\": " << all.falseClear << ", \"target\": " << (target ? "true" : "false") << "}";
+    firstRow = false;
+    return !target || pass;
+}
+
+/// Empty `texture` ground: every sector reported Obstacle is false. Printed and into `json`; nullopt on a
+/// render/detector failure, else whether the false sectors are within the target.
+std::optional<bool> runColourEmpty(const SimOptions& o, SimDetector& det, sim::GroundTexture texture, bool first,
+                                   std::ostringstream& json)
+{
+    sim::RenderResult frame;
+    const int refBefore = det.notGroundLikeFrames();
+    int frames = 0;
+    int sectors = 0;
+    int falseObstacle = 0;
+    int unknown = 0;
+    int clear = 0;
+    for (int seed = 1; seed <= o.emptySeeds; ++seed) {
+        auto scene = sim::makeScene("empty", 5.0, 0.0, texture, static_cast<std::uint64_t>(seed));
+        if (!scene || !det.run(*scene, frame)) {
+            return std::nullopt;
+        }
+        ++frames;
+        for (int i = 0; i < det.sectors().count; ++i) {
+            const SectorState state = det.sectors().sectors[static_cast<std::size_t>(i)].state;
+            const bool gtObstacle = frame.sectors.sectors[static_cast<std::size_t>(i)].state == SectorState::Obstacle;
+            ++sectors;
+            falseObstacle += state == SectorState::Obstacle && !gtObstacle ? 1 : 0;
+            unknown += state == SectorState::Unknown ? 1 : 0;
+            clear += state == SectorState::Clear ? 1 : 0;
+        }
+    }
+    const int refBad = det.notGroundLikeFrames() - refBefore;
+    const double falseRate = sectors > 0 ? double(falseObstacle) / sectors : 0.0;
+    const bool ok = falseRate <= kColourTargetFalseSectors;
+    std::printf("%-8s %6d %8d %9d %8.2f %8.1f %8.1f %7d %s\n", textureName(texture), frames, sectors, falseObstacle,
+                100.0 * falseRate, sectors > 0 ? 100.0 * unknown / sectors : 0.0,
+                sectors > 0 ? 100.0 * clear / sectors : 0.0, refBad, ok ? "PASS" : "FAIL");
+    json << (first ? "\n" : ",\n") << "      {\"ground\": \"" << textureName(texture) << "\", \"frames\": " << frames
+         << ", \"sectors\": " << sectors << ", \"false_obstacle_sectors\": " << falseObstacle
+         << ", \"false_obstacle_rate\": " << jsonNumber(falseRate) << ", \"unknown_sectors\": " << unknown
+         << ", \"clear_sectors\": " << clear << ", \"reference_not_ground_like_frames\": " << refBad << "}";
+    return ok;
+}
+
 /// The one-camera mode (`--detector colour`): ColourFreeSpace on the left colour image, scored by the stereo
 /// suite's scorer (scoreObstacleFrame) per obstacle type and ground at 1-6 m, plus the hard case of a box painted
 /// the ground's own colour, and the false Obstacle sectors of empty ground. Negative obstacles are listed for
@@ -467,12 +573,7 @@ int runColourSuite(const SimOptions& o, std::ostringstream& json)
         return 1;
     }
     SimDetector& det = *detector;
-    struct Row {
-        std::string label;
-        std::string type;
-        bool groundColoured; ///< the obstacle takes the ground's chroma (the hard case)
-    };
-    std::vector<Row> rows;
+    std::vector<ColourRow> rows;
     for (const std::string& type : obstacleTypes(o)) {
         rows.push_back({type, type, false});
     }
@@ -487,106 +588,26 @@ int runColourSuite(const SimOptions& o, std::ostringstream& json)
     bool firstRow = true;
     bool detectionOk = true;
     for (const sim::GroundTexture texture : o.textures) {
-        for (const Row& row : rows) {
-            std::vector<BandStats> stats(kBandCount);
-            const int refBefore = det.notGroundLikeFrames();
-            std::size_t cases = 0;
-            for (int b = 0; b < kBandCount && kBands[b].hi <= kColourMaxRangeM; ++b) {
-                for (const double fraction : o.rangesPerBand) {
-                    const double range = kBands[b].lo + fraction * (kBands[b].hi - kBands[b].lo);
-                    const double bearing = o.bearings[cases++ % o.bearings.size()];
-                    const ObstacleCase c{row.type,
-                                         range,
-                                         bearing,
-                                         texture,
-                                         "",
-                                         0,
-                                         row.groundColoured ? std::optional(sim::groundChroma(texture)) : std::nullopt};
-                    if (!runObstacleCase(o, det, c, stats)) {
-                        return 1;
-                    }
-                }
+        for (const ColourRow& row : rows) {
+            const auto ok = runColourRow(o, det, texture, row, json, firstRow);
+            if (!ok) {
+                return 1;
             }
-            const int refBad = det.notGroundLikeFrames() - refBefore;
-            BandStats all;
-            for (int b = 0; b < kBandCount && kBands[b].hi <= kColourMaxRangeM; ++b) {
-                const BandStats& s = stats[static_cast<std::size_t>(b)];
-                all.frames += s.frames;
-                all.gtFrames += s.gtFrames;
-                all.detected += s.detected;
-                all.spill += s.spill;
-                all.falseClear += s.falseClear;
-                all.errors.insert(all.errors.end(), s.errors.begin(), s.errors.end());
-            }
-            const bool target = !isNegativeType(row.type);
-            const bool pass = all.gtFrames > 0 && all.rate() >= kColourTargetDetection;
-            detectionOk = detectionOk && (!target || pass);
-            char p95Text[24] = "-";
-            if (!all.errors.empty()) {
-                std::snprintf(p95Text, sizeof(p95Text), "%.3f", quantile(all.errors, 0.95));
-            }
-            std::printf("%-*s %-8s %6d %6d %7.1f %7.1f %7.1f %10s %7d %11.2f %11.2f %s\n", kColourLabelColumn,
-                        row.label.c_str(), textureName(texture), all.frames, all.gtFrames, 100.0 * stats[0].rate(),
-                        100.0 * stats[1].rate(), 100.0 * all.rate(), p95Text, refBad,
-                        all.frames > 0 ? double(all.spill) / all.frames : 0.0,
-                        all.frames > 0 ? double(all.falseClear) / all.frames : 0.0,
-                        target ? (pass ? "PASS" : "FAIL") : "(negative: no target)");
-            json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << row.label << "\", \"ground\": \""
-                 << textureName(texture) << "\", \"frames\": " << all.frames << ", \"gt_frames\": " << all.gtFrames
-                 << ", \"detected\": " << all.detected << ", \"detection_rate_1_3\": " << jsonNumber(stats[0].rate())
-                 << ", \"detection_rate_3_6\": " << jsonNumber(stats[1].rate())
-                 << ", \"detection_rate\": " << jsonNumber(all.rate())
-                 << ", \"range_error_p95_m\": " << jsonNumber(all.errors.empty() ? NAN : quantile(all.errors, 0.95))
-                 << ", \"reference_not_ground_like_frames\": " << refBad << ", \"spill_sectors\": " << all.spill
-                 << ", \"false_clear_sectors\": " << all.falseClear << ", \"target\": " << (target ? "true" : "false")
-                 << "}";
-            firstRow = false;
+            detectionOk = detectionOk && *ok;
         }
     }
-    // Empty ground: every sector reported Obstacle is false.
     std::printf("empty ground (%d seed(s) per ground): false = sectors reported Obstacle, of all sectors\n",
                 o.emptySeeds);
     std::printf("%-8s %6s %8s %9s %8s %8s %8s %7s\n", "ground", "frames", "sectors", "false_obs", "false%", "unknown%",
                 "clear%", "ref_bad");
     json << "\n    ],\n    \"empty\": [";
     bool emptyOk = true;
-    sim::RenderResult frame;
     for (std::size_t t = 0; t < o.emptyTextures.size(); ++t) {
-        const sim::GroundTexture texture = o.emptyTextures[t];
-        const int refBefore = det.notGroundLikeFrames();
-        int frames = 0;
-        int sectors = 0;
-        int falseObstacle = 0;
-        int unknown = 0;
-        int clear = 0;
-        for (int seed = 1; seed <= o.emptySeeds; ++seed) {
-            auto scene = sim::makeScene("empty", 5.0, 0.0, texture, static_cast<std::uint64_t>(seed));
-            if (!scene || !det.run(*scene, frame)) {
-                return 1;
-            }
-            ++frames;
-            for (int i = 0; i < det.sectors().count; ++i) {
-                const SectorState state = det.sectors().sectors[static_cast<std::size_t>(i)].state;
-                const bool gtObstacle =
-                    frame.sectors.sectors[static_cast<std::size_t>(i)].state == SectorState::Obstacle;
-                ++sectors;
-                falseObstacle += state == SectorState::Obstacle && !gtObstacle ? 1 : 0;
-                unknown += state == SectorState::Unknown ? 1 : 0;
-                clear += state == SectorState::Clear ? 1 : 0;
-            }
+        const auto ok = runColourEmpty(o, det, o.emptyTextures[t], t == 0, json);
+        if (!ok) {
+            return 1;
         }
-        const int refBad = det.notGroundLikeFrames() - refBefore;
-        const double falseRate = sectors > 0 ? double(falseObstacle) / sectors : 0.0;
-        const bool ok = falseRate <= kColourTargetFalseSectors;
-        emptyOk = emptyOk && ok;
-        std::printf("%-8s %6d %8d %9d %8.2f %8.1f %8.1f %7d %s\n", textureName(texture), frames, sectors, falseObstacle,
-                    100.0 * falseRate, sectors > 0 ? 100.0 * unknown / sectors : 0.0,
-                    sectors > 0 ? 100.0 * clear / sectors : 0.0, refBad, ok ? "PASS" : "FAIL");
-        json << (t == 0 ? "\n" : ",\n") << "      {\"ground\": \"" << textureName(texture)
-             << "\", \"frames\": " << frames << ", \"sectors\": " << sectors
-             << ", \"false_obstacle_sectors\": " << falseObstacle
-             << ", \"false_obstacle_rate\": " << jsonNumber(falseRate) << ", \"unknown_sectors\": " << unknown
-             << ", \"clear_sectors\": " << clear << ", \"reference_not_ground_like_frames\": " << refBad << "}";
+        emptyOk = emptyOk && *ok;
     }
     const int framesRun = static_cast<int>(det.frames());
     const double seconds = det.seconds();
@@ -600,19 +621,10 @@ int runColourSuite(const SimOptions& o, std::ostringstream& json)
     return 0;
 }
 
-/// Runs the simulator suite; prints the table and verdicts and appends the JSON object to `json`.
-/// @return 0 when everything ran, 1 on a render/detector failure.
-int runSimSuite(const SimOptions& o, std::ostringstream& json)
+/// Every obstacle type at every band's ranges, texture and bearing (taking turns) into `stats` per type and band.
+bool runObstacleScenes(const SimOptions& o, SimDetector& det, const std::vector<std::string>& types,
+                       std::map<std::string, std::vector<BandStats>>& stats)
 {
-    std::optional<SimDetector> detector = makeSimDetector(o);
-    if (!detector) {
-        return 1;
-    }
-    SimDetector& det = *detector;
-    sim::RenderResult frame;
-
-    const std::vector<std::string> types = obstacleTypes(o);
-    std::map<std::string, std::vector<BandStats>> stats;
     for (const std::string& type : types) {
         stats[type].resize(kBandCount);
         std::size_t cases = 0;
@@ -624,63 +636,125 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
                     // type and band sees every bearing when cases per band >= bearings.
                     const double bearing = o.bearings[cases++ % o.bearings.size()];
                     if (!runObstacleCase(o, det, ObstacleCase{type, range, bearing, texture, "", 0}, stats[type])) {
-                        return 1;
+                        return false;
                     }
                 }
             }
         }
     }
+    return true;
+}
 
-    // Empty ground: any Red/Blue sector is false. Every texture, the painted floor too (the weakest texture, where
-    // matching noise is worst), whichever textures the obstacles ran on.
-    int emptyFrames = 0;
-    int emptyFalseFrames = 0;
-    int emptyFalseSectors = 0;
-    int emptyObstacleSectors = 0; ///< any range: a spurious far obstacle is not red/blue but still wrong
+/// Empty ground: any Red/Blue sector is false.
+struct EmptyScore {
+    int frames = 0;
+    int falseFrames = 0;
+    int falseSectors = 0;
+    int obstacleSectors = 0; ///< any range: a spurious far obstacle is not red/blue but still wrong
+    [[nodiscard]] double falseRate() const { return frames > 0 ? double(falseFrames) / frames : 0.0; }
+};
+
+/// Every empty texture, the painted floor too (the weakest texture, where matching noise is worst), whichever
+/// textures the obstacles ran on.
+bool runEmptyScenes(const SimOptions& o, SimDetector& det, EmptyScore& score)
+{
+    sim::RenderResult frame;
     for (const sim::GroundTexture texture : o.emptyTextures) {
         for (int seed = 1; seed <= o.emptySeeds; ++seed) {
             auto scene = sim::makeScene("empty", 5.0, 0.0, texture, static_cast<std::uint64_t>(seed));
             if (!scene || !det.run(*scene, frame)) {
-                return 1;
+                return false;
             }
-            ++emptyFrames;
+            ++score.frames;
             const int n = countRedBlue(det.sectors());
-            emptyFalseSectors += n;
+            score.falseSectors += n;
             for (int i = 0; i < det.sectors().count; ++i) {
-                emptyObstacleSectors +=
+                score.obstacleSectors +=
                     det.sectors().sectors[static_cast<std::size_t>(i)].state == SectorState::Obstacle ? 1 : 0;
             }
-            emptyFalseFrames += n > 0 ? 1 : 0;
+            score.falseFrames += n > 0 ? 1 : 0;
         }
     }
-    // Overhang (underside 1.5 m): never red or blue.
-    int overhangFrames = 0;
-    int overhangFalseFrames = 0;
+    return true;
+}
+
+/// Overhang (underside 1.5 m): never red or blue. The frames with a red or blue sector counted.
+bool runOverhangScenes(const SimOptions& o, SimDetector& det, int& frames, int& falseFrames)
+{
+    sim::RenderResult frame;
     for (const sim::GroundTexture texture : o.textures) {
         for (const double range : o.overhangRanges) {
             auto scene = sim::makeScene("overhang", range, 0.0, texture, 1);
             if (!scene || !det.run(*scene, frame)) {
-                return 1;
+                return false;
             }
-            ++overhangFrames;
-            overhangFalseFrames += countRedBlue(det.sectors()) > 0 ? 1 : 0;
+            ++frames;
+            falseFrames += countRedBlue(det.sectors()) > 0 ? 1 : 0;
         }
     }
-    // Doorway: the GT-clear sectors of the gap must not be reported Obstacle.
-    struct DoorwayRow {
-        double range;
-        const char* texture;
-        GapScore gap;
-    };
-    std::vector<DoorwayRow> doorway;
+    return true;
+}
+
+/// Doorway: the GT-clear sectors of the gap must not be reported Obstacle.
+struct DoorwayRow {
+    double range;
+    const char* texture;
+    GapScore gap;
+};
+
+bool runDoorwayScenes(const SimOptions& o, SimDetector& det, std::vector<DoorwayRow>& doorway)
+{
+    sim::RenderResult frame;
     for (const sim::GroundTexture texture : o.textures) {
         for (const double range : o.doorwayRanges) {
             auto scene = sim::makeScene("wall_doorway", range, 0.0, texture, 1);
             if (!scene || !det.run(*scene, frame)) {
-                return 1;
+                return false;
             }
             doorway.push_back({range, textureName(texture), scoreGap(det.sectors(), frame.sectors)});
         }
+    }
+    return true;
+}
+
+/// The doorway rows printed and into `json`; true when every gap was visible.
+bool reportDoorways(const std::vector<DoorwayRow>& doorway, std::ostringstream& json)
+{
+    bool doorwayOk = true;
+    json << "\n    ],\n    \"doorway\": [";
+    for (std::size_t i = 0; i < doorway.size(); ++i) {
+        const DoorwayRow& d = doorway[i];
+        std::printf("doorway 0.9 m at %.0f m (%s): %d GT-clear gap sectors: %d reported obstacle (%d inside the "
+                    "edge sectors), %d clear -> %s\n",
+                    d.range, d.texture, d.gap.gapSectors, d.gap.reportedObstacle, d.gap.innerObstacle,
+                    d.gap.reportedClear, d.gap.visible() ? "gap visible" : "GAP NOT VISIBLE");
+        doorwayOk = doorwayOk && d.gap.visible();
+        json << (i == 0 ? "\n" : ",\n") << "      {\"range_m\": " << d.range << ", \"texture\": \"" << d.texture
+             << "\", \"gap_sectors\": " << d.gap.gapSectors << ", \"reported_obstacle\": " << d.gap.reportedObstacle
+             << ", \"inner_obstacle\": " << d.gap.innerObstacle << ", \"reported_clear\": " << d.gap.reportedClear
+             << ", \"gap_visible\": " << (d.gap.visible() ? "true" : "false") << "}";
+    }
+    return doorwayOk;
+}
+
+/// Runs the simulator suite; prints the table and verdicts and appends the JSON object to `json`.
+/// @return 0 when everything ran, 1 on a render/detector failure.
+int runSimSuite(const SimOptions& o, std::ostringstream& json)
+{
+    std::optional<SimDetector> detector = makeSimDetector(o);
+    if (!detector) {
+        return 1;
+    }
+    SimDetector& det = *detector;
+    const std::vector<std::string> types = obstacleTypes(o);
+    std::map<std::string, std::vector<BandStats>> stats;
+    EmptyScore empty;
+    int overhangFrames = 0;
+    int overhangFalseFrames = 0;
+    std::vector<DoorwayRow> doorway;
+    if (!runObstacleScenes(o, det, types, stats) || !runEmptyScenes(o, det, empty) ||
+        !runOverhangScenes(o, det, overhangFrames, overhangFalseFrames) || !runDoorwayScenes(o, det, doorway)) {
+        return 1;
     }
     const double seconds = det.seconds();
     const int framesRun = static_cast<int>(det.frames());
@@ -701,36 +775,22 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
         detectionOk = detectionOk && within10.gtFrames > 0 && within10.rate() >= kTargetDetection;
         rangeOk = rangeOk && within10.detected > 0 && within10.withinRate() >= kTargetWithinTolerance;
     }
-    const double falseRate = emptyFrames > 0 ? double(emptyFalseFrames) / emptyFrames : 0.0;
-    const bool emptyOk = falseRate < kTargetFalseRate;
+    const bool emptyOk = empty.falseRate() < kTargetFalseRate;
     std::printf("empty ground: %d frames, %d with a false red/blue sector (%.2f%%), %.3f false red/blue sectors and "
                 "%.3f obstacle sectors at any range per frame\n",
-                emptyFrames, emptyFalseFrames, 100.0 * falseRate,
-                emptyFrames > 0 ? double(emptyFalseSectors) / emptyFrames : 0.0,
-                emptyFrames > 0 ? double(emptyObstacleSectors) / emptyFrames : 0.0);
+                empty.frames, empty.falseFrames, 100.0 * empty.falseRate(),
+                empty.frames > 0 ? double(empty.falseSectors) / empty.frames : 0.0,
+                empty.frames > 0 ? double(empty.obstacleSectors) / empty.frames : 0.0);
     std::printf("overhang (underside 1.5 m): %d frames, %d with a red/blue sector -> %s\n", overhangFrames,
                 overhangFalseFrames, overhangFalseFrames == 0 ? "PASS" : "FAIL");
-    bool doorwayOk = true;
-    json << "\n    ],\n    \"doorway\": [";
-    for (std::size_t i = 0; i < doorway.size(); ++i) {
-        const DoorwayRow& d = doorway[i];
-        std::printf("doorway 0.9 m at %.0f m (%s): %d GT-clear gap sectors: %d reported obstacle (%d inside the "
-                    "edge sectors), %d clear -> %s\n",
-                    d.range, d.texture, d.gap.gapSectors, d.gap.reportedObstacle, d.gap.innerObstacle,
-                    d.gap.reportedClear, d.gap.visible() ? "gap visible" : "GAP NOT VISIBLE");
-        doorwayOk = doorwayOk && d.gap.visible();
-        json << (i == 0 ? "\n" : ",\n") << "      {\"range_m\": " << d.range << ", \"texture\": \"" << d.texture
-             << "\", \"gap_sectors\": " << d.gap.gapSectors << ", \"reported_obstacle\": " << d.gap.reportedObstacle
-             << ", \"inner_obstacle\": " << d.gap.innerObstacle << ", \"reported_clear\": " << d.gap.reportedClear
-             << ", \"gap_visible\": " << (d.gap.visible() ? "true" : "false") << "}";
-    }
+    const bool doorwayOk = reportDoorways(doorway, json);
     std::printf("verdicts: detection >= 95%% 1-10 m per type: %s; false red/blue on empty ground < 1%%: %s; range "
                 "error within max(0.10 m, 3%%) at p95 within 10 m: %s; overhang: %s; doorway gap: %s\n",
                 detectionOk ? "PASS" : "FAIL", emptyOk ? "PASS" : "FAIL", rangeOk ? "PASS" : "FAIL",
                 overhangFalseFrames == 0 ? "PASS" : "FAIL", doorwayOk ? "PASS" : "FAIL");
-    json << "\n    ],\n    \"empty\": {\"frames\": " << emptyFrames << ", \"false_frames\": " << emptyFalseFrames
-         << ", \"false_sectors\": " << emptyFalseSectors << ", \"obstacle_sectors\": " << emptyObstacleSectors
-         << ", \"false_frame_rate\": " << jsonNumber(falseRate)
+    json << "\n    ],\n    \"empty\": {\"frames\": " << empty.frames << ", \"false_frames\": " << empty.falseFrames
+         << ", \"false_sectors\": " << empty.falseSectors << ", \"obstacle_sectors\": " << empty.obstacleSectors
+         << ", \"false_frame_rate\": " << jsonNumber(empty.falseRate())
          << "},\n    \"overhang\": {\"frames\": " << overhangFrames << ", \"false_frames\": " << overhangFalseFrames
          << "},\n    \"verdicts\": {\"detection\": " << (detectionOk ? "true" : "false")
          << ", \"empty_false_rate\": " << (emptyOk ? "true" : "false")
@@ -1001,11 +1061,10 @@ int runMiddlebury(const std::filesystem::path& root, vision::MatcherMode matcher
     return 0;
 }
 
-} // namespace
-
-int runEval(int argc, char** argv)
+/// eval's options.
+Args evalArgs()
 {
-    Args args(
+    return Args(
         "eval",
         "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
@@ -1059,13 +1118,40 @@ int runEval(int argc, char** argv)
          {"json", "OUT", "write all figures as JSON", false},
          {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
          {"skip-missing", "", "exit 77 (skipped) when the Middlebury or real data are missing", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError("eval", parsed.error());
+}
+
+/// What eval's options choose beside the suites.
+struct EvalChoices {
+    int seeds = 1;
+    vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
+    bool colourDetector = false;
+    bool groundRange = vision::RoiMatcherConfig{}.groundRange;
+    std::filesystem::path root = "../shared/data";
+};
+
+/// An exit code when the Middlebury or real data the options name are missing (77 with --skip-missing).
+std::optional<int> missingData(const Args& args, const std::filesystem::path& root)
+{
+    std::error_code ec;
+    if (args.has("middlebury") && !std::filesystem::is_directory(root / "middlebury", ec)) {
+        std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error") << ": Middlebury data "
+                  << "not found at " << (root / "middlebury").string()
+                  << " (fix: set UGV_SHARED_DATA or --data DIR to the shared data root)\n";
+        return args.has("skip-missing") ? kExitSkipped : 1;
     }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (args.has("real") &&
+        !std::filesystem::is_regular_file(std::filesystem::path(args.get("real")) / "index.csv", ec)) {
+        std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error")
+                  << ": real stereo data not found: no " << args.get("real") << "/index.csv"
+                  << " (fix: --real ../shared/data/real-stereo, or $UGV_SHARED_DATA/real-stereo)\n";
+        return args.has("skip-missing") ? kExitSkipped : 1;
     }
+    return std::nullopt;
+}
+
+/// The choices of `args`; an exit code when the options are wrong or the data they name is missing.
+std::optional<int> readChoices(const Args& args, EvalChoices& c)
+{
     if (!args.has("sim") && !args.has("approach") && !args.has("hole-signal") && !args.has("middlebury") &&
         !args.has("real")) {
         return reportUsageError("eval", Error{"ugvsense eval", "nothing to evaluate",
@@ -1080,7 +1166,7 @@ int runEval(int argc, char** argv)
         return reportUsageError("eval", seeds ? Error{"ugvsense eval --frames-per-case", "not a whole number", ""}
                                               : seeds.error());
     }
-    vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
+    c.seeds = static_cast<int>(*seeds);
     if (args.has("matcher")) {
         const std::string name = args.get("matcher");
         const auto mode = vision::parseMatcherMode(name);
@@ -1088,179 +1174,219 @@ int runEval(int argc, char** argv)
             return reportUsageError("eval", Error{"ugvsense eval --matcher", "unknown mode '" + name + "'",
                                                   "use " + std::string(vision::kMatcherModeNames)});
         }
-        matcher = *mode;
+        c.matcher = *mode;
     }
     const std::string detectorName = args.has("detector") ? args.get("detector") : "stereo";
     if (detectorName != "stereo" && detectorName != "colour") {
         return reportUsageError("eval", Error{"ugvsense eval --detector", "unknown detector '" + detectorName + "'",
                                               "use stereo or colour"});
     }
-    const bool colourDetector = detectorName == "colour";
-    if (colourDetector && (!args.has("sim") || args.has("approach") || args.has("hole-signal"))) {
+    c.colourDetector = detectorName == "colour";
+    if (c.colourDetector && (!args.has("sim") || args.has("approach") || args.has("hole-signal"))) {
         return reportUsageError("eval", Error{"ugvsense eval --detector colour", "runs with --sim only",
                                               "give --sim (the approach and hole signal are stereo measures)"});
     }
-    bool groundRange = vision::RoiMatcherConfig{}.groundRange;
     if (args.has("ground-range")) {
         const std::string value = args.get("ground-range");
         if (value != "on" && value != "off") {
             return reportUsageError("eval", Error{"ugvsense eval --ground-range", "'" + value + "' is not on or off",
                                                   "use --ground-range on or --ground-range off"});
         }
-        groundRange = value == "on";
+        c.groundRange = value == "on";
     }
-    std::filesystem::path root = "../shared/data";
     if (args.has("data")) {
-        root = args.get("data");
+        c.root = args.get("data");
     } else if (const char* env = std::getenv("UGV_SHARED_DATA"); env != nullptr && *env != '\0') {
-        root = env;
+        c.root = env;
     }
-    if (args.has("middlebury")) {
-        std::error_code ec;
-        if (!std::filesystem::is_directory(root / "middlebury", ec)) {
-            std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error") << ": Middlebury data "
-                      << "not found at " << (root / "middlebury").string()
-                      << " (fix: set UGV_SHARED_DATA or --data DIR to the shared data root)\n";
-            return args.has("skip-missing") ? kExitSkipped : 1;
-        }
-    }
-
     if (args.has("mount")) {
         if (auto mount = parseMount(args.get("mount")); !mount) {
             return reportUsageError("eval", mount.error());
         }
     }
-    if (args.has("real")) {
-        std::error_code ec;
-        if (!std::filesystem::is_regular_file(std::filesystem::path(args.get("real")) / "index.csv", ec)) {
-            std::cerr << "ugvsense eval: " << (args.has("skip-missing") ? "skipped" : "error")
-                      << ": real stereo data not found: no " << args.get("real") << "/index.csv"
-                      << " (fix: --real ../shared/data/real-stereo, or $UGV_SHARED_DATA/real-stereo)\n";
-            return args.has("skip-missing") ? kExitSkipped : 1;
+    return missingData(args, c.root);
+}
+
+/// A comma-separated list option of names, each one of `known` (or `extra`); an error naming the option otherwise.
+Result<std::vector<std::string>, Error> nameList(const Args& args, const char* option,
+                                                 const std::vector<std::string>& known, const std::string& what,
+                                                 const std::string& fix)
+{
+    std::vector<std::string> names;
+    std::stringstream list(args.get(option));
+    for (std::string name; std::getline(list, name, ',');) {
+        if (std::find(known.begin(), known.end(), name) == known.end()) {
+            return Unexpected(
+                Error{std::string("ugvsense eval --") + option, "unknown " + what + " '" + name + "'", fix});
+        }
+        names.push_back(name);
+    }
+    return names;
+}
+
+/// The simulator suites' cases: the full or the quick grid, narrowed by --types and --grounds.
+Result<SimOptions, Error> simOptions(const Args& args, const EvalChoices& c)
+{
+    SimOptions o;
+    if (args.has("quick")) {
+        o.textures = {sim::GroundTexture::Asphalt};
+        o.rangesPerBand = {0.5};
+        o.bearings = {0.0};
+        o.emptySeeds = 3;
+        o.emptyTextures = o.textures;
+        o.doorwayRanges = {3.0};
+        o.overhangRanges = {3.0};
+        o.groundSeeds = 2;
+        o.groundRanges = {4.5};
+    } else {
+        o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::Gravel};
+        o.rangesPerBand = {0.25, 0.75};
+        o.bearings = {0.0, -15.0, 15.0};
+        o.emptySeeds = 10;
+        o.doorwayRanges = {2.0, 3.0, 4.0, 5.0};
+        o.overhangRanges = {2.0, 3.0, 4.0};
+    }
+    o.seeds = c.seeds;
+    if (args.has("types")) {
+        std::vector<std::string> types;
+        for (const std::string& name : sim::sceneNames()) {
+            if (name != "empty" && name != "overhang") {
+                types.push_back(name);
+            }
+        }
+        auto chosen = nameList(args, "types", types, "obstacle type", "see 'ugvsense sim --list'");
+        if (!chosen) {
+            return Unexpected(chosen.error());
+        }
+        o.types = *chosen;
+    }
+    if (args.has("grounds")) {
+        std::vector<std::string> grounds = sim::conditionNames();
+        grounds.emplace_back("none");
+        auto chosen = nameList(args, "grounds", grounds, "ground", "see 'ugvsense sim --list' (conditions), or none");
+        if (!chosen) {
+            return Unexpected(chosen.error());
+        }
+        o.groundKinds.clear();
+        std::copy_if(chosen->begin(), chosen->end(), std::back_inserter(o.groundKinds),
+                     [](const std::string& name) { return name != "none"; });
+        o.obstacleGrounds = o.groundKinds;
+    }
+    o.matcher = c.matcher;
+    o.groundPrior = args.has("ground-prior");
+    o.groundRange = c.groundRange;
+    if (c.colourDetector) {
+        // The grounds of issue 23's one-camera targets; the empty scenes on the same ones.
+        o.colour = true;
+        o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::PaintedFloor};
+        o.emptyTextures = o.textures;
+        if (!args.has("quick")) {
+            o.rangesPerBand = {0.125, 0.375, 0.625, 0.875};
         }
     }
+    return o;
+}
 
+/// The simulator suites the options ask for (--sim, --approach, --hole-signal), their JSON into `json`.
+int runSimulated(const Args& args, const SimOptions& o, std::ostringstream& json)
+{
+    if (o.colour) {
+        if (const int rc = runColourSuite(o, json); rc != 0) {
+            return rc;
+        }
+    } else if (args.has("sim")) {
+        if (const int rc = runSimSuite(o, json); rc != 0) {
+            return rc;
+        }
+    }
+    if (args.has("approach")) {
+        json << (args.has("sim") ? ",\n" : "");
+        if (const int rc = runApproach(o, args.has("quick") ? 0.5 : 0.25, json); rc != 0) {
+            return rc;
+        }
+    }
+    if (args.has("hole-signal")) {
+        json << (args.has("sim") || args.has("approach") ? ",\n" : "");
+        const std::vector<double> ranges = args.has("quick")
+                                               ? std::vector<double>{7.0, 9.0}
+                                               : std::vector<double>{6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5, 10.0};
+        return runHoleSignal(o, ranges, json);
+    }
+    return 0;
+}
+
+/// --real: the options of the real-pair suite, run.
+int runReal(const Args& args, bool groundRange, std::ostringstream& json)
+{
+    RealEvalOptions real;
+    real.dir = args.get("real");
+    real.overlayDir = args.get("overlay-dir");
+    real.mount = args.get("mount");
+    real.verbose = args.has("verbose");
+    real.groundRange = groundRange;
+    std::stringstream list(args.get("pairs"));
+    for (std::string name; std::getline(list, name, ',');) {
+        real.pairs.push_back(name);
+    }
+    return runRealEval(real, json);
+}
+
+/// --json OUT: every figure, written.
+int writeJson(const std::string& path, const std::string& text)
+{
+    std::ofstream out(path);
+    out << text;
+    out.flush();
+    if (!out) {
+        std::cerr << "ugvsense eval: error: " << path << ": cannot write the JSON file\n";
+        return 1;
+    }
+    std::printf("wrote %s\n", path.c_str());
+    return 0;
+}
+
+} // namespace
+
+int runEval(int argc, char** argv)
+{
+    Args args = evalArgs();
+    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
+        return reportUsageError("eval", parsed.error());
+    }
+    if (args.helpRequested()) {
+        std::cout << args.usage();
+        return 0;
+    }
+    EvalChoices choices;
+    if (const auto exit = readChoices(args, choices)) {
+        return *exit;
+    }
     std::ostringstream json;
     json << "{\n";
     const bool simulated = args.has("sim") || args.has("approach") || args.has("hole-signal");
     if (simulated) {
-        SimOptions o;
-        if (args.has("quick")) {
-            o.textures = {sim::GroundTexture::Asphalt};
-            o.rangesPerBand = {0.5};
-            o.bearings = {0.0};
-            o.emptySeeds = 3;
-            o.emptyTextures = o.textures;
-            o.doorwayRanges = {3.0};
-            o.overhangRanges = {3.0};
-            o.groundSeeds = 2;
-            o.groundRanges = {4.5};
-        } else {
-            o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::Gravel};
-            o.rangesPerBand = {0.25, 0.75};
-            o.bearings = {0.0, -15.0, 15.0};
-            o.emptySeeds = 10;
-            o.doorwayRanges = {2.0, 3.0, 4.0, 5.0};
-            o.overhangRanges = {2.0, 3.0, 4.0};
+        const auto o = simOptions(args, choices);
+        if (!o) {
+            return reportUsageError("eval", o.error());
         }
-        o.seeds = static_cast<int>(*seeds);
-        if (args.has("types")) {
-            std::stringstream list(args.get("types"));
-            for (std::string name; std::getline(list, name, ',');) {
-                const auto& names = sim::sceneNames();
-                if (name == "empty" || name == "overhang" ||
-                    std::find(names.begin(), names.end(), name) == names.end()) {
-                    return reportUsageError("eval",
-                                            Error{"ugvsense eval --types", "unknown obstacle type '" + name + "'",
-                                                  "see 'ugvsense sim --list'"});
-                }
-                o.types.push_back(name);
-            }
-        }
-        if (args.has("grounds")) {
-            o.groundKinds.clear();
-            std::stringstream list(args.get("grounds"));
-            for (std::string name; std::getline(list, name, ',');) {
-                const auto& names = sim::conditionNames();
-                if (name != "none" && std::find(names.begin(), names.end(), name) == names.end()) {
-                    return reportUsageError("eval", Error{"ugvsense eval --grounds", "unknown ground '" + name + "'",
-                                                          "see 'ugvsense sim --list' (conditions), or none"});
-                }
-                if (name != "none") {
-                    o.groundKinds.push_back(name);
-                }
-            }
-            o.obstacleGrounds = o.groundKinds;
-        }
-        o.matcher = matcher;
-        o.groundPrior = args.has("ground-prior");
-        o.groundRange = groundRange;
-        if (colourDetector) {
-            // The grounds of issue 23's one-camera targets; the empty scenes on the same ones.
-            o.colour = true;
-            o.textures = {sim::GroundTexture::Asphalt, sim::GroundTexture::Grass, sim::GroundTexture::PaintedFloor};
-            o.emptyTextures = o.textures;
-            if (!args.has("quick")) {
-                o.rangesPerBand = {0.125, 0.375, 0.625, 0.875};
-            }
-            if (const int rc = runColourSuite(o, json); rc != 0) {
-                return rc;
-            }
-        } else if (args.has("sim")) {
-            if (const int rc = runSimSuite(o, json); rc != 0) {
-                return rc;
-            }
-        }
-        if (args.has("approach")) {
-            json << (args.has("sim") ? ",\n" : "");
-            if (const int rc = runApproach(o, args.has("quick") ? 0.5 : 0.25, json); rc != 0) {
-                return rc;
-            }
-        }
-        if (args.has("hole-signal")) {
-            json << (args.has("sim") || args.has("approach") ? ",\n" : "");
-            const std::vector<double> ranges = args.has("quick")
-                                                   ? std::vector<double>{7.0, 9.0}
-                                                   : std::vector<double>{6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5, 10.0};
-            if (const int rc = runHoleSignal(o, ranges, json); rc != 0) {
-                return rc;
-            }
+        if (const int rc = runSimulated(args, *o, json); rc != 0) {
+            return rc;
         }
     }
     if (args.has("middlebury")) {
         json << (simulated ? ",\n" : "");
-        if (const int rc = runMiddlebury(root, matcher, json); rc != 0) {
+        if (const int rc = runMiddlebury(choices.root, choices.matcher, json); rc != 0) {
             return rc;
         }
     }
     if (args.has("real")) {
         json << (simulated || args.has("middlebury") ? ",\n" : "");
-        RealEvalOptions real;
-        real.dir = args.get("real");
-        real.overlayDir = args.get("overlay-dir");
-        real.mount = args.get("mount");
-        real.verbose = args.has("verbose");
-        real.groundRange = groundRange;
-        std::stringstream list(args.get("pairs"));
-        for (std::string name; std::getline(list, name, ',');) {
-            real.pairs.push_back(name);
-        }
-        if (const int rc = runRealEval(real, json); rc != 0) {
+        if (const int rc = runReal(args, choices.groundRange, json); rc != 0) {
             return rc;
         }
     }
     json << "\n}\n";
-    if (args.has("json")) {
-        std::ofstream out(args.get("json"));
-        out << json.str();
-        out.flush();
-        if (!out) {
-            std::cerr << "ugvsense eval: error: " << args.get("json") << ": cannot write the JSON file\n";
-            return 1;
-        }
-        std::printf("wrote %s\n", args.get("json").c_str());
-    }
-    return 0;
+    return args.has("json") ? writeJson(args.get("json"), json.str()) : 0;
 }
 
 } // namespace ugv::tool

@@ -421,6 +421,221 @@ void RealTally::merge(const RealTally& o)
     rangeErrorsM.insert(rangeErrorsM.end(), o.rangeErrorsM.begin(), o.rangeErrorsM.end());
 }
 
+namespace {
+
+/// A pair's images, its ground truth in pixels of disparity, and its calibration.
+struct RealImages {
+    cv::Mat left;
+    cv::Mat right;
+    cv::Mat gt; ///< [px] disparity, 0 where the LiDAR saw nothing
+    vision::StereoCalibration calib;
+};
+
+/// Reads a pair. Each header is checked before decoding (a PNG that declares a huge size is refused unread); the
+/// error names the pair, its files and the first that failed.
+Result<RealImages, Error> readRealPair(const RealPair& pair, const std::optional<vision::Mount>& mount)
+{
+    std::string why; // of the first file that failed
+    const auto read = [&](const std::filesystem::path& file, int flags) {
+        std::string reason;
+        cv::Mat image = why.empty() ? readImage(file, flags, &reason) : cv::Mat();
+        if (image.empty() && why.empty()) {
+            why = file.filename().string() + ": " + reason;
+        }
+        return image;
+    };
+    RealImages images;
+    images.left = read(pair.left, cv::IMREAD_GRAYSCALE);
+    images.right = read(pair.right, cv::IMREAD_GRAYSCALE);
+    const cv::Mat gtRaw = read(pair.gt, cv::IMREAD_UNCHANGED);
+    const cv::Size size(pair.width, pair.height);
+    if (images.left.empty() || images.right.empty() || gtRaw.type() != CV_16UC1 || images.left.size() != size ||
+        images.right.size() != size || gtRaw.size() != size) {
+        return Unexpected(Error{"",
+                                "cannot read " + pair.left.string() + ", " + pair.right.string() +
+                                    " and the 16-bit GT " + pair.gt.string() + " of size " +
+                                    std::to_string(pair.width) + "x" + std::to_string(pair.height) +
+                                    (why.empty() ? "" : ": " + why),
+                                "give index.csv's images and 16-bit disparity ground truth of the size it names"});
+    }
+    gtRaw.convertTo(images.gt, CV_32F, 1.0 / kKittiScale);
+    images.calib = vision::makeRectifiedCalibration(size, pair.fx, pair.fx, pair.cx, pair.cy, pair.baselineM);
+    images.calib.mount = mount;
+    return images;
+}
+
+/// The plain OpenCV pipeline's sectors: its disparity's RANSAC road and the same height rules with the dense
+/// matcher's point count; nothing known (ours' layout, every sector blank) when it finds no road.
+ObstacleSectors baselineSectors(const cv::Mat& disparity, int firstRow, const vision::RectifiedProjection& projection,
+                                const ObstacleSectors& ours, const RealScoringRules& rules)
+{
+    if (auto baseRoad = roadPlane(disparity, projection)) {
+        RealScoringRules denseRules = rules;
+        denseRules.minPoints = kBaselineMinPoints;
+        return sectorsFromTruth(sectorTruth(disparity, firstRow, *baseRoad, projection, ours, denseRules), ours);
+    }
+    ObstacleSectors baseline = ours;
+    for (int k = 0; k < baseline.count; ++k) {
+        Sector& sector = baseline.sectors[static_cast<std::size_t>(k)];
+        const Sector blank;
+        sector.state = blank.state;
+        sector.kind = blank.kind;
+        sector.rangeM = blank.rangeM;
+    }
+    return baseline;
+}
+
+/// --overlay-dir: the left image with our obstacles and two bars under it, ours by state and kind, then the truth
+/// (grey: not scored). False when it could not be written.
+bool writeRealOverlay(const std::filesystem::path& out, const RealPair& pair, const RealImages& images,
+                      const PairDetection& run, const vision::DetectorConfig& config,
+                      const std::vector<SectorTruth>& truth)
+{
+    const ObstacleSectors& ours = run.detector->sectors();
+    const vision::RectifiedProjection& projection = run.rectifier->projection();
+    cv::Mat colour = readImage(pair.left, cv::IMREAD_COLOR);
+    vision::RectifierConfig fullConfig;
+    fullConfig.fullFrame = true;
+    auto full = vision::Rectifier::create(images.calib, fullConfig);
+    std::vector<cv::Scalar> oursColours;
+    std::vector<cv::Scalar> truthColours;
+    for (int s = 0; s < ours.count; ++s) {
+        const SectorTruth& t = truth[static_cast<std::size_t>(s)];
+        oursColours.push_back(stateColour(ours.sectors[static_cast<std::size_t>(s)]));
+        truthColours.push_back(!t.scored         ? cv::Scalar(128, 128, 128)
+                               : t.hasObstacle() ? cv::Scalar(0, 0, 255)
+                                                 : cv::Scalar(0, 190, 0));
+    }
+    if (colour.empty() || !full) {
+        return false;
+    }
+    const cv::Mat image = makeOverlay(colour, *full, *run.detector, config, projection);
+    const cv::Mat plain = image(cv::Rect(0, 0, image.cols, pair.height)); // without the danger bar
+    return cv::imwrite(out.string(), appendSectorBar(appendSectorBar(plain, ours, oursColours, projection), ours,
+                                                     truthColours, projection));
+}
+
+/// --verbose: a line per sector (truth, ours, outcome).
+void printSectorLines(const ObstacleSectors& ours, const std::vector<SectorTruth>& truth, const RealScoringRules& rules)
+{
+    static constexpr const char* kOutcome[] = {"not scored", "correct", "too near", "missed", "FALSE", "ok"};
+    for (int s = 0; s < ours.count; ++s) {
+        const auto k = static_cast<std::size_t>(s);
+        const Sector& r = ours.sectors[k];
+        std::printf("    sector %2d truth %6.2f m (kerb %6.2f, %4d pts, cov %3.0f %%) ours %-8s %-8s %6.2f m  %s\n", s,
+                    truth[k].hasObstacle() ? truth[k].obstacleRangeM : -1.0,
+                    truth[k].kerbRangeM < SectorTruth::kNoRange ? truth[k].kerbRangeM : -1.0, truth[k].obstaclePoints,
+                    100.0 * truth[k].coverage, stateName(r.state), kindName(r.kind), r.rangeM,
+                    kOutcome[static_cast<int>(scoreRealSector(truth[k], r, rules))]);
+    }
+}
+
+/// What the suite keeps across the pairs.
+struct RealRun {
+    const RealEvalOptions& options;
+    std::optional<vision::Mount> mount;
+    vision::DetectorConfig config;
+    RealScoringRules rules;
+    RealTally ours;
+    RealTally baseline;
+    double searchedSum = 0.0; ///< CensusSgm::searchedFraction over the pairs
+    int searchedPairs = 0;
+    bool firstJson = true;
+};
+
+/// One pair: ours and the baseline scored against the truth, the pair's line and JSON, the overlay.
+/// @return 0, or 1 on a pair that cannot be read or run, or an overlay that cannot be written.
+int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
+{
+    auto images = readRealPair(pair, r.mount);
+    auto run = images ? detectPair(images->calib, images->left, images->right, r.config, pair.name)
+                      : Result<PairDetection, Error>(Unexpected(images.error()));
+    if (!run) {
+        std::cerr << "ugvsense eval: error: " << pair.name << ": " << run.error().message() << '\n';
+        return 1;
+    }
+    const vision::RectifiedProjection& projection = run->rectifier->projection();
+    const int firstRow = run->rectifier->roi().y + r.config.marginRows;
+    const ObstacleSectors& ours = run->detector->sectors();
+    auto road = roadPlane(images->gt, projection);
+    auto baseDisparity = baselineDisparity(images->left, images->right);
+    if (!road || !baseDisparity) {
+        std::cerr << "ugvsense eval: error: " << pair.name << ": "
+                  << (!road ? road.error().message() : baseDisparity.error().message()) << '\n';
+        return 1;
+    }
+    const std::vector<SectorTruth> truth = sectorTruth(images->gt, firstRow, *road, projection, ours, r.rules);
+    const ObstacleSectors baseline = baselineSectors(*baseDisparity, firstRow, projection, ours, r.rules);
+    bool truthHasDrop = false;
+    for (const SectorTruth& t : truth) {
+        truthHasDrop = truthHasDrop || t.dropPoints >= r.rules.minPoints;
+    }
+    RealTally o;
+    RealTally b;
+    for (int s = 0; s < ours.count; ++s) {
+        const auto k = static_cast<std::size_t>(s);
+        o.add(scoreRealSector(truth[k], ours.sectors[k], r.rules), truth[k], ours.sectors[k]);
+        b.add(scoreRealSector(truth[k], baseline.sectors[k], r.rules), truth[k], baseline.sectors[k]);
+        if (!truthHasDrop && ours.sectors[k].state == SectorState::Obstacle &&
+            ours.sectors[k].kind == ObstacleKind::Negative) {
+            ++o.negativeNoDrop;
+        }
+    }
+    const vision::GroundPlane& g = run->detector->ground();
+    std::printf("%-12s %5d | %4d %4d %4d %4d %4d  h %4.2f p %5.1f%s | %4d %4d %4d %4d  (GT road h %4.2f p %5.1f)\n",
+                pair.name.c_str(), o.gtObstacle, o.correct, o.missed, o.tooNear, o.falseSectors, o.negativeNoDrop,
+                g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct, b.missed,
+                b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
+    if (r.options.verbose) {
+        printSectorLines(ours, truth, r.rules);
+    }
+    json << (r.firstJson ? "\n" : ",\n") << "    {\"pair\": \"" << pair.name
+         << "\", \"truth_has_drop\": " << (truthHasDrop ? "true" : "false")
+         << ", \"ground\": {\"height_m\": " << jsonNumber(g.heightM) << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg())
+         << ", \"roll_deg\": " << jsonNumber(g.rollDeg()) << ", \"gt_height_m\": " << jsonNumber(road->heightM)
+         << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg())
+         << "}, \"image_noise_grey\": " << jsonNumber(run->detector->verifier().noiseSigma())
+         << ", \"verifier_contrast_grey\": " << jsonNumber(run->detector->verifier().requiredContrast())
+         << ", \"searched_fraction\": " << jsonNumber(run->detector->searchedFraction())
+         << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b) << "}";
+    r.firstJson = false;
+    r.searchedSum += run->detector->searchedFraction();
+    ++r.searchedPairs;
+    if (!r.options.overlayDir.empty()) {
+        const std::filesystem::path out = r.options.overlayDir / (pair.name + ".png");
+        if (!writeRealOverlay(out, pair, *images, *run, r.config, truth)) {
+            std::cerr << "ugvsense eval: error: cannot write the overlay " << out.string() << '\n';
+            return 1;
+        }
+    }
+    r.ours.merge(o);
+    r.baseline.merge(b);
+    return 0;
+}
+
+/// The totals and the targets' verdicts, printed and closing `json`'s "real" object.
+void reportRealTotals(const RealRun& r, std::ostringstream& json)
+{
+    std::printf("total:\n");
+    const double searched = r.searchedPairs > 0 ? r.searchedSum / r.searchedPairs : 1.0;
+    std::printf("matcher cost cells searched (ground range %s): %.1f %% of the full range, mean over the pairs\n",
+                r.config.matcher.groundRange ? "on" : "off", 100.0 * searched);
+    printTally("ours", r.ours);
+    printTally("opencv", r.baseline);
+    const auto verdict = [](bool ok) { return ok ? "PASS" : "FAIL"; };
+    const bool noWorse = r.ours.correctRate() >= r.baseline.correctRate() &&
+                         r.ours.tooNear + r.ours.falseSectors <= r.baseline.tooNear + r.baseline.falseSectors;
+    std::printf("targets (issue 20): correct >= 90 %%: %s; too near + false <= 5 %% of scored: %s; no negative sector "
+                "on pairs without a drop: %s\n",
+                verdict(r.ours.correctRate() >= kTargetCorrect), verdict(r.ours.wrongRate() <= kTargetWrong),
+                verdict(r.ours.negativeNoDrop == 0));
+    std::printf("against the plain OpenCV pipeline: correct no lower and too near + false no more: %s\n",
+                verdict(noWorse));
+    json << "\n  ], \"ours\": " << tallyJson(r.ours) << ", \"opencv\": " << tallyJson(r.baseline) << "}";
+}
+
+} // namespace
+
 int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
 {
     auto index = readIndex(options.dir);
@@ -428,30 +643,23 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         std::cerr << "ugvsense eval: error: " << index.error().message() << '\n';
         return 1;
     }
-    std::optional<vision::Mount> mount;
+    RealRun r{options, std::nullopt, detectorConfig(DetectionOptions{}), RealScoringRules{}, {}, {}};
     if (!options.mount.empty()) {
         auto parsed = parseMount(options.mount);
         if (!parsed) {
             std::cerr << "ugvsense eval: error: " << parsed.error().message() << '\n';
             return 2;
         }
-        mount = *parsed;
+        r.mount = *parsed;
     }
-    const RealScoringRules rules;
-    vision::DetectorConfig config = detectorConfig(DetectionOptions{});
-    config.matcher.groundRange = options.groundRange;
+    r.config.matcher.groundRange = options.groundRange;
     std::printf("\nReal pairs (%s), ground %s: obstacle sectors (GT 0.25-2.5 m above the GT road within 25 m) right "
                 "within max(1 m, 10 %%); ours against OpenCV StereoSGBM + RANSAC ground + 0.25 m threshold\n",
                 options.dir.string().c_str(),
-                mount ? ("of the mount " + options.mount).c_str() : "found (no mount given)");
+                r.mount ? ("of the mount " + options.mount).c_str() : "found (no mount given)");
     std::printf("%-12s %5s | %-46s | %-19s\n", "pair", "gt", "ours: correct missed near false neg, ground",
                 "opencv: same");
-    RealTally oursTotal;
-    RealTally baseTotal;
-    double searchedSum = 0.0; // CensusSgm::searchedFraction over the pairs
-    int searchedPairs = 0;
-    json << "  \"real\": {\"mount\": \"" << (mount ? options.mount : "found") << "\", \"pairs\": [";
-    bool first = true;
+    json << "  \"real\": {\"mount\": \"" << (r.mount ? options.mount : "found") << "\", \"pairs\": [";
     std::vector<std::string> done; // index.csv has a row per GT file: a pair is scored once, on its first (noc)
     for (const RealPair& pair : *index) {
         if (std::find(done.begin(), done.end(), pair.name) != done.end()) {
@@ -466,158 +674,11 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             std::printf("%-12s skipped: only KITTI-style GT (16-bit PNG, no doffs) is scored\n", pair.name.c_str());
             continue;
         }
-        // Each header is checked before decoding (a PNG that declares a huge size is refused unread).
-        std::string why; // of the first file that failed
-        const auto read = [&](const std::filesystem::path& file, int flags) {
-            std::string reason;
-            cv::Mat image = why.empty() ? readImage(file, flags, &reason) : cv::Mat();
-            if (image.empty() && why.empty()) {
-                why = file.filename().string() + ": " + reason;
-            }
-            return image;
-        };
-        const cv::Mat left = read(pair.left, cv::IMREAD_GRAYSCALE);
-        const cv::Mat right = read(pair.right, cv::IMREAD_GRAYSCALE);
-        const cv::Mat gtRaw = read(pair.gt, cv::IMREAD_UNCHANGED);
-        const cv::Size size(pair.width, pair.height);
-        if (left.empty() || right.empty() || gtRaw.type() != CV_16UC1 || left.size() != size || right.size() != size ||
-            gtRaw.size() != size) {
-            std::cerr << "ugvsense eval: error: " << pair.name << ": cannot read " << pair.left.string() << ", "
-                      << pair.right.string() << " and the 16-bit GT " << pair.gt.string() << " of size " << pair.width
-                      << "x" << pair.height << (why.empty() ? "" : ": " + why) << '\n';
-            return 1;
+        if (const int rc = runRealPair(pair, r, json); rc != 0) {
+            return rc;
         }
-        cv::Mat gt;
-        gtRaw.convertTo(gt, CV_32F, 1.0 / kKittiScale);
-        vision::StereoCalibration calib =
-            vision::makeRectifiedCalibration(size, pair.fx, pair.fx, pair.cx, pair.cy, pair.baselineM);
-        calib.mount = mount;
-        auto run = detectPair(calib, left, right, config, pair.name);
-        if (!run) {
-            std::cerr << "ugvsense eval: error: " << pair.name << ": " << run.error().message() << '\n';
-            return 1;
-        }
-        const vision::RectifiedProjection& projection = run->rectifier->projection();
-        const int firstRow = run->rectifier->roi().y + config.marginRows;
-        const ObstacleSectors& ours = run->detector->sectors();
-        auto road = roadPlane(gt, projection);
-        auto baseDisparity = baselineDisparity(left, right);
-        if (!road || !baseDisparity) {
-            std::cerr << "ugvsense eval: error: " << pair.name << ": "
-                      << (!road ? road.error().message() : baseDisparity.error().message()) << '\n';
-            return 1;
-        }
-        const std::vector<SectorTruth> truth = sectorTruth(gt, firstRow, *road, projection, ours, rules);
-        ObstacleSectors baseline;
-        if (auto baseRoad = roadPlane(*baseDisparity, projection)) {
-            RealScoringRules denseRules = rules;
-            denseRules.minPoints = kBaselineMinPoints;
-            baseline =
-                sectorsFromTruth(sectorTruth(*baseDisparity, firstRow, *baseRoad, projection, ours, denseRules), ours);
-        } else {
-            baseline = ours; // the same layout, nothing known: no road, no sectors
-            for (int k = 0; k < baseline.count; ++k) {
-                Sector& sector = baseline.sectors[static_cast<std::size_t>(k)];
-                const Sector blank;
-                sector.state = blank.state;
-                sector.kind = blank.kind;
-                sector.rangeM = blank.rangeM;
-            }
-        }
-        bool truthHasDrop = false;
-        for (const SectorTruth& t : truth) {
-            truthHasDrop = truthHasDrop || t.dropPoints >= rules.minPoints;
-        }
-        RealTally o;
-        RealTally b;
-        for (int s = 0; s < ours.count; ++s) {
-            const auto k = static_cast<std::size_t>(s);
-            o.add(scoreRealSector(truth[k], ours.sectors[k], rules), truth[k], ours.sectors[k]);
-            b.add(scoreRealSector(truth[k], baseline.sectors[k], rules), truth[k], baseline.sectors[k]);
-            if (!truthHasDrop && ours.sectors[k].state == SectorState::Obstacle &&
-                ours.sectors[k].kind == ObstacleKind::Negative) {
-                ++o.negativeNoDrop;
-            }
-        }
-        const vision::GroundPlane& g = run->detector->ground();
-        std::printf("%-12s %5d | %4d %4d %4d %4d %4d  h %4.2f p %5.1f%s | %4d %4d %4d %4d  (GT road h %4.2f p %5.1f)\n",
-                    pair.name.c_str(), o.gtObstacle, o.correct, o.missed, o.tooNear, o.falseSectors, o.negativeNoDrop,
-                    g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct, b.missed,
-                    b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
-        if (options.verbose) {
-            static constexpr const char* kOutcome[] = {"not scored", "correct", "too near", "missed", "FALSE", "ok"};
-            for (int s = 0; s < ours.count; ++s) {
-                const auto k = static_cast<std::size_t>(s);
-                const Sector& r = ours.sectors[k];
-                std::printf("    sector %2d truth %6.2f m (kerb %6.2f, %4d pts, cov %3.0f %%) ours %-8s %-8s %6.2f m  "
-                            "%s\n",
-                            s, truth[k].hasObstacle() ? truth[k].obstacleRangeM : -1.0,
-                            truth[k].kerbRangeM < SectorTruth::kNoRange ? truth[k].kerbRangeM : -1.0,
-                            truth[k].obstaclePoints, 100.0 * truth[k].coverage, stateName(r.state), kindName(r.kind),
-                            r.rangeM, kOutcome[static_cast<int>(scoreRealSector(truth[k], r, rules))]);
-            }
-        }
-        json << (first ? "\n" : ",\n") << "    {\"pair\": \"" << pair.name
-             << "\", \"truth_has_drop\": " << (truthHasDrop ? "true" : "false")
-             << ", \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
-             << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
-             << ", \"gt_height_m\": " << jsonNumber(road->heightM)
-             << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg())
-             << "}, \"image_noise_grey\": " << jsonNumber(run->detector->verifier().noiseSigma())
-             << ", \"verifier_contrast_grey\": " << jsonNumber(run->detector->verifier().requiredContrast())
-             << ", \"searched_fraction\": " << jsonNumber(run->detector->searchedFraction())
-             << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b) << "}";
-        first = false;
-        searchedSum += run->detector->searchedFraction();
-        ++searchedPairs;
-        if (!options.overlayDir.empty()) {
-            cv::Mat colour = readImage(pair.left, cv::IMREAD_COLOR);
-            vision::RectifierConfig fullConfig;
-            fullConfig.fullFrame = true;
-            auto full = vision::Rectifier::create(calib, fullConfig);
-            const std::filesystem::path out = options.overlayDir / (pair.name + ".png");
-            // Two bars under the image: ours by state and kind, then the truth (grey: not scored).
-            std::vector<cv::Scalar> oursColours;
-            std::vector<cv::Scalar> truthColours;
-            for (int s = 0; s < ours.count; ++s) {
-                const SectorTruth& t = truth[static_cast<std::size_t>(s)];
-                oursColours.push_back(stateColour(ours.sectors[static_cast<std::size_t>(s)]));
-                truthColours.push_back(!t.scored         ? cv::Scalar(128, 128, 128)
-                                       : t.hasObstacle() ? cv::Scalar(0, 0, 255)
-                                                         : cv::Scalar(0, 190, 0));
-            }
-            bool written = false;
-            if (!colour.empty() && full) {
-                const cv::Mat image = makeOverlay(colour, *full, *run->detector, config, projection);
-                const cv::Mat plain = image(cv::Rect(0, 0, image.cols, pair.height)); // without the danger bar
-                written =
-                    cv::imwrite(out.string(), appendSectorBar(appendSectorBar(plain, ours, oursColours, projection),
-                                                              ours, truthColours, projection));
-            }
-            if (!written) {
-                std::cerr << "ugvsense eval: error: cannot write the overlay " << out.string() << '\n';
-                return 1;
-            }
-        }
-        oursTotal.merge(o);
-        baseTotal.merge(b);
     }
-    std::printf("total:\n");
-    const double searched = searchedPairs > 0 ? searchedSum / searchedPairs : 1.0;
-    std::printf("matcher cost cells searched (ground range %s): %.1f %% of the full range, mean over the pairs\n",
-                config.matcher.groundRange ? "on" : "off", 100.0 * searched);
-    printTally("ours", oursTotal);
-    printTally("opencv", baseTotal);
-    const auto verdict = [](bool ok) { return ok ? "PASS" : "FAIL"; };
-    const bool noWorse = oursTotal.correctRate() >= baseTotal.correctRate() &&
-                         oursTotal.tooNear + oursTotal.falseSectors <= baseTotal.tooNear + baseTotal.falseSectors;
-    std::printf("targets (issue 20): correct >= 90 %%: %s; too near + false <= 5 %% of scored: %s; no negative sector "
-                "on pairs without a drop: %s\n",
-                verdict(oursTotal.correctRate() >= kTargetCorrect), verdict(oursTotal.wrongRate() <= kTargetWrong),
-                verdict(oursTotal.negativeNoDrop == 0));
-    std::printf("against the plain OpenCV pipeline: correct no lower and too near + false no more: %s\n",
-                verdict(noWorse));
-    json << "\n  ], \"ours\": " << tallyJson(oursTotal) << ", \"opencv\": " << tallyJson(baseTotal) << "}";
+    reportRealTotals(r, json);
     return 0;
 }
 
