@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -205,9 +206,79 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
     return static_cast<int>(kept.size());
 }
 
-int runCalibrate(int argc, char** argv)
+namespace {
+
+/// --mount-height/pitch/roll: the mount to write, none without them; a usage error (exit code) when wrong.
+std::optional<int> readMount(const Args& args, std::optional<vision::Mount>& mount)
 {
-    Args args(
+    if (!args.has("mount-height") && !args.has("mount-pitch") && !args.has("mount-roll")) {
+        return std::nullopt;
+    }
+    if (!args.has("mount-height")) {
+        return reportUsageError("calibrate", Error{"ugvsense calibrate",
+                                                   "--mount-pitch/--mount-roll without "
+                                                   "--mount-height",
+                                                   "give --mount-height M too"});
+    }
+    const auto height = args.number("mount-height", 0.0, 1e-3, bringup::kMaxMountHeightM);
+    const auto pitch = args.number("mount-pitch", 0.0, -bringup::kMaxMountPitchDeg, bringup::kMaxMountPitchDeg);
+    const auto roll = args.number("mount-roll", 0.0, -bringup::kMaxMountRollDeg, bringup::kMaxMountRollDeg);
+    for (const auto* value : {&height, &pitch, &roll}) {
+        if (!*value) {
+            return reportUsageError("calibrate", value->error());
+        }
+    }
+    mount = vision::Mount{*height, *pitch, *roll};
+    return std::nullopt;
+}
+
+/// The listed pairs read in grey; a pair with a file that cannot be read goes to `unreadable` (printed).
+std::vector<vision::CalibrationPair> readPairs(const PairListing& listing,
+                                               std::vector<vision::RejectedPair>& unreadable)
+{
+    std::vector<vision::CalibrationPair> pairs;
+    for (const auto& files : listing.pairs) {
+        vision::CalibrationPair pair{files.name, readGrey(files.left), readGrey(files.right)};
+        if (pair.left.empty() || pair.right.empty()) {
+            unreadable.push_back({files.name, "unreadable image file " +
+                                                  (pair.left.empty() ? files.left : files.right).filename().string()});
+            continue;
+        }
+        pairs.push_back(std::move(pair));
+    }
+    for (const auto& rejected : unreadable) {
+        std::cout << "rejected " << rejected.name << ": " << rejected.reason << '\n';
+    }
+    return pairs;
+}
+
+/// The per-pair errors, the pairs the calibrator rejected (the first `alreadyPrinted` were) and the quality figures.
+void printReport(const vision::CalibrationReport& report, std::size_t alreadyPrinted)
+{
+    const vision::StereoCalibration& c = report.calibration;
+    std::printf("per-pair reprojection error:\n");
+    for (const auto& pair : report.perPair) {
+        std::printf("  %-40s %.3f px\n", pair.name.c_str(), pair.errorPx);
+    }
+    for (std::size_t i = alreadyPrinted; i < report.rejected.size(); ++i) {
+        std::printf("rejected %s: %s\n", report.rejected[i].name.c_str(), report.rejected[i].reason.c_str());
+    }
+    if (report.outlierRounds > 0) {
+        std::printf("dropped outliers and recalibrated (%d round(s)): RMS %.3f -> %.3f px (%.1f %% better)\n",
+                    report.outlierRounds, report.rmsBeforeOutliersPx, c.rmsPx,
+                    100.0 * (report.rmsBeforeOutliersPx - c.rmsPx) / report.rmsBeforeOutliersPx);
+    }
+    std::printf("pairs used %d, rejected %d\n", c.pairsUsed, c.pairsRejected);
+    std::printf("RMS reprojection error %.4f px\nmean epipolar error    %.4f px\nrectified mean |dy|    %.4f px\n",
+                c.rmsPx, c.epipolarPx, c.rectifiedDyPx);
+    std::printf("fx %.2f px, baseline %.4f m, rectified f %.2f px\n", c.K1.at<double>(0, 0), c.baselineM(),
+                c.rectifiedFocalPx());
+}
+
+/// calibrate's options.
+Args calibrateArgs()
+{
+    return Args(
         "calibrate", "--images DIR --board WxH --square M --out CALIB.yaml [--json REPORT.json] [--mount-*]",
         {{"images", "DIR", "folder with left*/right* chessboard images (left01.jpg pairs with right01.jpg)", true},
          {"board", "WxH", "inner corners per row x per column, e.g. 9x6", true},
@@ -223,12 +294,15 @@ int runCalibrate(int argc, char** argv)
          {"replay", "REC", "capture: take the pairs from a recording instead of the camera", false},
          {"pairs", "N", "capture: pairs to keep, 4..60, default 15", false},
          {"seconds", "S", "capture: give up after S seconds, default 300", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError("calibrate", parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+}
+
+} // namespace
+
+int runCalibrate(int argc, char** argv)
+{
+    Args args = calibrateArgs();
+    if (const auto exit = parseOrExit(args, argc, argv, "calibrate")) {
+        return *exit;
     }
     vision::CalibratorConfig config;
     const auto board = parseBoard("calibrate", args.get("board"));
@@ -242,22 +316,8 @@ int runCalibrate(int argc, char** argv)
     }
     config.squareM = *square;
     std::optional<vision::Mount> mount;
-    if (args.has("mount-height") || args.has("mount-pitch") || args.has("mount-roll")) {
-        if (!args.has("mount-height")) {
-            return reportUsageError("calibrate", Error{"ugvsense calibrate",
-                                                       "--mount-pitch/--mount-roll without "
-                                                       "--mount-height",
-                                                       "give --mount-height M too"});
-        }
-        const auto height = args.number("mount-height", 0.0, 1e-3, bringup::kMaxMountHeightM);
-        const auto pitch = args.number("mount-pitch", 0.0, -bringup::kMaxMountPitchDeg, bringup::kMaxMountPitchDeg);
-        const auto roll = args.number("mount-roll", 0.0, -bringup::kMaxMountRollDeg, bringup::kMaxMountRollDeg);
-        for (const auto* value : {&height, &pitch, &roll}) {
-            if (!*value) {
-                return reportUsageError("calibrate", value->error());
-            }
-        }
-        mount = vision::Mount{*height, *pitch, *roll};
+    if (const auto exit = readMount(args, mount)) {
+        return *exit;
     }
     const std::string outPath = args.get("out");
     const std::string jsonPath = args.get("json");
@@ -267,7 +327,6 @@ int runCalibrate(int argc, char** argv)
                 Error{path, "the folder of the output file does not exist", "create it or choose another path"});
         }
     }
-
     if (args.has("capture")) {
         auto captured = capturePairs(args, config.innerCorners);
         if (!captured) {
@@ -286,21 +345,8 @@ int runCalibrate(int argc, char** argv)
     for (const auto& unpaired : listing->unpaired) {
         std::cout << "unpaired image: " << unpaired << '\n';
     }
-    std::vector<vision::CalibrationPair> pairs;
     std::vector<vision::RejectedPair> unreadable;
-    for (const auto& files : listing->pairs) {
-        vision::CalibrationPair pair{files.name, readGrey(files.left), readGrey(files.right)};
-        if (pair.left.empty() || pair.right.empty()) {
-            unreadable.push_back({files.name, "unreadable image file " +
-                                                  (pair.left.empty() ? files.left : files.right).filename().string()});
-            continue;
-        }
-        pairs.push_back(std::move(pair));
-    }
-    for (const auto& rejected : unreadable) {
-        std::cout << "rejected " << rejected.name << ": " << rejected.reason << '\n';
-    }
-    auto result = vision::calibrateStereo(pairs, config);
+    auto result = vision::calibrateStereo(readPairs(*listing, unreadable), config);
     if (!result) {
         Error error = result.error();
         error.where = args.get("images");
@@ -313,27 +359,8 @@ int runCalibrate(int argc, char** argv)
     report.rejected.insert(report.rejected.begin(), unreadable.begin(), unreadable.end());
     report.calibration.pairsRejected = static_cast<int>(report.rejected.size());
     report.calibration.mount = mount;
-    const vision::StereoCalibration& c = report.calibration;
-
-    std::printf("per-pair reprojection error:\n");
-    for (const auto& pair : report.perPair) {
-        std::printf("  %-40s %.3f px\n", pair.name.c_str(), pair.errorPx);
-    }
-    for (std::size_t i = unreadable.size(); i < report.rejected.size(); ++i) {
-        std::printf("rejected %s: %s\n", report.rejected[i].name.c_str(), report.rejected[i].reason.c_str());
-    }
-    if (report.outlierRounds > 0) {
-        std::printf("dropped outliers and recalibrated (%d round(s)): RMS %.3f -> %.3f px (%.1f %% better)\n",
-                    report.outlierRounds, report.rmsBeforeOutliersPx, c.rmsPx,
-                    100.0 * (report.rmsBeforeOutliersPx - c.rmsPx) / report.rmsBeforeOutliersPx);
-    }
-    std::printf("pairs used %d, rejected %d\n", c.pairsUsed, c.pairsRejected);
-    std::printf("RMS reprojection error %.4f px\nmean epipolar error    %.4f px\nrectified mean |dy|    %.4f px\n",
-                c.rmsPx, c.epipolarPx, c.rectifiedDyPx);
-    std::printf("fx %.2f px, baseline %.4f m, rectified f %.2f px\n", c.K1.at<double>(0, 0), c.baselineM(),
-                c.rectifiedFocalPx());
-
-    if (auto saved = bringup::saveCalibration(outPath, c); !saved) {
+    printReport(report, unreadable.size());
+    if (auto saved = bringup::saveCalibration(outPath, report.calibration); !saved) {
         return fail(saved.error());
     }
     std::printf("wrote %s\n", outPath.c_str());

@@ -1,6 +1,7 @@
 // ugvsense check-config: validate a service config file in full and print the effective config.
 
 #include <iostream>
+#include <string>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -14,6 +15,83 @@
 #include "ugv/ipc/dds_bus.hpp"
 
 namespace ugv::tool {
+
+namespace {
+
+/// The frame pipeline the service builds at start (the mount, the rectification, the detector's settings) from
+/// `calibration`; false, with the error printed, when it cannot be built.
+bool pipelineOk(const std::string& path, const bringup::ServiceConfig& config,
+                const vision::StereoCalibration& calibration, const std::string& source)
+{
+    bringup::ServiceConfig effective = config;
+    effective.camera.width = calibration.imageSize.width;
+    effective.camera.height = calibration.imageSize.height;
+    if (auto pipeline = service::FramePipeline::create(calibration, effective); !pipeline) {
+        std::cerr << "error: " << source << ": " << pipeline.error().message() << '\n'
+                  << path << ": the pipeline cannot be built from it; the service would refuse to start\n";
+        return false;
+    }
+    return true;
+}
+
+/// camera.backend replay: the recording opens, its stored calibration (which the service replays with, not the
+/// config's) is valid and fits its frames, and the pipeline builds from it. 0 or 1 (the error printed).
+int checkRecording(const std::string& path, const bringup::ServiceConfig& config)
+{
+    auto replay = hal::ReplayCamera::open(config.camera.replayPath, hal::ReplayOptions{});
+    if (!replay) {
+        std::cerr << "error: " << replay.error().message() << '\n'
+                  << path << ": the recording camera.replay_path names cannot be replayed; the service would "
+                  << "refuse to start\n";
+        return 1;
+    }
+    const auto calibration =
+        bringup::parseCalibration((*replay)->calibrationText(), config.camera.replayPath + " (its stored calibration)");
+    if (!calibration) {
+        std::cerr << "error: " << calibration.error().message() << '\n'
+                  << path << ": the recording's calibration cannot be used; the service would refuse to start\n";
+        return 1;
+    }
+    if (auto sized = service::checkCameraSize(**replay, *calibration); !sized) {
+        std::cerr << "error: " << sized.error().message() << '\n'
+                  << path << ": the recording's frames do not fit its calibration; the service would refuse to "
+                  << "start\n";
+        return 1;
+    }
+    if (!pipelineOk(path, config, *calibration, config.camera.replayPath)) {
+        return 1;
+    }
+    std::cerr << config.camera.replayPath << ": OK (a recording of " << (*replay)->recordedFrames() << " frames, "
+              << (*replay)->width() << "x" << (*replay)->height() << ", with its own calibration)\n";
+    return 0;
+}
+
+/// A live camera: the calibration the config names is valid, of the camera's size, and the pipeline builds from
+/// it. 0 or 1 (the error printed).
+int checkCalibration(const std::string& path, const bringup::ServiceConfig& config)
+{
+    const auto calibration = bringup::loadCalibration(config.calibrationPath);
+    if (!calibration) {
+        std::cerr << "error: " << calibration.error().message() << '\n'
+                  << path << ": the calibration it names cannot be used; the service would refuse to start\n";
+        return 1;
+    }
+    const cv::Size size = calibration->imageSize;
+    if (size.width != config.camera.width || size.height != config.camera.height) {
+        std::cerr << "error: " << config.calibrationPath << ": calibrated for " << size.width << "x" << size.height
+                  << " but camera.width/height in " << path << " are " << config.camera.width << "x"
+                  << config.camera.height << " (fix: recalibrate at the camera resolution or fix the config)\n";
+        return 1;
+    }
+    if (!pipelineOk(path, config, *calibration, config.calibrationPath)) {
+        return 1;
+    }
+    std::cerr << config.calibrationPath << ": OK (" << (calibration->rectified ? "rectified" : "full") << " form, "
+              << size.width << "x" << size.height << ", baseline " << calibration->baselineM() << " m)\n";
+    return 0;
+}
+
+} // namespace
 
 int runCheckConfig(int argc, char** argv)
 {
@@ -67,64 +145,12 @@ int runCheckConfig(int argc, char** argv)
         std::cerr << path << ": OK (vision off: no camera and no calibration to check)\n";
         return 0;
     }
-    // The frame pipeline the service builds at start (the mount, the rectification, the detector's settings).
-    const auto pipelineOk = [&path, &config](const vision::StereoCalibration& calibration, const std::string& source) {
-        bringup::ServiceConfig effective = *config;
-        effective.camera.width = calibration.imageSize.width;
-        effective.camera.height = calibration.imageSize.height;
-        if (auto pipeline = service::FramePipeline::create(calibration, effective); !pipeline) {
-            std::cerr << "error: " << source << ": " << pipeline.error().message() << '\n'
-                      << path << ": the pipeline cannot be built from it; the service would refuse to start\n";
-            return false;
+    if (!args.has("no-calibration")) {
+        const int rc = config->camera.backend == bringup::CameraBackend::Replay ? checkRecording(path, *config)
+                                                                                : checkCalibration(path, *config);
+        if (rc != 0) {
+            return rc;
         }
-        return true;
-    };
-    if (!args.has("no-calibration") && config->camera.backend == bringup::CameraBackend::Replay) {
-        // The service replays with the calibration stored in the recording (runner.cpp), not the config's.
-        auto replay = hal::ReplayCamera::open(config->camera.replayPath, hal::ReplayOptions{});
-        if (!replay) {
-            std::cerr << "error: " << replay.error().message() << '\n'
-                      << path << ": the recording camera.replay_path names cannot be replayed; the service would "
-                      << "refuse to start\n";
-            return 1;
-        }
-        const auto calibration = bringup::parseCalibration((*replay)->calibrationText(),
-                                                           config->camera.replayPath + " (its stored calibration)");
-        if (!calibration) {
-            std::cerr << "error: " << calibration.error().message() << '\n'
-                      << path << ": the recording's calibration cannot be used; the service would refuse to start\n";
-            return 1;
-        }
-        if (auto sized = service::checkCameraSize(**replay, *calibration); !sized) {
-            std::cerr << "error: " << sized.error().message() << '\n'
-                      << path << ": the recording's frames do not fit its calibration; the service would refuse to "
-                      << "start\n";
-            return 1;
-        }
-        if (!pipelineOk(*calibration, config->camera.replayPath)) {
-            return 1;
-        }
-        std::cerr << config->camera.replayPath << ": OK (a recording of " << (*replay)->recordedFrames() << " frames, "
-                  << (*replay)->width() << "x" << (*replay)->height() << ", with its own calibration)\n";
-    } else if (!args.has("no-calibration")) {
-        const auto calibration = bringup::loadCalibration(config->calibrationPath);
-        if (!calibration) {
-            std::cerr << "error: " << calibration.error().message() << '\n'
-                      << path << ": the calibration it names cannot be used; the service would refuse to start\n";
-            return 1;
-        }
-        const cv::Size size = calibration->imageSize;
-        if (size.width != config->camera.width || size.height != config->camera.height) {
-            std::cerr << "error: " << config->calibrationPath << ": calibrated for " << size.width << "x" << size.height
-                      << " but camera.width/height in " << path << " are " << config->camera.width << "x"
-                      << config->camera.height << " (fix: recalibrate at the camera resolution or fix the config)\n";
-            return 1;
-        }
-        if (!pipelineOk(*calibration, config->calibrationPath)) {
-            return 1;
-        }
-        std::cerr << config->calibrationPath << ": OK (" << (calibration->rectified ? "rectified" : "full") << " form, "
-                  << size.width << "x" << size.height << ", baseline " << calibration->baselineM() << " m)\n";
     }
     std::cerr << path << ": OK\n";
     return 0;

@@ -239,9 +239,12 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
 
 } // namespace
 
-int runCorrelate(int argc, char** argv)
+namespace {
+
+/// correlate's options.
+Args correlateArgs()
 {
-    Args args(
+    return Args(
         kCommand,
         "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode pose-corrected|original] "
         "[--map MAP.png]",
@@ -268,6 +271,116 @@ int runCorrelate(int argc, char** argv)
           "correlator.late_window_s); 0: refused",
           false},
          {"log-dir", "DIR", "--from-dds: write inputs.jsonl and snapshots.jsonl there", false}});
+}
+
+/// What a run over a file gave beside the feed's own counts.
+struct FileRun {
+    std::size_t bad = 0; ///< lines skipped (malformed, or refused by the correlator)
+    Snapshot last;
+};
+
+/// Every line of `in` into `feed`, each snapshot to `out`; a bad line is reported by number (the first
+/// kMaxReportedLines of them) and skipped, a jump in time by the snapshots it skipped.
+FileRun feedLines(const std::string& inputName, std::istream& in, correlator::CorrelatorFeed& feed, std::ostream& out)
+{
+    FileRun run;
+    std::string line;
+    std::size_t lineNumber = 0;
+    const auto report = [&](const Error& e) {
+        ++run.bad;
+        if (run.bad <= kMaxReportedLines) {
+            std::cerr << inputName << ':' << lineNumber << ": skipped: " << e.message() << '\n';
+        }
+    };
+    const auto write = [&](const Snapshot& s) {
+        run.last = s;
+        out << toJsonLine(s) << '\n';
+    };
+    double lastT = NAN;
+    while (bringup::readBoundedLine(in, line, bringup::kMaxMessageLineBytes)) {
+        ++lineNumber;
+        if (line.find_first_not_of(" \t\r") == std::string::npos) {
+            continue;
+        }
+        auto message = parseMessageLine(line);
+        if (!message) {
+            report(message.error());
+            continue;
+        }
+        const std::size_t skippedBefore = feed.skippedSnapshots();
+        const double t = std::visit([](const auto& m) { return m.t; }, *message);
+        if (auto applied = feed.add(*message, write); !applied) {
+            report(applied.error());
+        }
+        if (feed.skippedSnapshots() > skippedBefore) {
+            std::cerr << inputName << ':' << lineNumber << ": field 't' jumps from " << lastT << " to " << t
+                      << " s: wrote " << correlator::CorrelatorFeed::kMaxSnapshotsPerGap
+                      << " snapshots of the gap and skipped " << feed.skippedSnapshots() - skippedBefore << '\n';
+        }
+        lastT = std::isnan(lastT) ? t : std::max(lastT, t);
+    }
+    feed.finish(write);
+    if (run.bad > kMaxReportedLines) {
+        std::cerr << inputName << ": " << run.bad - kMaxReportedLines << " more bad line(s) not shown\n";
+    }
+    return run;
+}
+
+/// The run's counts and the correlator's time.
+void printFileSummary(const correlator::CorrelatorFeed& feed, const FileRun& run, const std::string& outputName)
+{
+    const double seconds = feed.addSeconds();
+    const double snapshotSeconds = feed.snapshotSeconds();
+    const std::size_t messages = feed.applied();
+    const std::size_t snapshots = feed.snapshots();
+    if (feed.skippedSnapshots() > 0) {
+        std::printf("%zu snapshot(s) skipped over jumps in time (at most %zu are written for one gap)\n",
+                    feed.skippedSnapshots(), correlator::CorrelatorFeed::kMaxSnapshotsPerGap);
+    }
+    std::printf(
+        "correlated %zu message(s) (%zu late, put in place by replaying %zu), %zu bad line(s) skipped, %zu "
+        "snapshot(s) to %s; %zu object(s) at t %.1f\n"
+        "correlator: %.3f s in add() (%.0f messages/s), %.3f s in snapshot() (%.1f us each); "
+        "mode %s; %zu observation points held\n",
+        messages, feed.resequenced(), feed.replayed(), run.bad, snapshots, outputName.c_str(), run.last.objects.size(),
+        run.last.t, seconds, seconds > 0.0 ? static_cast<double>(messages) / seconds : 0.0, snapshotSeconds,
+        snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0, feed.mode(), feed.storedPoints());
+}
+
+/// --input: the file's messages in order, a snapshot per period; exit 1 when every line was bad.
+int correlateFile(const Args& args, correlator::Mode mode, double period, double lateWindow, std::istream& in,
+                  std::ofstream& out)
+{
+    correlator::CorrelatorFeed feed(mode, period, lateWindow, [] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    });
+    const FileRun run = feedLines(args.get("input"), in, feed, out);
+    out.flush();
+    if (!out) {
+        return fail(Error{args.get("output"), "write failed", "check the free space"});
+    }
+    printFileSummary(feed, run, args.get("output"));
+    if (args.has("map")) {
+        Result<void, Error> drawn;
+        try {
+            drawn = drawMap(args.get("map"), run.last, feed.ugvs());
+        } catch (const cv::Exception& e) {
+            drawn = Unexpected(Error{args.get("map"), std::string("cannot draw the map: ") + e.what(),
+                                     "check the input's ranges and positions"});
+        }
+        if (!drawn) {
+            return fail(drawn.error());
+        }
+        std::printf("map of t %.1f written to %s\n", run.last.t, args.get("map").c_str());
+    }
+    return feed.applied() == 0 && run.bad > 0 ? 1 : 0;
+}
+
+} // namespace
+
+int runCorrelate(int argc, char** argv)
+{
+    Args args = correlateArgs();
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }
@@ -304,85 +417,7 @@ int runCorrelate(int argc, char** argv)
     if (args.has("from-dds")) {
         return correlateFromDds(args, *mode, *period, *lateWindow, out);
     }
-
-    correlator::CorrelatorFeed feed(*mode, *period, *lateWindow, [] {
-        return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-    });
-    std::string line;
-    std::size_t lineNumber = 0;
-    std::size_t bad = 0;
-    Snapshot last;
-    const auto report = [&](const Error& e) {
-        ++bad;
-        if (bad <= kMaxReportedLines) {
-            std::cerr << args.get("input") << ':' << lineNumber << ": skipped: " << e.message() << '\n';
-        }
-    };
-    const auto write = [&](const Snapshot& s) {
-        last = s;
-        out << toJsonLine(s) << '\n';
-    };
-    double lastT = NAN;
-    while (bringup::readBoundedLine(in, line, bringup::kMaxMessageLineBytes)) {
-        ++lineNumber;
-        if (line.find_first_not_of(" \t\r") == std::string::npos) {
-            continue;
-        }
-        auto message = parseMessageLine(line);
-        if (!message) {
-            report(message.error());
-            continue;
-        }
-        const std::size_t skippedBefore = feed.skippedSnapshots();
-        const double t = std::visit([](const auto& m) { return m.t; }, *message);
-        if (auto applied = feed.add(*message, write); !applied) {
-            report(applied.error());
-        }
-        if (feed.skippedSnapshots() > skippedBefore) {
-            std::cerr << args.get("input") << ':' << lineNumber << ": field 't' jumps from " << lastT << " to " << t
-                      << " s: wrote " << correlator::CorrelatorFeed::kMaxSnapshotsPerGap
-                      << " snapshots of the gap and skipped " << feed.skippedSnapshots() - skippedBefore << '\n';
-        }
-        lastT = std::isnan(lastT) ? t : std::max(lastT, t);
-    }
-    feed.finish(write);
-    out.flush();
-    if (!out) {
-        return fail(Error{args.get("output"), "write failed", "check the free space"});
-    }
-    if (bad > kMaxReportedLines) {
-        std::cerr << args.get("input") << ": " << bad - kMaxReportedLines << " more bad line(s) not shown\n";
-    }
-    const double seconds = feed.addSeconds();
-    const double snapshotSeconds = feed.snapshotSeconds();
-    const std::size_t messages = feed.applied();
-    const std::size_t snapshots = feed.snapshots();
-    if (feed.skippedSnapshots() > 0) {
-        std::printf("%zu snapshot(s) skipped over jumps in time (at most %zu are written for one gap)\n",
-                    feed.skippedSnapshots(), correlator::CorrelatorFeed::kMaxSnapshotsPerGap);
-    }
-    std::printf("correlated %zu message(s) (%zu late, put in place by replaying %zu), %zu bad line(s) skipped, %zu "
-                "snapshot(s) to %s; %zu object(s) at t %.1f\n"
-                "correlator: %.3f s in add() (%.0f messages/s), %.3f s in snapshot() (%.1f us each); "
-                "mode %s; %zu observation points held\n",
-                messages, feed.resequenced(), feed.replayed(), bad, snapshots, args.get("output").c_str(),
-                last.objects.size(), last.t, seconds, seconds > 0.0 ? static_cast<double>(messages) / seconds : 0.0,
-                snapshotSeconds, snapshots > 0 ? snapshotSeconds * 1e6 / static_cast<double>(snapshots) : 0.0,
-                feed.mode(), feed.storedPoints());
-    if (args.has("map")) {
-        Result<void, Error> drawn;
-        try {
-            drawn = drawMap(args.get("map"), last, feed.ugvs());
-        } catch (const cv::Exception& e) {
-            drawn = Unexpected(Error{args.get("map"), std::string("cannot draw the map: ") + e.what(),
-                                     "check the input's ranges and positions"});
-        }
-        if (!drawn) {
-            return fail(drawn.error());
-        }
-        std::printf("map of t %.1f written to %s\n", last.t, args.get("map").c_str());
-    }
-    return messages == 0 && bad > 0 ? 1 : 0;
+    return correlateFile(args, *mode, *period, *lateWindow, in, out);
 }
 
 } // namespace ugv::tool

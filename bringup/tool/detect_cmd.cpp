@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -199,34 +201,9 @@ int runMono(const Args& args, const vision::StereoCalibration& calib, const Dete
     return 0;
 }
 
-} // namespace
-
-int runDetect(int argc, char** argv)
+/// detect's options, parsed; an exit code when they are wrong.
+std::optional<int> readDetectOptions(const Args& args, DetectionOptions& options)
 {
-    Args args("detect", "--calib FILE --left L.png (--right R.png | --mono) [--json OUT] [--overlay OUT.png] [options]",
-              {{"calib", "FILE", "calibration file (full or already-rectified form; mount optional)", true},
-               {"left", "L.png", "left image", true},
-               {"right", "R.png", "right image (required unless --mono)", false},
-               {"mono", "",
-                "one camera: ColourFreeSpace on the left image read in colour (no --right); the ground is the "
-                "calibration's mount (required)",
-                false},
-               {"json", "OUT", "write the ground estimate and the sectors as JSON", false},
-               {"overlay", "OUT.png", "write the rectified left image with obstacles and the sector bar", false},
-               {"sectors", "N", "number of sectors, 1..180, default 64", false},
-               {"danger", "M", "red below this range, default 1.5 m", false},
-               {"caution", "M", "blue below this range, default 5 m (>= --danger)", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError("detect", parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
-    }
-    if (!args.positional().empty()) {
-        return reportUsageError("detect", Error{"ugvsense detect", "unexpected argument '" + args.positional()[0] + "'",
-                                                "see 'ugvsense detect --help'"});
-    }
     const auto sectorCount = args.number("sectors", 64, 1, kMaxSectors);
     const auto danger = args.number("danger", 1.5, 0.01, kMaxDistanceM);
     const auto caution = args.number("caution", 5.0, 0.01, kMaxDistanceM);
@@ -248,88 +225,138 @@ int runDetect(int argc, char** argv)
         return reportUsageError("detect", Error{"ugvsense detect", "--sectors must be whole and --caution >= --danger",
                                                 "see 'ugvsense detect --help'"});
     }
-    const DetectionOptions options{static_cast<int>(*sectorCount), static_cast<float>(*danger),
-                                   static_cast<float>(*caution)};
+    options =
+        DetectionOptions{static_cast<int>(*sectorCount), static_cast<float>(*danger), static_cast<float>(*caution)};
+    return std::nullopt;
+}
 
+/// The left and right images, grey, of one size and the calibration's; the error names the file and the fix.
+Result<std::pair<cv::Mat, cv::Mat>, Error> readStereoPair(const Args& args, const vision::StereoCalibration& calib)
+{
+    std::string why;
+    cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, &why);
+    if (left.empty()) {
+        return Unexpected(Error{args.get("left"), why, "give an existing 8-bit image file"});
+    }
+    cv::Mat right = readImage(args.get("right"), cv::IMREAD_GRAYSCALE, &why);
+    if (right.empty()) {
+        return Unexpected(Error{args.get("right"), why, "give an existing 8-bit image file"});
+    }
+    const auto sizeText = [](cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); };
+    if (left.size() != right.size()) {
+        return Unexpected(
+            Error{args.get("right"),
+                  "size " + sizeText(right.size()) + " differs from the left image's " + sizeText(left.size()),
+                  "give the two images of one stereo pair"});
+    }
+    if (left.size() != calib.imageSize) {
+        return Unexpected(
+            Error{args.get("left"),
+                  "image size " + sizeText(left.size()) + " but the calibration is for " + sizeText(calib.imageSize),
+                  "use the calibration of this camera at this resolution"});
+    }
+    return std::pair{std::move(left), std::move(right)};
+}
+
+/// The ground the pair was detected with, and its sectors, printed.
+void printDetection(const PairDetection& run)
+{
+    const bool estimated = run.fit.has_value();
+    if (estimated) {
+        const vision::GroundPlane& g = run.fit->ground;
+        std::printf("ground: estimated from the bottom rows (no mount in the calibration): height %.3f m, pitch "
+                    "%.2f deg, roll %.2f deg (%d of %d disparities fit)\n",
+                    g.heightM, g.pitchDeg(), g.rollDeg(), run.fit->inliers, run.fit->samples);
+    }
+    const vision::ObstacleDetector& detector = *run.detector;
+    const vision::GroundPlane& used = detector.ground();
+    std::printf("ground used: height %.3f m, pitch %.2f deg, roll %.2f deg (%s; per-frame estimate %s)\n", used.heightM,
+                used.pitchDeg(), used.rollDeg(), estimated ? "estimated" : "configured mount",
+                detector.groundEstimate().reliable ? "reliable" : "not reliable, prior used");
+    printSectors(detector.sectors());
+}
+
+/// --overlay: the full rectified left image in colour with the obstacles and the sector bar.
+Result<void, Error> writeOverlay(const Args& args, const vision::StereoCalibration& calib, const PairDetection& run,
+                                 const vision::DetectorConfig& config)
+{
+    vision::RectifierConfig fullConfig;
+    fullConfig.roiMarginRows = config.marginRows;
+    fullConfig.fullFrame = true;
+    auto fullRectifier = vision::Rectifier::create(calib, fullConfig);
+    if (!fullRectifier) {
+        return Unexpected(fullRectifier.error());
+    }
+    std::string why;
+    const cv::Mat colour = readImage(args.get("left"), cv::IMREAD_COLOR, &why);
+    bool written = false;
+    if (!colour.empty()) {
+        const cv::Mat overlay = makeOverlay(colour, *fullRectifier, *run.detector, config, run.rectifier->projection());
+        try {
+            written = cv::imwrite(args.get("overlay"), overlay);
+        } catch (const std::exception&) {
+            written = false;
+        }
+    }
+    if (!written) {
+        return Unexpected(Error{args.get("overlay"), "cannot write the overlay image",
+                                "check that the folder exists and the name ends in .png"});
+    }
+    std::printf("wrote %s\n", args.get("overlay").c_str());
+    return {};
+}
+
+} // namespace
+
+int runDetect(int argc, char** argv)
+{
+    Args args("detect", "--calib FILE --left L.png (--right R.png | --mono) [--json OUT] [--overlay OUT.png] [options]",
+              {{"calib", "FILE", "calibration file (full or already-rectified form; mount optional)", true},
+               {"left", "L.png", "left image", true},
+               {"right", "R.png", "right image (required unless --mono)", false},
+               {"mono", "",
+                "one camera: ColourFreeSpace on the left image read in colour (no --right); the ground is the "
+                "calibration's mount (required)",
+                false},
+               {"json", "OUT", "write the ground estimate and the sectors as JSON", false},
+               {"overlay", "OUT.png", "write the rectified left image with obstacles and the sector bar", false},
+               {"sectors", "N", "number of sectors, 1..180, default 64", false},
+               {"danger", "M", "red below this range, default 1.5 m", false},
+               {"caution", "M", "blue below this range, default 5 m (>= --danger)", false}});
+    if (const auto exit = parseOrExit(args, argc, argv, "detect")) {
+        return *exit;
+    }
+    DetectionOptions options;
+    if (const auto exit = readDetectOptions(args, options)) {
+        return *exit;
+    }
     auto calib = bringup::loadCalibration(args.get("calib"));
     if (!calib) {
         return fail(calib.error());
     }
-    if (mono) {
+    if (args.has("mono")) {
         return runMono(args, *calib, options);
     }
-    std::string why;
-    const cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, &why);
-    if (left.empty()) {
-        return fail(Error{args.get("left"), why, "give an existing 8-bit image file"});
+    auto pair = readStereoPair(args, *calib);
+    if (!pair) {
+        return fail(pair.error());
     }
-    const cv::Mat right = readImage(args.get("right"), cv::IMREAD_GRAYSCALE, &why);
-    if (right.empty()) {
-        return fail(Error{args.get("right"), why, "give an existing 8-bit image file"});
-    }
-    const auto sizeText = [](cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); };
-    if (left.size() != right.size()) {
-        return fail(Error{args.get("right"),
-                          "size " + sizeText(right.size()) + " differs from the left image's " + sizeText(left.size()),
-                          "give the two images of one stereo pair"});
-    }
-    if (left.size() != calib->imageSize) {
-        return fail(
-            Error{args.get("left"),
-                  "image size " + sizeText(left.size()) + " but the calibration is for " + sizeText(calib->imageSize),
-                  "use the calibration of this camera at this resolution"});
-    }
-
     const vision::DetectorConfig config = detectorConfig(options);
-    vision::RectifierConfig fullConfig;
-    fullConfig.roiMarginRows = config.marginRows;
-    fullConfig.fullFrame = true;
-    auto fullRectifier = vision::Rectifier::create(*calib, fullConfig);
-    if (!fullRectifier) {
-        return fail(fullRectifier.error());
-    }
-    auto run = detectPair(*calib, left, right, config, args.get("calib"));
+    auto run = detectPair(*calib, pair->first, pair->second, config, args.get("calib"));
     if (!run) {
         return fail(run.error());
     }
-    const vision::RectifiedProjection& projection = run->rectifier->projection();
-    const bool estimated = run->fit.has_value();
-    if (estimated) {
-        const vision::GroundPlane& g = run->fit->ground;
-        std::printf("ground: estimated from the bottom rows (no mount in the calibration): height %.3f m, pitch "
-                    "%.2f deg, roll %.2f deg (%d of %d disparities fit)\n",
-                    g.heightM, g.pitchDeg(), g.rollDeg(), run->fit->inliers, run->fit->samples);
-    }
-    const vision::ObstacleDetector* detector = &*run->detector;
-    const ObstacleSectors& sectors = detector->sectors();
-    const vision::GroundPlane& used = detector->ground();
-    std::printf("ground used: height %.3f m, pitch %.2f deg, roll %.2f deg (%s; per-frame estimate %s)\n", used.heightM,
-                used.pitchDeg(), used.rollDeg(), estimated ? "estimated" : "configured mount",
-                detector->groundEstimate().reliable ? "reliable" : "not reliable, prior used");
-    printSectors(sectors);
-
+    printDetection(*run);
     if (args.has("json")) {
-        if (!writeJson(args.get("json"), *detector, estimated)) {
+        if (!writeJson(args.get("json"), *run->detector, run->fit.has_value())) {
             return fail(Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
         }
         std::printf("wrote %s\n", args.get("json").c_str());
     }
     if (args.has("overlay")) {
-        const cv::Mat colour = readImage(args.get("left"), cv::IMREAD_COLOR, &why);
-        bool written = false;
-        if (!colour.empty()) {
-            const cv::Mat overlay = makeOverlay(colour, *fullRectifier, *detector, config, projection);
-            try {
-                written = cv::imwrite(args.get("overlay"), overlay);
-            } catch (const std::exception&) {
-                written = false;
-            }
+        if (auto written = writeOverlay(args, *calib, *run, config); !written) {
+            return fail(written.error());
         }
-        if (!written) {
-            return fail(Error{args.get("overlay"), "cannot write the overlay image",
-                              "check that the folder exists and the name ends in .png"});
-        }
-        std::printf("wrote %s\n", args.get("overlay").c_str());
     }
     return 0;
 }

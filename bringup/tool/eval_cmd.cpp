@@ -1157,10 +1157,6 @@ std::optional<int> readChoices(const Args& args, EvalChoices& c)
         return reportUsageError("eval", Error{"ugvsense eval", "nothing to evaluate",
                                               "give --sim, --approach, --hole-signal, --middlebury and/or --real"});
     }
-    if (!args.positional().empty()) {
-        return reportUsageError("eval", Error{"ugvsense eval", "unexpected argument '" + args.positional()[0] + "'",
-                                              "see 'ugvsense eval --help'"});
-    }
     const auto seeds = args.number("frames-per-case", 1, 1, 20);
     if (!seeds || *seeds != std::floor(*seeds)) {
         return reportUsageError("eval", seeds ? Error{"ugvsense eval --frames-per-case", "not a whole number", ""}
@@ -1350,12 +1346,8 @@ int writeJson(const std::string& path, const std::string& text)
 int runEval(int argc, char** argv)
 {
     Args args = evalArgs();
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError("eval", parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, "eval")) {
+        return *exit;
     }
     EvalChoices choices;
     if (const auto exit = readChoices(args, choices)) {

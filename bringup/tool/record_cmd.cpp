@@ -39,6 +39,44 @@ int fail(const Error& error)
     return 1;
 }
 
+/// The iceoryx runtime and a subscriber to the service's frames; SIGINT and SIGTERM end the recording.
+Result<std::unique_ptr<ipc::FrameSubscriber>, Error> subscribe()
+{
+    if (auto runtime = ipc::startRuntime("ugvsense-record"); !runtime) {
+        return Unexpected(runtime.error());
+    }
+    auto created = ipc::FrameSubscriber::create(kQueue);
+    if (!created) {
+        return Unexpected(created.error());
+    }
+    struct sigaction action {};
+    action.sa_handler = onSignal;
+    ::sigaction(SIGINT, &action, nullptr);
+    ::sigaction(SIGTERM, &action, nullptr);
+    return std::move(*created);
+}
+
+/// The recording, opened at the first frame: its size must be the calibration's (stored in the recording).
+Result<hal::RecordingWriter, Error> openWriter(const Args& args, const bringup::CalibrationWithText& calibration,
+                                               const FrameHeader& h)
+{
+    const cv::Size calibrated = calibration.calibration.imageSize;
+    if (static_cast<int>(h.width) != calibrated.width || static_cast<int>(h.height) != calibrated.height) {
+        return Unexpected(Error{args.get("calib"),
+                                "is for " + std::to_string(calibrated.width) + "x" + std::to_string(calibrated.height) +
+                                    " but the frames are " + std::to_string(h.width) + "x" + std::to_string(h.height),
+                                "give the calibration of this camera at this resolution"});
+    }
+    hal::RecordingWriterOptions options;
+    options.syncEveryFrame = !args.has("no-sync");
+    options.overwrite = args.has("force");
+    auto opened = hal::RecordingWriter::create(args.get("out"), h.width, h.height, calibration.text, options);
+    if (!opened) {
+        return Unexpected(opened.error());
+    }
+    return std::move(*opened);
+}
+
 } // namespace
 
 int runRecord(int argc, char** argv)
@@ -54,12 +92,8 @@ int runRecord(int argc, char** argv)
                {"seconds", "S", "stop after S seconds", false},
                {"no-sync", "", "do not fdatasync each frame (faster, a power cut may lose more)", false},
                {"force", "", "overwrite an existing recording", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError(kCommand, parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+        return *exit;
     }
     const auto frames = args.number("frames", 0, 1, 1e12);
     const auto seconds = args.number("seconds", 0, 0.1, 1e9);
@@ -75,18 +109,11 @@ int runRecord(int argc, char** argv)
     }
     (void)::setpriority(PRIO_PROCESS, 0, kNiceness); // low priority: never in the service's way
 
-    if (auto runtime = ipc::startRuntime("ugvsense-record"); !runtime) {
-        return fail(runtime.error());
-    }
-    auto created = ipc::FrameSubscriber::create(kQueue);
+    auto created = subscribe();
     if (!created) {
         return fail(created.error());
     }
     const std::unique_ptr<ipc::FrameSubscriber> subscriber = std::move(*created);
-    struct sigaction action {};
-    action.sa_handler = onSignal;
-    ::sigaction(SIGINT, &action, nullptr);
-    ::sigaction(SIGTERM, &action, nullptr);
 
     std::optional<hal::RecordingWriter> writer;
     std::uint64_t written = 0;
@@ -107,19 +134,7 @@ int runRecord(int argc, char** argv)
         }
         const FrameHeader& h = frame.header;
         if (!writer) {
-            const cv::Size calibrated = calibration->calibration.imageSize;
-            if (static_cast<int>(h.width) != calibrated.width || static_cast<int>(h.height) != calibrated.height) {
-                subscriber->release(frame);
-                return fail(Error{args.get("calib"),
-                                  "is for " + std::to_string(calibrated.width) + "x" +
-                                      std::to_string(calibrated.height) + " but the frames are " +
-                                      std::to_string(h.width) + "x" + std::to_string(h.height),
-                                  "give the calibration of this camera at this resolution"});
-            }
-            hal::RecordingWriterOptions options;
-            options.syncEveryFrame = !args.has("no-sync");
-            options.overwrite = args.has("force");
-            auto opened = hal::RecordingWriter::create(args.get("out"), h.width, h.height, calibration->text, options);
+            auto opened = openWriter(args, *calibration, h);
             if (!opened) {
                 subscriber->release(frame);
                 return fail(opened.error());
