@@ -121,13 +121,15 @@ start_sender() { # ROLE FILE LOG [BUS-SEND OPTION...]
     sender_pid[$role]=$!
     pids+=("${sender_pid[$role]}")
 }
-wait_acked() { # LOG...: every sender says its messages were acknowledged (bounded: 180 s)
+wait_acked() { # LOG...: every sender says its messages were acknowledged by a reader at least (bounded: 180 s)
     for log in "$@"; do
         for _ in $(seq 1800); do
             grep -q "acknowledged" "$work/$log.log" && break
             sleep 0.1
         done
         grep -q "acknowledged" "$work/$log.log" || fail "$log: not acknowledged"
+        grep -q "acknowledged by 0 reader" "$work/$log.log" &&
+            fail "$log: sent to no reader (the station was not matched)"
     done
 }
 partition() { # ROLE SECONDS: cut ROLE's namespace off the network (every packet in and out dropped), then heal it
