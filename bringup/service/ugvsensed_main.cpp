@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 
 #include "runner.hpp"
@@ -59,12 +60,9 @@ bool parseNumber(const char* text, double min, double max, double& out)
     ugv::exitUnlessCpuRunsBuild("ugvsensed");
 }
 
-} // namespace
-
-int main(int argc, char** argv)
+/// Reads the command line into `options`; the exit code when the process should end here (--help, a bad option).
+std::optional<int> parseArgs(int argc, char** argv, ugv::service::RunOptions& options)
 {
-    ugv::service::RunOptions options;
-    options.printEvery = 10;
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
         const auto value = [&](const char* name) -> const char* {
@@ -119,6 +117,18 @@ int main(int argc, char** argv)
             std::fprintf(stderr, "ugvsensed: error: unknown option '%s' (fix: see ugvsensed --help)\n", arg.c_str());
             return 2;
         }
+    }
+    return std::nullopt;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    ugv::service::RunOptions options;
+    options.printEvery = 10;
+    if (const auto exit = parseArgs(argc, argv, options)) {
+        return *exit;
     }
     struct sigaction action {};
     action.sa_handler = onSignal;

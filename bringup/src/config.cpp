@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -89,9 +90,10 @@ KeySpec choiceKey(std::string path, std::string description, std::vector<std::pa
         return c.member;                                                                                               \
     }
 
-std::vector<KeySpec> baseKeys()
+// The vehicle, its calibration and its cameras.
+std::vector<KeySpec> cameraKeys()
 {
-    std::vector<KeySpec> keys = {
+    return {
         textKey("vehicle_id", Kind::Text, "name of this vehicle in published messages", UGV_REF(vehicleId)),
         textKey("calibration", Kind::Path,
                 "stereo calibration file written by 'ugvsense calibrate' ($UGV_CALIBRATION overrides)",
@@ -122,6 +124,13 @@ std::vector<KeySpec> baseKeys()
                   UGV_REF(camera.replayFps)),
         choiceKey<bool>("camera.replay_loop", "replay the recording over and over (backend: replay)",
                         {{"true", true}, {"false", false}}, UGV_REF(camera.replayLoop)),
+    };
+}
+
+// The region of interest, the matcher, the obstacle detector, overload and handover.
+std::vector<KeySpec> visionKeys()
+{
+    return {
         numberKey("roi.top_fraction", Kind::Double, 0.0, 0.9,
                   "first row of the region of interest, as a fraction of the height", UGV_REF(roi.topFraction)),
         numberKey("roi.matcher_margin_rows", Kind::Int, 0, 64,
@@ -168,6 +177,13 @@ std::vector<KeySpec> baseKeys()
                   UGV_REF(handover.spinUs)),
         choiceKey<bool>("vision.enabled", "false: no camera, no vision (a ground station running only the correlator)",
                         {{"true", true}, {"false", false}}, UGV_REF(visionEnabled)),
+    };
+}
+
+// The DDS bus and its security.
+std::vector<KeySpec> ddsKeys()
+{
+    return {
         choiceKey<bool>("dds.enabled", "join the DDS bus: sectors, ROS 2 scans, health out; poses in",
                         {{"true", true}, {"false", false}}, UGV_REF(dds.enabled)),
         numberKey("dds.domain_id", Kind::Int, 0, 232,
@@ -209,6 +225,13 @@ std::vector<KeySpec> baseKeys()
                 UGV_REF(dds.security.governance)),
         textKey("dds.security.permissions", Kind::Path, "this vehicle's signed permissions document (S/MIME)",
                 UGV_REF(dds.security.permissions)),
+    };
+}
+
+// The OOI correlator.
+std::vector<KeySpec> correlatorKeys()
+{
+    return {
         choiceKey<bool>("correlator.enabled", "run the OOI correlator on the bus's observations (lowest priority)",
                         {{"true", true}, {"false", false}}, UGV_REF(correlator.enabled)),
         choiceKey<correlator::Mode>("correlator.mode",
@@ -242,6 +265,15 @@ std::vector<KeySpec> baseKeys()
                   "synchronised) [ms]",
                   UGV_REF(correlator.maxClockSkewMs)),
     };
+}
+
+std::vector<KeySpec> baseKeys()
+{
+    std::vector<KeySpec> keys;
+    for (auto part : {cameraKeys, visionKeys, ddsKeys, correlatorKeys}) {
+        std::vector<KeySpec> section = part();
+        keys.insert(keys.end(), std::make_move_iterator(section.begin()), std::make_move_iterator(section.end()));
+    }
     return keys;
 }
 

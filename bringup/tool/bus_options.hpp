@@ -2,16 +2,15 @@
 
 /// @file
 /// The DDS options that `ugvsense listen` and `ugvsense bus-send` share (--domain, --partition, --ros-namespace,
-/// --discovery-server, --no-shm), their checks, and a stop flag set by SIGINT/SIGTERM. Header-only: the two commands
-/// are the only users. Init-time only (allocates).
+/// --discovery-server, --no-shm) and their checks. Header-only: the two commands are the only users. Init-time only
+/// (allocates).
 
-#include <atomic>
-#include <csignal>
 #include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "args.hpp"
+#include "stop_signal.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
@@ -142,24 +141,6 @@ inline std::string describe(const ipc::dds::BusConfig& config)
         text += ", secured as '" + config.security.identity + "'";
     }
     return text;
-}
-
-/// Set by SIGINT/SIGTERM once installStopHandler() ran; a second signal exits with 130.
-inline std::atomic<bool> g_stop{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-inline void installStopHandler()
-{
-    struct sigaction action {};
-    // A second signal ends the process at once (a Fast DDS teardown that hangs must not need kill -9).
-    action.sa_handler = [](int /*signal*/) {
-        if (g_stop.exchange(true)) {
-            std::_Exit(130);
-        }
-    };
-    sigemptyset(&action.sa_mask);
-    ::sigaction(SIGINT, &action, nullptr);
-    ::sigaction(SIGTERM, &action, nullptr);
 }
 
 } // namespace ugv::tool::bus

@@ -101,6 +101,28 @@ Result<std::vector<Line>, Error> readInput(const std::string& path, std::size_t&
     return lines;
 }
 
+/// --only-ugv: keeps the observations of `ugv` alone; an error naming the file's UGVs when it has none of them.
+std::optional<Error> keepOnlyUgv(std::vector<Line>& lines, const std::string& path, const std::string& ugv)
+{
+    std::set<std::string> ugvs;
+    std::erase_if(lines, [&](const Line& l) {
+        const auto* o = std::get_if<correlator::Observation>(&l.message);
+        if (o != nullptr) {
+            ugvs.insert(o->ugv);
+        }
+        return o == nullptr || o->ugv != ugv;
+    });
+    if (!lines.empty()) {
+        return std::nullopt;
+    }
+    std::string names;
+    for (const std::string& u : ugvs) {
+        names += (names.empty() ? "" : ", ") + u;
+    }
+    return Error{path, "no observation of ugv '" + ugv + "'",
+                 ugvs.empty() ? std::string("the file has no observations") : "give one of the file's UGVs: " + names};
+}
+
 /// --input: every line on its topic, paced by --rate.
 int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderWait& wait, double lingerS)
 {
@@ -113,22 +135,8 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
         return fail(lines.error());
     }
     if (!onlyUgv.empty()) {
-        std::set<std::string> ugvs;
-        std::erase_if(*lines, [&](const Line& l) {
-            const auto* o = std::get_if<correlator::Observation>(&l.message);
-            if (o != nullptr) {
-                ugvs.insert(o->ugv);
-            }
-            return o == nullptr || o->ugv != onlyUgv;
-        });
-        if (lines->empty()) {
-            std::string names;
-            for (const std::string& u : ugvs) {
-                names += (names.empty() ? "" : ", ") + u;
-            }
-            return fail(Error{path, "no observation of ugv '" + onlyUgv + "'",
-                              ugvs.empty() ? std::string("the file has no observations")
-                                           : "give one of the file's UGVs: " + names});
+        if (auto none = keepOnlyUgv(*lines, path, onlyUgv)) {
+            return fail(*none);
         }
     }
     if (lines->empty()) {
@@ -170,7 +178,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
             written = writeOne(w.corrections, correction);
         }
         if (!written) {
-            if (bus::g_stop.load()) {
+            if (g_stop.load()) {
                 break;
             }
             return fail(Error{path + ":" + std::to_string(line.number),
@@ -180,7 +188,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
         }
         ++w.sent[topic];
     }
-    if (bus::g_stop.load()) {
+    if (g_stop.load()) {
         std::printf("interrupted: sent %llu of %zu message(s)\n", static_cast<unsigned long long>(w.total()),
                     lines->size());
         return 1;
@@ -245,15 +253,51 @@ int sendPoses(dds::Bus& bus, const std::string& vehicle, double rateHz, double d
                 "reader(s)%s\n",
                 static_cast<unsigned long long>(sent), vehicle.c_str(), kCircleRadiusM, kCircleCentreLat,
                 kCircleCentreLon, kCircleSpeedMps, rateHz, bus::describe(bus.config()).c_str(), writer->matched(),
-                bus::g_stop.load() ? " (stopped by a signal)" : "");
+                g_stop.load() ? " (stopped by a signal)" : "");
     if (refused > 0) {
         std::printf("%llu pose(s) refused by the writer\n", static_cast<unsigned long long>(refused));
     }
     std::fflush(stdout);
-    if (lingerS > 0.0 && !bus::g_stop.load()) {
+    if (lingerS > 0.0 && !g_stop.load()) {
         sleepUntil(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(lingerS)));
     }
     return refused > 0 ? 1 : 0;
+}
+
+/// One mode (--input or --poses), options only where they apply, and names the bus can carry.
+std::optional<Error> checkModeAndNames(const Args& args)
+{
+    const std::string where = std::string("ugvsense ") + kCommand;
+    const int modes = (args.has("input") ? 1 : 0) + (args.has("poses") ? 1 : 0);
+    if (modes != 1) {
+        return Error{where, modes == 0 ? "nothing to send" : "both --input and --poses",
+                     "give exactly one of --input OBS.jsonl, --poses VEHICLE"};
+    }
+    const auto only = [&](const char* option, const char* mode, bool inMode) -> std::optional<Error> {
+        if (args.has(option) && !inMode) {
+            return Error{where + " --" + option, std::string("only applies to ") + mode,
+                         std::string("remove it or add ") + mode};
+        }
+        return std::nullopt;
+    };
+    for (const auto& e :
+         {only("only-ugv", "--input", args.has("input")), only("duration", "--poses", args.has("poses"))}) {
+        if (e) {
+            return e;
+        }
+    }
+    if (args.has("poses") && args.get("poses").empty()) {
+        return Error{where + " --poses", "an empty vehicle name", "name the vehicle"};
+    }
+    if ((args.has("source") && args.get("source").empty()) || (args.has("only-ugv") && args.get("only-ugv").empty())) {
+        return Error{where, "an empty --source or --only-ugv name", "give a name"};
+    }
+    if (args.get("source", "").size() > dds::kMaxNameLength || args.get("only-ugv", "").size() > dds::kMaxNameLength) {
+        return Error{where,
+                     "a --source or --only-ugv name longer than " + std::to_string(dds::kMaxNameLength) + " characters",
+                     "shorten it (the bus's name bound)"};
+    }
+    return std::nullopt;
 }
 
 } // namespace
@@ -289,36 +333,8 @@ int runBusSend(int argc, char** argv)
     if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
         return *exit;
     }
-    const std::string where = std::string("ugvsense ") + kCommand;
-    const int modes = (args.has("input") ? 1 : 0) + (args.has("poses") ? 1 : 0);
-    if (modes != 1) {
-        return reportUsageError(kCommand, Error{where, modes == 0 ? "nothing to send" : "both --input and --poses",
-                                                "give exactly one of --input OBS.jsonl, --poses VEHICLE"});
-    }
-    const auto only = [&](const char* option, const char* mode, bool inMode) -> std::optional<Error> {
-        if (args.has(option) && !inMode) {
-            return Error{where + " --" + option, std::string("only applies to ") + mode,
-                         std::string("remove it or add ") + mode};
-        }
-        return std::nullopt;
-    };
-    for (const auto& e :
-         {only("only-ugv", "--input", args.has("input")), only("duration", "--poses", args.has("poses"))}) {
-        if (e) {
-            return reportUsageError(kCommand, *e);
-        }
-    }
-    if (args.has("poses") && args.get("poses").empty()) {
-        return reportUsageError(kCommand, Error{where + " --poses", "an empty vehicle name", "name the vehicle"});
-    }
-    if ((args.has("source") && args.get("source").empty()) || (args.has("only-ugv") && args.get("only-ugv").empty())) {
-        return reportUsageError(kCommand, Error{where, "an empty --source or --only-ugv name", "give a name"});
-    }
-    if (args.get("source", "").size() > dds::kMaxNameLength || args.get("only-ugv", "").size() > dds::kMaxNameLength) {
-        return reportUsageError(kCommand, Error{where,
-                                                "a --source or --only-ugv name longer than " +
-                                                    std::to_string(dds::kMaxNameLength) + " characters",
-                                                "shorten it (the bus's name bound)"});
+    if (auto bad = checkModeAndNames(args)) {
+        return reportUsageError(kCommand, *bad);
     }
     const auto rate = args.number("rate", args.has("poses") ? kDefaultPoseRateHz : 0.0, 0.001, kMaxRateHz);
     const auto duration = args.number("duration", kDefaultPoseDurationS, 0.0, 1e7);
@@ -334,7 +350,7 @@ int runBusSend(int argc, char** argv)
     if (!config) {
         return reportUsageError(kCommand, config.error());
     }
-    bus::installStopHandler();
+    installStopHandler();
     auto created = dds::Bus::create(*config);
     if (!created) {
         return fail(created.error());

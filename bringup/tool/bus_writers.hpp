@@ -3,7 +3,7 @@
 /// @file
 /// Sending on the DDS bus from a command-line sender (`ugvsense bus-send`, and the test tool `bus-hostile`): the
 /// four writers of the correlator's inputs, waits for readers and acknowledgements, writes that retry while a
-/// keep-all history is full, and the summary line. Every wait ends on SIGINT/SIGTERM (bus::g_stop). Init-time
+/// keep-all history is full, and the summary line. Every wait ends on SIGINT/SIGTERM (g_stop). Init-time
 /// and tool code only (allocates, blocks).
 
 #include <array>

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -105,6 +106,52 @@ int fail(const Error& error)
     return 1;
 }
 
+/// Where and how large the board appears in a kept pair.
+struct BoardView {
+    cv::Point2f centre;
+    float span; ///< [px] the larger side of the corners' bounding box
+};
+
+/// A cv::Mat over an image, without a copy.
+cv::Mat matOver(ConstImageViewU8 view)
+{
+    return cv::Mat(view.height(), view.width(), CV_8UC1, const_cast<std::uint8_t*>(view.row(0)), // NOLINT
+                   static_cast<std::size_t>(view.strideBytes()));
+}
+
+/// The board's place in the left image, when the whole board is found in both images.
+std::optional<BoardView> findBoard(const cv::Mat& left, const cv::Mat& right, cv::Size board)
+{
+    std::vector<cv::Point2f> cornersL;
+    std::vector<cv::Point2f> cornersR;
+    const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
+    if (!cv::findChessboardCorners(left, board, cornersL, flags) ||
+        !cv::findChessboardCorners(right, board, cornersR, flags)) {
+        return std::nullopt;
+    }
+    const cv::Rect box = cv::boundingRect(cornersL);
+    return BoardView{cv::Point2f(static_cast<float>(box.x) + static_cast<float>(box.width) / 2.0F,
+                                 static_cast<float>(box.y) + static_cast<float>(box.height) / 2.0F),
+                     static_cast<float>(std::max(box.width, box.height))};
+}
+
+/// The camera of --config (the default configuration without it), or the recording --replay REC, read as fast as
+/// possible.
+Result<std::unique_ptr<hal::StereoCamera>, Error> openCaptureCamera(const Args& args)
+{
+    bringup::ServiceConfig config;
+    if (args.has("config")) {
+        auto loaded = bringup::loadConfig(args.get("config"));
+        if (!loaded) {
+            return Unexpected(loaded.error().front());
+        }
+        config = std::move(*loaded);
+    }
+    hal::ReplayOptions replay;
+    replay.pace = hal::ReplayPace::AsFastAsPossible;
+    return bringup::openCamera(config, args.get("replay"), replay);
+}
+
 } // namespace
 
 /// Grabs pairs from the configured camera (or --replay REC) and keeps those where the board is found in both
@@ -119,17 +166,7 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
             return Unexpected(value->error());
         }
     }
-    bringup::ServiceConfig config;
-    if (args.has("config")) {
-        auto loaded = bringup::loadConfig(args.get("config"));
-        if (!loaded) {
-            return Unexpected(loaded.error().front());
-        }
-        config = std::move(*loaded);
-    }
-    hal::ReplayOptions replay;
-    replay.pace = hal::ReplayPace::AsFastAsPossible;
-    auto camera = bringup::openCamera(config, args.get("replay"), replay);
+    auto camera = openCaptureCamera(args);
     if (!camera) {
         return Unexpected(camera.error());
     }
@@ -141,11 +178,7 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
     }
     std::printf("capturing from %s: hold the %dx%d board at different places, distances and tilts\n",
                 (*camera)->description(), board.width, board.height);
-    struct Seen {
-        cv::Point2f centre;
-        float span;
-    };
-    std::vector<Seen> kept;
+    std::vector<BoardView> kept;
     const auto start = std::chrono::steady_clock::now();
     hal::CameraFrame frame;
     int grabbed = 0;
@@ -163,27 +196,14 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
             continue;
         }
         ++grabbed;
-        const cv::Mat left(frame.left.height(), frame.left.width(), CV_8UC1,
-                           const_cast<std::uint8_t*>(frame.left.row(0)),
-                           static_cast<std::size_t>(frame.left.strideBytes()));
-        const cv::Mat right(frame.right.height(), frame.right.width(), CV_8UC1,
-                            const_cast<std::uint8_t*>(frame.right.row(0)),
-                            static_cast<std::size_t>(frame.right.strideBytes()));
-        std::vector<cv::Point2f> cornersL;
-        std::vector<cv::Point2f> cornersR;
-        const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
-        if (!cv::findChessboardCorners(left, board, cornersL, flags) ||
-            !cv::findChessboardCorners(right, board, cornersR, flags)) {
-            continue;
-        }
-        const cv::Rect box = cv::boundingRect(cornersL);
-        const Seen seen{cv::Point2f(static_cast<float>(box.x) + static_cast<float>(box.width) / 2.0F,
-                                    static_cast<float>(box.y) + static_cast<float>(box.height) / 2.0F),
-                        static_cast<float>(std::max(box.width, box.height))};
-        const auto similar = [&](const Seen& s) {
-            return cv::norm(s.centre - seen.centre) < 0.05 * left.cols && std::abs(s.span - seen.span) < 0.1F * s.span;
+        const cv::Mat left = matOver(frame.left);
+        const cv::Mat right = matOver(frame.right);
+        const std::optional<BoardView> seen = findBoard(left, right, board);
+        const auto similar = [&](const BoardView& s) {
+            return cv::norm(s.centre - seen->centre) < 0.05 * left.cols &&
+                   std::abs(s.span - seen->span) < 0.1F * s.span;
         };
-        if (std::any_of(kept.begin(), kept.end(), similar)) {
+        if (!seen || std::any_of(kept.begin(), kept.end(), similar)) {
             continue;
         }
         char name[32];
@@ -192,10 +212,10 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
             !cv::imwrite((dir / (std::string("right") + name)).string(), right)) {
             return Unexpected(Error{dir.string(), "cannot write the captured images", "check the free space"});
         }
-        kept.push_back(seen);
+        kept.push_back(*seen);
         std::printf("  pair %zu kept (frame %llu, board at %.0f,%.0f px, %.0f px across)\n", kept.size(),
-                    static_cast<unsigned long long>(frame.sequence), static_cast<double>(seen.centre.x),
-                    static_cast<double>(seen.centre.y), static_cast<double>(seen.span));
+                    static_cast<unsigned long long>(frame.sequence), static_cast<double>(seen->centre.x),
+                    static_cast<double>(seen->centre.y), static_cast<double>(seen->span));
     }
     if (kept.size() < 4) {
         return Unexpected(Error{(*camera)->description(),

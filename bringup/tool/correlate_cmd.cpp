@@ -6,10 +6,8 @@
 // last snapshot (and the map) when stopped.
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -26,6 +24,7 @@
 #include "bus_options.hpp"
 #include "commands.hpp"
 #include "correlator_task.hpp"
+#include "stop_signal.hpp"
 #include "ugv/bringup/correlate_io.hpp"
 #include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/correlator/geodesy.hpp"
@@ -145,12 +144,6 @@ Result<void, Error> drawMap(const std::string& path, const Snapshot& s,
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-void onSignal(int /*signal*/)
-{
-    g_stop.store(true);
-}
-
 /// --from-dds: the live correlator on the bus as a viewer (it publishes nothing), until --duration or SIGINT.
 int correlateFromDds(const Args& args, correlator::Mode mode, double period, double lateWindow, std::ofstream& out)
 {
@@ -189,10 +182,7 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     if (!live) {
         return fail(live.error());
     }
-    struct sigaction action {};
-    action.sa_handler = onSignal;
-    ::sigaction(SIGINT, &action, nullptr);
-    ::sigaction(SIGTERM, &action, nullptr);
+    installStopHandler();
     std::printf("correlating live inputs on DDS domain %d%s (Ctrl-C to stop)\n", bc.domainId,
                 *duration > 0.0 ? (", for " + std::to_string(static_cast<int>(*duration)) + " s").c_str() : "");
     std::fflush(stdout);

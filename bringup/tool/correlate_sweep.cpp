@@ -356,6 +356,54 @@ void printRow(const PointResult& r)
     std::fflush(stdout);
 }
 
+/// What the sweep adds up over every run of the grid.
+struct SweepTotals {
+    std::vector<double> idPerHour; ///< pose-corrected's static ID changes per hour of mission, every run
+    std::vector<double> idPerHourOriginal;
+    double messages[2] = {0.0, 0.0}; ///< original, pose-corrected
+    double seconds[2] = {0.0, 0.0};
+
+    double rate(int mode) const { return seconds[mode] > 0 ? messages[mode] / seconds[mode] : 0.0; }
+};
+
+/// Writes the sweep's JSON summary to options.jsonPath; false (with a message) when it cannot be written.
+bool writeSummary(const SweepOptions& options, const std::vector<PointResult>& results, const SweepTotals& totals,
+                  std::size_t met, bool idTarget)
+{
+    ordered_json j{{"machine", machineName()},        {"seeds", options.seeds}, {"first_seed", options.firstSeed},
+                   {"duration_s", options.durationS}, {"quick", options.quick}, {"points", ordered_json::array()}};
+    for (const PointResult& r : results) {
+        j["points"].push_back(ordered_json{{"name", r.point.name},
+                                           {"pose_errors", r.targets.poseErrors},
+                                           {"config", configJson(r.point.config)},
+                                           {"original", modeJson(r.original)},
+                                           {"pose-corrected", modeJson(r.poseCorrected)},
+                                           {"targets",
+                                            {{"static_median", r.targets.staticMedian},
+                                             {"mobile_median", r.targets.mobileMedian},
+                                             {"id_changes", r.targets.idChanges},
+                                             {"worst_seed", r.targets.worstSeed},
+                                             {"all", r.targets.all()}}}});
+    }
+    j["summary"] =
+        ordered_json{{"points", results.size()},
+                     {"points_meeting_every_target", met},
+                     {"id_changes_per_hour_median",
+                      {{"original", median(totals.idPerHourOriginal)}, {"pose-corrected", median(totals.idPerHour)}}},
+                     {"id_changes_per_hour_target_met", idTarget},
+                     {"messages_per_s", {{"original", totals.rate(0)}, {"pose-corrected", totals.rate(1)}}}};
+    std::ofstream out(options.jsonPath);
+    out << j.dump(2) << '\n';
+    out.flush();
+    if (!out) {
+        std::cerr << "ugvsense correlate-eval --sweep: error: " << options.jsonPath
+                  << ": cannot write the summary; fix: check that the folder exists and is writable\n";
+        return false;
+    }
+    std::printf("wrote the summary to %s\n", options.jsonPath.c_str());
+    return true;
+}
+
 } // namespace
 
 int runCorrelateSweep(const SweepOptions& options)
@@ -370,10 +418,7 @@ int runCorrelateSweep(const SweepOptions& options)
                 "0.2 m; lower case: missed\n");
     printHeader();
     std::vector<PointResult> results;
-    std::vector<double> idPerHour; // pose-corrected, every run of the grid
-    std::vector<double> idPerHourOriginal;
-    double messages[2] = {0.0, 0.0};
-    double seconds[2] = {0.0, 0.0};
+    SweepTotals totals;
     for (const SweepPoint& point : points) {
         PointResult result{point, {}, {}, {}};
         for (int k = 0; k < options.seeds; ++k) {
@@ -391,12 +436,12 @@ int runCorrelateSweep(const SweepOptions& options)
             result.original.add(o);
             result.poseCorrected.add(i);
             const double hours = config.durationS / kSecondsPerHour;
-            idPerHour.push_back(i.staticIdChanges / hours);
-            idPerHourOriginal.push_back(o.staticIdChanges / hours);
-            messages[0] += o.messages;
-            messages[1] += i.messages;
-            seconds[0] += o.seconds;
-            seconds[1] += i.seconds;
+            totals.idPerHour.push_back(i.staticIdChanges / hours);
+            totals.idPerHourOriginal.push_back(o.staticIdChanges / hours);
+            totals.messages[0] += o.messages;
+            totals.messages[1] += i.messages;
+            totals.seconds[0] += o.seconds;
+            totals.seconds[1] += i.seconds;
         }
         result.targets = check(point.config, result.original, result.poseCorrected);
         printRow(result);
@@ -406,47 +451,16 @@ int runCorrelateSweep(const SweepOptions& options)
     for (const PointResult& r : results) {
         met += r.targets.all() ? 1U : 0U;
     }
-    const double idMedian = median(idPerHour);
+    const double idMedian = median(totals.idPerHour);
     const bool idTarget = idMedian <= kIdChangesPerHour + kTolerance;
     std::printf("points meeting every target: %zu of %zu\n", met, results.size());
     std::printf("static ID changes per hour over the grid (median of every run): original %.2f, pose-corrected %.2f "
                 "(target <= %.0f: %s)\n",
-                median(idPerHourOriginal), idMedian, kIdChangesPerHour, idTarget ? "met" : "missed");
+                median(totals.idPerHourOriginal), idMedian, kIdChangesPerHour, idTarget ? "met" : "missed");
     std::printf("throughput over the sweep: original %.0f, pose-corrected %.0f messages/s (add and snapshot)\n",
-                seconds[0] > 0 ? messages[0] / seconds[0] : 0.0, seconds[1] > 0 ? messages[1] / seconds[1] : 0.0);
-    if (!options.jsonPath.empty()) {
-        ordered_json j{{"machine", machineName()},        {"seeds", options.seeds}, {"first_seed", options.firstSeed},
-                       {"duration_s", options.durationS}, {"quick", options.quick}, {"points", ordered_json::array()}};
-        for (const PointResult& r : results) {
-            j["points"].push_back(ordered_json{{"name", r.point.name},
-                                               {"pose_errors", r.targets.poseErrors},
-                                               {"config", configJson(r.point.config)},
-                                               {"original", modeJson(r.original)},
-                                               {"pose-corrected", modeJson(r.poseCorrected)},
-                                               {"targets",
-                                                {{"static_median", r.targets.staticMedian},
-                                                 {"mobile_median", r.targets.mobileMedian},
-                                                 {"id_changes", r.targets.idChanges},
-                                                 {"worst_seed", r.targets.worstSeed},
-                                                 {"all", r.targets.all()}}}});
-        }
-        j["summary"] = ordered_json{
-            {"points", results.size()},
-            {"points_meeting_every_target", met},
-            {"id_changes_per_hour_median", {{"original", median(idPerHourOriginal)}, {"pose-corrected", idMedian}}},
-            {"id_changes_per_hour_target_met", idTarget},
-            {"messages_per_s",
-             {{"original", seconds[0] > 0 ? messages[0] / seconds[0] : 0.0},
-              {"pose-corrected", seconds[1] > 0 ? messages[1] / seconds[1] : 0.0}}}};
-        std::ofstream out(options.jsonPath);
-        out << j.dump(2) << '\n';
-        out.flush();
-        if (!out) {
-            std::cerr << "ugvsense correlate-eval --sweep: error: " << options.jsonPath
-                      << ": cannot write the summary; fix: check that the folder exists and is writable\n";
-            return 1;
-        }
-        std::printf("wrote the summary to %s\n", options.jsonPath.c_str());
+                totals.rate(0), totals.rate(1));
+    if (!options.jsonPath.empty() && !writeSummary(options, results, totals, met, idTarget)) {
+        return 1;
     }
     constexpr int kTargetsMissedExit = 3;
     return options.requireTargets && (met < results.size() || !idTarget) ? kTargetsMissedExit : 0;

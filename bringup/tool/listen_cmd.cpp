@@ -359,7 +359,7 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
     T sample;
     eprosima::fastdds::dds::SampleInfo info;
     const bool secured = bus.config().security.enabled;
-    while (!bus::g_stop.load() && (o.count == 0 || printed < o.count)) {
+    while (!g_stop.load() && (o.count == 0 || printed < o.count)) {
         auto slice = kPollSlice;
         if (o.timeoutS > 0.0) {
             const auto now = std::chrono::steady_clock::now();
@@ -395,7 +395,7 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
     const double elapsedS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "ugvsense %s: %llu sample(s) printed, %llu refused, in %.1f s%s\n", kCommand,
                  static_cast<unsigned long long>(printed), static_cast<unsigned long long>(refused), elapsedS,
-                 bus::g_stop.load() ? " (stopped by a signal)" : "");
+                 g_stop.load() ? " (stopped by a signal)" : "");
     if (timedOut && printed == 0) {
         const int writers = reader->matched();
         return fail(Error{topic + " on " + bus::describe(bus.config()),
@@ -408,6 +408,38 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
                                          "now, and its QoS (ugvsense listen uses the topic's own)"});
     }
     return 0;
+}
+
+/// Prints the samples of topic `id` (see listenTo).
+int listenOn(dds::Bus& b, dds::TopicId id, const ListenOptions& o)
+{
+    switch (id) {
+    case dds::TopicId::Sectors:
+        return listenTo<msg::ObstacleSectors>(b, o);
+    case dds::TopicId::Health:
+        return listenTo<msg::ServiceHealth>(b, o);
+    case dds::TopicId::Pose:
+        return listenTo<msg::VehiclePose>(b, o);
+    case dds::TopicId::Observation:
+        return listenTo<msg::OoiObservation>(b, o);
+    case dds::TopicId::Uav:
+        return listenTo<msg::UavObservation>(b, o);
+    case dds::TopicId::Confirmation:
+        return listenTo<msg::ConfirmationState>(b, o);
+    case dds::TopicId::PoseCorrection:
+        return listenTo<msg::PoseCorrection>(b, o);
+    case dds::TopicId::Correlated:
+        return listenTo<msg::CorrelatedOoiList>(b, o);
+    case dds::TopicId::RosScan:
+        return listenTo<ros::LaserScan_>(b, o);
+    case dds::TopicId::RosNegatives:
+        return listenTo<ros::PointCloud2_>(b, o);
+    case dds::TopicId::RosGraph:
+        return listenTo<graph::ParticipantEntitiesInfo_>(b, o);
+    case dds::TopicId::RosClearScan:
+        return listenTo<ros::LaserScan_>(b, o, id);
+    }
+    return fail(Error{std::string("ugvsense ") + kCommand, "topic without a listener", "a bug: add it to listenOn"});
 }
 
 } // namespace
@@ -476,39 +508,12 @@ int runListen(int argc, char** argv)
     o.count = static_cast<std::uint64_t>(*count);
     o.timeoutS = *timeout;
 
-    bus::installStopHandler();
+    installStopHandler();
     auto created = dds::Bus::create(*config);
     if (!created) {
         return fail(created.error());
     }
-    dds::Bus& b = **created;
-    switch (id) {
-    case dds::TopicId::Sectors:
-        return listenTo<msg::ObstacleSectors>(b, o);
-    case dds::TopicId::Health:
-        return listenTo<msg::ServiceHealth>(b, o);
-    case dds::TopicId::Pose:
-        return listenTo<msg::VehiclePose>(b, o);
-    case dds::TopicId::Observation:
-        return listenTo<msg::OoiObservation>(b, o);
-    case dds::TopicId::Uav:
-        return listenTo<msg::UavObservation>(b, o);
-    case dds::TopicId::Confirmation:
-        return listenTo<msg::ConfirmationState>(b, o);
-    case dds::TopicId::PoseCorrection:
-        return listenTo<msg::PoseCorrection>(b, o);
-    case dds::TopicId::Correlated:
-        return listenTo<msg::CorrelatedOoiList>(b, o);
-    case dds::TopicId::RosScan:
-        return listenTo<ros::LaserScan_>(b, o);
-    case dds::TopicId::RosNegatives:
-        return listenTo<ros::PointCloud2_>(b, o);
-    case dds::TopicId::RosGraph:
-        return listenTo<graph::ParticipantEntitiesInfo_>(b, o);
-    case dds::TopicId::RosClearScan:
-        return listenTo<ros::LaserScan_>(b, o, id);
-    }
-    return fail(Error{where, "topic without a listener", "a bug: add it to runListen"});
+    return listenOn(**created, id, o);
 }
 
 } // namespace ugv::tool

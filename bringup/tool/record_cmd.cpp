@@ -5,8 +5,7 @@
 
 #include <sys/resource.h>
 
-#include <atomic>
-#include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -14,6 +13,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "stop_signal.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
@@ -25,13 +25,6 @@ namespace {
 constexpr const char* kCommand = "record";
 constexpr int kQueue = 16;
 constexpr int kNiceness = 10; ///< below every service task
-
-std::atomic<bool> g_stop{false};
-
-void onSignal(int /*signal*/)
-{
-    g_stop.store(true);
-}
 
 int fail(const Error& error)
 {
@@ -49,10 +42,7 @@ Result<std::unique_ptr<ipc::FrameSubscriber>, Error> subscribe()
     if (!created) {
         return Unexpected(created.error());
     }
-    struct sigaction action {};
-    action.sa_handler = onSignal;
-    ::sigaction(SIGINT, &action, nullptr);
-    ::sigaction(SIGTERM, &action, nullptr);
+    installStopHandler();
     return std::move(*created);
 }
 
@@ -75,6 +65,48 @@ Result<hal::RecordingWriter, Error> openWriter(const Args& args, const bringup::
         return Unexpected(opened.error());
     }
     return std::move(*opened);
+}
+
+/// What the recorder wrote.
+struct Tally {
+    std::uint64_t written = 0;
+    std::uint64_t missed = 0; ///< sequence numbers skipped: frames the recorder's queue lost
+    std::uint64_t firstSequence = 0;
+    std::uint64_t lastSequence = 0;
+};
+
+/// Appends a taken frame to the recording (opened at the first frame) and releases it. The exit code when the
+/// recording cannot go on, else nothing.
+std::optional<int> recordFrame(ipc::FrameSubscriber& subscriber, ipc::TakenFrame& frame, const Args& args,
+                               const bringup::CalibrationWithText& calibration,
+                               std::optional<hal::RecordingWriter>& writer, Tally& tally)
+{
+    const FrameHeader& h = frame.header;
+    if (!writer) {
+        auto opened = openWriter(args, calibration, h);
+        if (!opened) {
+            subscriber.release(frame);
+            return fail(opened.error());
+        }
+        writer.emplace(std::move(*opened));
+        tally.firstSequence = h.sequence;
+    } else if (h.sequence > tally.lastSequence + 1) {
+        tally.missed += h.sequence - tally.lastSequence - 1;
+    }
+    tally.lastSequence = h.sequence;
+    const auto appended =
+        writer->append(h.sequence, h.leftStampNs, h.rightStampNs, frame.views.left, frame.views.right);
+    subscriber.release(frame);
+    if (!appended) {
+        std::fprintf(stderr,
+                     "ugvsense record: error: %s: cannot append: %s (%s); the %llu frames before are kept "
+                     "(fix: free space on the device)\n",
+                     args.get("out").c_str(), appended.error().text(), appended.error().name(),
+                     static_cast<unsigned long long>(tally.written));
+        return 1;
+    }
+    ++tally.written;
+    return std::nullopt;
 }
 
 } // namespace
@@ -116,47 +148,21 @@ int runRecord(int argc, char** argv)
     const std::unique_ptr<ipc::FrameSubscriber> subscriber = std::move(*created);
 
     std::optional<hal::RecordingWriter> writer;
-    std::uint64_t written = 0;
-    std::uint64_t missed = 0;
-    std::uint64_t firstSequence = 0;
-    std::uint64_t lastSequence = 0;
+    Tally tally;
     const std::int64_t startNs = MonotonicClock::nowNs();
     const auto timeUp = [&] {
         return args.has("seconds") && static_cast<double>(MonotonicClock::nowNs() - startNs) * 1e-9 >= *seconds;
     };
     std::fprintf(stderr, "ugvsense record: waiting for frames on ugvsense/stereo/frames ...\n");
     ipc::TakenFrame frame;
-    while (!g_stop.load() && !(args.has("frames") && static_cast<double>(written) >= *frames) && !timeUp()) {
+    while (!g_stop.load() && !(args.has("frames") && static_cast<double>(tally.written) >= *frames) && !timeUp()) {
         // Oldest first: a recorder keeps every pair its queue holds.
-        const ipc::TakeStatus status = subscriber->takeOldest(frame, std::chrono::milliseconds(100));
-        if (status != ipc::TakeStatus::Frame) {
+        if (subscriber->takeOldest(frame, std::chrono::milliseconds(100)) != ipc::TakeStatus::Frame) {
             continue;
         }
-        const FrameHeader& h = frame.header;
-        if (!writer) {
-            auto opened = openWriter(args, *calibration, h);
-            if (!opened) {
-                subscriber->release(frame);
-                return fail(opened.error());
-            }
-            writer.emplace(std::move(*opened));
-            firstSequence = h.sequence;
-        } else if (h.sequence > lastSequence + 1) {
-            missed += h.sequence - lastSequence - 1;
+        if (const auto exit = recordFrame(*subscriber, frame, args, *calibration, writer, tally)) {
+            return *exit;
         }
-        lastSequence = h.sequence;
-        const auto appended =
-            writer->append(h.sequence, h.leftStampNs, h.rightStampNs, frame.views.left, frame.views.right);
-        subscriber->release(frame);
-        if (!appended) {
-            std::fprintf(stderr,
-                         "ugvsense record: error: %s: cannot append: %s (%s); the %llu frames before are kept "
-                         "(fix: free space on the device)\n",
-                         args.get("out").c_str(), appended.error().text(), appended.error().name(),
-                         static_cast<unsigned long long>(written));
-            return 1;
-        }
-        ++written;
     }
     if (!writer) {
         std::fprintf(stderr, "ugvsense record: no frame arrived; nothing written (is ugvsensed running?)\n");
@@ -166,9 +172,9 @@ int runRecord(int argc, char** argv)
         return fail(Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
     }
     std::printf("recorded %llu frame(s) to %s (sequence %llu..%llu; %llu missed by the recorder)\n",
-                static_cast<unsigned long long>(written), args.get("out").c_str(),
-                static_cast<unsigned long long>(firstSequence), static_cast<unsigned long long>(lastSequence),
-                static_cast<unsigned long long>(missed));
+                static_cast<unsigned long long>(tally.written), args.get("out").c_str(),
+                static_cast<unsigned long long>(tally.firstSequence),
+                static_cast<unsigned long long>(tally.lastSequence), static_cast<unsigned long long>(tally.missed));
     return 0;
 }
 

@@ -123,6 +123,40 @@ Result<std::map<std::size_t, std::int64_t>, Error> readTimestamps(const std::str
     return stamps;
 }
 
+/// Appends the pairs to the recording, stamped from `stamps` (by index) or else at `fps`; a pair that is
+/// unreadable or not of `size` is skipped with a warning. The number skipped.
+Result<std::size_t, Error> appendPairs(hal::RecordingWriter& writer, const std::vector<PairFiles>& pairs, cv::Size size,
+                                       const std::map<std::size_t, std::int64_t>& stamps, const Args& args, double fps)
+{
+    std::size_t skipped = 0;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        const PairFiles& pair = pairs[k];
+        const cv::Mat left = readGrey(pair.left);
+        const cv::Mat right = readGrey(pair.right);
+        if (left.empty() || right.empty() || left.size() != size || right.size() != size) {
+            std::cerr << "ugvsense recording: warning: skipped " << pair.name
+                      << ": unreadable, or not the size of the first pair (" << size.width << "x" << size.height
+                      << ")\n";
+            ++skipped;
+            continue;
+        }
+        const auto it = stamps.find(k);
+        if (!stamps.empty() && it == stamps.end()) {
+            return Unexpected(Error{args.get("timestamps"),
+                                    "no timestamp for pair " + std::to_string(k) + " (" + pair.name + ")",
+                                    "give one line per pair, or leave out --timestamps to use --fps"});
+        }
+        const std::int64_t stamp = it != stamps.end()
+                                       ? it->second
+                                       : static_cast<std::int64_t>(std::llround(static_cast<double>(k) / fps * 1e9));
+        if (auto appended = writer.append(k, stamp, stamp, viewOf(left), viewOf(right)); !appended) {
+            return Unexpected(Error{args.get("out"), std::string("cannot append: ") + appended.error().text(),
+                                    "check the free space"});
+        }
+    }
+    return skipped;
+}
+
 int runImport(const Args& args)
 {
     for (const char* needed : {"pairs", "calib", "out"}) {
@@ -181,37 +215,15 @@ int runImport(const Args& args)
     if (!writer) {
         return fail(writer.error());
     }
-    std::size_t skipped = 0;
-    for (std::size_t k = 0; k < listing->pairs.size(); ++k) {
-        const PairFiles& pair = listing->pairs[k];
-        const cv::Mat left = readGrey(pair.left);
-        const cv::Mat right = readGrey(pair.right);
-        if (left.empty() || right.empty() || left.size() != first.size() || right.size() != first.size()) {
-            std::cerr << "ugvsense recording: warning: skipped " << pair.name
-                      << ": unreadable, or not the size of the first pair (" << first.cols << "x" << first.rows
-                      << ")\n";
-            ++skipped;
-            continue;
-        }
-        const auto it = stamps.find(k);
-        if (!stamps.empty() && it == stamps.end()) {
-            return fail(Error{args.get("timestamps"),
-                              "no timestamp for pair " + std::to_string(k) + " (" + pair.name + ")",
-                              "give one line per pair, or leave out --timestamps to use --fps"});
-        }
-        const std::int64_t stamp = it != stamps.end()
-                                       ? it->second
-                                       : static_cast<std::int64_t>(std::llround(static_cast<double>(k) / *fps * 1e9));
-        if (auto appended = writer->append(k, stamp, stamp, viewOf(left), viewOf(right)); !appended) {
-            return fail(Error{args.get("out"), std::string("cannot append: ") + appended.error().text(),
-                              "check the free space"});
-        }
+    const auto skipped = appendPairs(*writer, listing->pairs, first.size(), stamps, args, *fps);
+    if (!skipped) {
+        return fail(skipped.error());
     }
     if (auto closed = writer->close(); !closed) {
         return fail(Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
     }
     std::printf("imported %llu pair(s) of %zu (%zu skipped) into %s (%dx%d)\n",
-                static_cast<unsigned long long>(writer->framesWritten()), listing->pairs.size(), skipped,
+                static_cast<unsigned long long>(writer->framesWritten()), listing->pairs.size(), *skipped,
                 args.get("out").c_str(), first.cols, first.rows);
     return 0;
 }

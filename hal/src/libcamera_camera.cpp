@@ -87,6 +87,85 @@ struct LibcameraStereoCamera::Impl {
     void onRight(libcamera::Request* request) { complete(right, request); }
 };
 
+namespace {
+
+/// Acquires `cam` and configures its stream: frameWidth x height YUV420 (the Y plane is used), kBuffers buffers.
+Result<void, Error> configureSide(Side& side, const std::shared_ptr<libcamera::Camera>& cam, const std::string& name,
+                                  int frameWidth, int height)
+{
+    side.camera = cam;
+    if (cam->acquire() != 0) {
+        return Unexpected(Error{name, "the camera is in use by another process", "stop the other user"});
+    }
+    side.acquired = true;
+    side.config = cam->generateConfiguration({libcamera::StreamRole::Viewfinder});
+    if (!side.config || side.config->empty()) {
+        return Unexpected(Error{name, "cannot generate a stream configuration", "check the camera"});
+    }
+    libcamera::StreamConfiguration& stream = side.config->at(0);
+    stream.pixelFormat = libcamera::formats::YUV420;
+    stream.size = libcamera::Size(static_cast<unsigned>(frameWidth), static_cast<unsigned>(height));
+    stream.bufferCount = kBuffers;
+    if (side.config->validate() == libcamera::CameraConfiguration::Invalid ||
+        stream.size.width != static_cast<unsigned>(frameWidth) || stream.size.height != static_cast<unsigned>(height) ||
+        stream.pixelFormat != libcamera::formats::YUV420) {
+        return Unexpected(Error{name,
+                                "cannot deliver " + std::to_string(frameWidth) + "x" + std::to_string(height) +
+                                    " YUV420 (it offers " + stream.toString() + ")",
+                                "set camera.width/height to a mode the camera has"});
+    }
+    if (cam->configure(side.config.get()) != 0) {
+        return Unexpected(Error{name, "configure failed", "check the camera"});
+    }
+    side.stream = stream.stream();
+    side.stride = stream.stride;
+    return {};
+}
+
+/// Allocates the side's frame buffers, maps their Y planes and makes one capture request per buffer.
+Result<void, Error> mapBuffers(Side& side, const std::string& name)
+{
+    side.allocator = std::make_unique<libcamera::FrameBufferAllocator>(side.camera);
+    if (side.allocator->allocate(side.stream) < 0) {
+        return Unexpected(Error{name, "cannot allocate frame buffers", "check the memory limits"});
+    }
+    for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : side.allocator->buffers(side.stream)) {
+        const libcamera::FrameBuffer::Plane& y = buffer->planes()[0];
+        const std::size_t length = y.offset + y.length;
+        void* address = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, y.fd.get(), 0);
+        if (address == MAP_FAILED) {
+            return Unexpected(Error{name, "cannot map a frame buffer", "check the memory limits"});
+        }
+        side.maps[buffer.get()] = Side::Mapping{address, length};
+        std::unique_ptr<libcamera::Request> request = side.camera->createRequest();
+        if (!request || request->addBuffer(side.stream, buffer.get()) != 0) {
+            return Unexpected(Error{name, "cannot create a capture request", "check the camera"});
+        }
+        side.requests.push_back(std::move(request));
+    }
+    return {};
+}
+
+/// Starts the side's camera at `fps` and queues its requests.
+Result<void, Error> startSide(Side& side, const std::string& name, double fps)
+{
+    libcamera::ControlList controls;
+    const auto frameUs = static_cast<std::int64_t>(std::llround(1e6 / fps));
+    controls.set(libcamera::controls::FrameDurationLimits, {frameUs, frameUs});
+    if (side.camera->start(&controls) != 0) {
+        return Unexpected(Error{name, "start failed", "check the camera"});
+    }
+    side.started = true;
+    for (const std::unique_ptr<libcamera::Request>& request : side.requests) {
+        if (side.camera->queueRequest(request.get()) != 0) {
+            return Unexpected(Error{name, "cannot queue a capture request", "check the camera"});
+        }
+    }
+    return {};
+}
+
+} // namespace
+
 LibcameraStereoCamera::LibcameraStereoCamera(const LibcameraOptions& options) : options_(options)
 {
     period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
@@ -147,66 +226,14 @@ Result<void, Error> LibcameraStereoCamera::start()
         if (!cam) {
             return Unexpected(Error{name, "no camera with this id", "list the ids with `cam --list`"});
         }
-        side.camera = cam;
-        if (cam->acquire() != 0) {
-            return Unexpected(Error{name, "the camera is in use by another process", "stop the other user"});
+        if (auto configured = configureSide(side, cam, name, frameWidth, options_.height); !configured) {
+            return configured;
         }
-        side.acquired = true;
-        side.config = cam->generateConfiguration({libcamera::StreamRole::Viewfinder});
-        if (!side.config || side.config->empty()) {
-            return Unexpected(Error{name, "cannot generate a stream configuration", "check the camera"});
-        }
-        libcamera::StreamConfiguration& stream = side.config->at(0);
-        stream.pixelFormat = libcamera::formats::YUV420;
-        stream.size = libcamera::Size(static_cast<unsigned>(frameWidth), static_cast<unsigned>(options_.height));
-        stream.bufferCount = kBuffers;
-        if (side.config->validate() == libcamera::CameraConfiguration::Invalid ||
-            stream.size.width != static_cast<unsigned>(frameWidth) ||
-            stream.size.height != static_cast<unsigned>(options_.height) ||
-            stream.pixelFormat != libcamera::formats::YUV420) {
-            return Unexpected(Error{name,
-                                    "cannot deliver " + std::to_string(frameWidth) + "x" +
-                                        std::to_string(options_.height) + " YUV420 (it offers " + stream.toString() +
-                                        ")",
-                                    "set camera.width/height to a mode the camera has"});
-        }
-        if (cam->configure(side.config.get()) != 0) {
-            return Unexpected(Error{name, "configure failed", "check the camera"});
-        }
-        side.stream = stream.stream();
-        side.stride = stream.stride;
-        side.allocator = std::make_unique<libcamera::FrameBufferAllocator>(cam);
-        if (side.allocator->allocate(side.stream) < 0) {
-            return Unexpected(Error{name, "cannot allocate frame buffers", "check the memory limits"});
-        }
-        for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : side.allocator->buffers(side.stream)) {
-            const libcamera::FrameBuffer::Plane& y = buffer->planes()[0];
-            const std::size_t length = y.offset + y.length;
-            void* address = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, y.fd.get(), 0);
-            if (address == MAP_FAILED) {
-                return Unexpected(Error{name, "cannot map a frame buffer", "check the memory limits"});
-            }
-            side.maps[buffer.get()] = Side::Mapping{address, length};
-            std::unique_ptr<libcamera::Request> request = cam->createRequest();
-            if (!request || request->addBuffer(side.stream, buffer.get()) != 0) {
-                return Unexpected(Error{name, "cannot create a capture request", "check the camera"});
-            }
-            side.requests.push_back(std::move(request));
+        if (auto mapped = mapBuffers(side, name); !mapped) {
+            return mapped;
         }
         cam->requestCompleted.connect(impl_.get(), handler);
-        libcamera::ControlList controls;
-        const auto frameUs = static_cast<std::int64_t>(std::llround(1e6 / options_.fps));
-        controls.set(libcamera::controls::FrameDurationLimits, {frameUs, frameUs});
-        if (cam->start(&controls) != 0) {
-            return Unexpected(Error{name, "start failed", "check the camera"});
-        }
-        side.started = true;
-        for (const std::unique_ptr<libcamera::Request>& request : side.requests) {
-            if (cam->queueRequest(request.get()) != 0) {
-                return Unexpected(Error{name, "cannot queue a capture request", "check the camera"});
-            }
-        }
-        return {};
+        return startSide(side, name, options_.fps);
     };
     if (auto left = setUp(impl_->left, pick(options_.leftId, 0), options_.leftId, &Impl::onLeft); !left) {
         stop();

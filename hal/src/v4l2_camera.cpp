@@ -119,30 +119,41 @@ Result<std::unique_ptr<V4l2StereoCamera>, Error> V4l2StereoCamera::open(const V4
     return camera;
 }
 
-Result<void, Error> V4l2StereoCamera::start(Device& device, int frameWidth)
+namespace {
+
+/// An error of one camera device: what failed, with errno's text when `code` is not 0.
+Error deviceError(const V4l2StereoCamera::Device& device, const std::string& what, int code, const std::string& fix)
 {
-    const auto fail = [&](const std::string& what, int code, const std::string& fix) {
-        const SysError e{code};
-        stop(device);
-        return Unexpected(
-            Error{device.path, what + (code != 0 ? std::string(": ") + e.text() + " (" + e.name() + ")" : ""), fix});
-    };
-    device.frameWidth = frameWidth;
+    const SysError e{code};
+    return Error{device.path, what + (code != 0 ? std::string(": ") + e.text() + " (" + e.name() + ")" : ""), fix};
+}
+
+} // namespace
+
+Result<void, Error> V4l2StereoCamera::openDevice(Device& device)
+{
     device.fd = ops_.open(ops_.context, device.path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
     if (device.fd < 0) {
-        return fail("cannot open the camera", errno,
-                    errno == EACCES ? "add the service user to group video"
-                                    : "check camera.left_device/right_device and that the camera is plugged in");
+        return Unexpected(deviceError(device, "cannot open the camera", errno,
+                                      errno == EACCES
+                                          ? "add the service user to group video"
+                                          : "check camera.left_device/right_device and that the camera is plugged in"));
     }
     v4l2_capability cap{};
     if (ops_.ioctl(ops_.context, device.fd, VIDIOC_QUERYCAP, &cap) != 0) {
-        return fail("VIDIOC_QUERYCAP failed: not a V4L2 device?", errno, "give a /dev/videoN capture node");
+        return Unexpected(deviceError(device, "VIDIOC_QUERYCAP failed: not a V4L2 device?", errno,
+                                      "give a /dev/videoN capture node"));
     }
     const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
     if ((caps & V4L2_CAP_VIDEO_CAPTURE) == 0 || (caps & V4L2_CAP_STREAMING) == 0) {
-        return fail("is not a streaming video capture device", 0,
-                    "give the capture node of the camera (v4l2-ctl --list-devices)");
+        return Unexpected(deviceError(device, "is not a streaming video capture device", 0,
+                                      "give the capture node of the camera (v4l2-ctl --list-devices)"));
     }
+    return {};
+}
+
+Result<void, Error> V4l2StereoCamera::setFormat(Device& device, int frameWidth)
+{
     v4l2_format fmt{};
     fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     fmt.fmt.pix.width = static_cast<std::uint32_t>(frameWidth);
@@ -150,31 +161,42 @@ Result<void, Error> V4l2StereoCamera::start(Device& device, int frameWidth)
     fmt.fmt.pix.pixelformat = fourcc(options_.format);
     fmt.fmt.pix.field = V4L2_FIELD_NONE;
     if (ops_.ioctl(ops_.context, device.fd, VIDIOC_S_FMT, &fmt) != 0) {
-        return fail("VIDIOC_S_FMT failed", errno, "check camera.width/height against v4l2-ctl --list-formats-ext");
+        return Unexpected(deviceError(device, "VIDIOC_S_FMT failed", errno,
+                                      "check camera.width/height against v4l2-ctl --list-formats-ext"));
     }
     if (fmt.fmt.pix.width != static_cast<std::uint32_t>(frameWidth) ||
         fmt.fmt.pix.height != static_cast<std::uint32_t>(options_.height) ||
         fmt.fmt.pix.pixelformat != fourcc(options_.format)) {
-        return fail("offers " + std::to_string(fmt.fmt.pix.width) + "x" + std::to_string(fmt.fmt.pix.height) + " " +
-                        fourccText(fmt.fmt.pix.pixelformat) + " instead of " + std::to_string(frameWidth) + "x" +
-                        std::to_string(options_.height) + " " + fourccText(fourcc(options_.format)),
-                    0, "set camera.width/height/format to a mode the camera has (v4l2-ctl --list-formats-ext)");
+        return Unexpected(
+            deviceError(device,
+                        "offers " + std::to_string(fmt.fmt.pix.width) + "x" + std::to_string(fmt.fmt.pix.height) + " " +
+                            fourccText(fmt.fmt.pix.pixelformat) + " instead of " + std::to_string(frameWidth) + "x" +
+                            std::to_string(options_.height) + " " + fourccText(fourcc(options_.format)),
+                        0, "set camera.width/height/format to a mode the camera has (v4l2-ctl --list-formats-ext)"));
     }
     const std::uint32_t bytesPerPixel = options_.format == V4l2Format::Yuyv ? 2 : 1;
     if (fmt.fmt.pix.bytesperline < static_cast<std::uint32_t>(frameWidth) * bytesPerPixel) {
-        return fail("reports a line shorter than its width", 0, "a driver bug: try another format");
+        return Unexpected(
+            deviceError(device, "reports a line shorter than its width", 0, "a driver bug: try another format"));
     }
+    device.stride = fmt.fmt.pix.bytesperline;
     v4l2_streamparm parm{};
     parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     parm.parm.capture.timeperframe.numerator = 1000;
     parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(options_.fps * 1000.0));
     (void)ops_.ioctl(ops_.context, device.fd, VIDIOC_S_PARM, &parm); // a fixed-rate camera may refuse: fine
+    return {};
+}
+
+Result<void, Error> V4l2StereoCamera::mapBuffers(Device& device)
+{
     v4l2_requestbuffers req{};
     req.count = static_cast<std::uint32_t>(options_.buffers);
     req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     req.memory = V4L2_MEMORY_MMAP;
     if (ops_.ioctl(ops_.context, device.fd, VIDIOC_REQBUFS, &req) != 0 || req.count < 2) {
-        return fail("VIDIOC_REQBUFS (MMAP) failed", errno, "the driver must support MMAP streaming");
+        return Unexpected(
+            deviceError(device, "VIDIOC_REQBUFS (MMAP) failed", errno, "the driver must support MMAP streaming"));
     }
     device.buffers = static_cast<int>(std::min<std::uint32_t>(req.count, kMaxBuffers));
     for (int i = 0; i < device.buffers; ++i) {
@@ -183,23 +205,43 @@ Result<void, Error> V4l2StereoCamera::start(Device& device, int frameWidth)
         buf.memory = V4L2_MEMORY_MMAP;
         buf.index = static_cast<std::uint32_t>(i);
         if (ops_.ioctl(ops_.context, device.fd, VIDIOC_QUERYBUF, &buf) != 0) {
-            return fail("VIDIOC_QUERYBUF failed", errno, "check the driver");
+            return Unexpected(deviceError(device, "VIDIOC_QUERYBUF failed", errno, "check the driver"));
         }
         void* map = ops_.mmap(ops_.context, buf.length, device.fd, buf.m.offset);
         if (map == MAP_FAILED) {
-            return fail("mmap of a capture buffer failed", errno, "check the driver and the memory limits");
+            return Unexpected(deviceError(device, "mmap of a capture buffer failed", errno,
+                                          "check the driver and the memory limits"));
         }
         device.maps[static_cast<std::size_t>(i)] = map;
         device.lengths[static_cast<std::size_t>(i)] = buf.length;
         if (ops_.ioctl(ops_.context, device.fd, VIDIOC_QBUF, &buf) != 0) {
-            return fail("VIDIOC_QBUF failed", errno, "check the driver");
+            return Unexpected(deviceError(device, "VIDIOC_QBUF failed", errno, "check the driver"));
         }
+    }
+    return {};
+}
+
+Result<void, Error> V4l2StereoCamera::start(Device& device, int frameWidth)
+{
+    device.frameWidth = frameWidth;
+    if (auto opened = openDevice(device); !opened) {
+        stop(device);
+        return opened;
+    }
+    if (auto formatted = setFormat(device, frameWidth); !formatted) {
+        stop(device);
+        return formatted;
+    }
+    if (auto mapped = mapBuffers(device); !mapped) {
+        stop(device);
+        return mapped;
     }
     int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     if (ops_.ioctl(ops_.context, device.fd, VIDIOC_STREAMON, &type) != 0) {
-        return fail("VIDIOC_STREAMON failed", errno, "another process may hold the camera");
+        Error e = deviceError(device, "VIDIOC_STREAMON failed", errno, "another process may hold the camera");
+        stop(device);
+        return Unexpected(std::move(e));
     }
-    device.stride = fmt.fmt.pix.bytesperline;
     device.haveSequence = false;
     device.held = -1;
     return {};

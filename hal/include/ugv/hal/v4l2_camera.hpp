@@ -94,6 +94,9 @@ public:
 private:
     V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops);
     Result<void, Error> start(Device& device, int frameWidth);
+    Result<void, Error> openDevice(Device& device);                ///< open, and check it is a capture device
+    Result<void, Error> setFormat(Device& device, int frameWidth); ///< size, pixel format and rate
+    Result<void, Error> mapBuffers(Device& device);                ///< MMAP buffers, mapped and queued
     void stop(Device& device) noexcept;
     /// Dequeues the next buffer of `device` within `timeoutMs`; Frame, Timeout or Disconnected.
     GrabStatus dequeue(Device& device, int timeoutMs) noexcept;
