@@ -128,7 +128,7 @@ int reportUsageError(const std::string& command, const Error& error)
     return 2;
 }
 
-std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command)
+std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command, Positionals positionals)
 {
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {
         return reportUsageError(command, parsed.error());
@@ -137,7 +137,7 @@ std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::str
         std::cout << args.usage();
         return 0;
     }
-    if (!args.positional().empty()) {
+    if (positionals == Positionals::Refused && !args.positional().empty()) {
         return reportUsageError(command,
                                 Error{"ugvsense " + command, "unexpected argument '" + args.positional().front() + "'",
                                       "see 'ugvsense " + command + " --help'"});

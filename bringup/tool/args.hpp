@@ -54,8 +54,13 @@ private:
 /// for usage errors, which callers return from main.
 int reportUsageError(const std::string& command, const Error& error);
 
-/// The opening of a subcommand: parses argv[2..], prints the usage for --help, rejects positional arguments.
+/// Whether a subcommand takes positional arguments (a TOPIC, an action) besides its options.
+enum class Positionals : bool { Refused, Allowed };
+
+/// The opening of a subcommand: parses argv[2..], prints the usage for --help, rejects positional arguments unless
+/// they are allowed.
 /// @return the exit code to return now (0 after --help, 2 on a usage error), or nothing to go on.
-std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command);
+std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command,
+                               Positionals positionals = Positionals::Refused);
 
 } // namespace ugv::tool

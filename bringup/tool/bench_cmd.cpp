@@ -192,12 +192,8 @@ int runBench(int argc, char** argv)
          {"one-core", "", "pin the three tasks to CPU 0 (the one-core budget)", false},
          {"sweep", "", "find the highest rate without deadline misses", false},
          {"config", "FILE", "service config (default: built-in defaults)", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError(kCommand, parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+        return *exit;
     }
     const auto rate = args.number("rate", 0.0, 0.0, 1000.0);
     const auto frames = args.number("frames", 300, 20, 1e9);

@@ -467,12 +467,8 @@ int runListen(int argc, char** argv)
         "  graph: which nodes each participant holds), or a wire name\n"
         "  (ugvsense/ooi/observations, rt/NS/obstacle_scan, ros_discovery_info, ...)",
         specs);
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError(kCommand, parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand, Positionals::Allowed)) {
+        return *exit;
     }
     const std::string where = std::string("ugvsense ") + kCommand;
     if (args.positional().size() != 1) {

@@ -309,12 +309,8 @@ int runRecording(int argc, char** argv)
                {"fps", "F", "import: frame rate when there are no timestamps, default 10", false},
                {"force", "", "import: overwrite an existing recording", false},
                {"frame", "N", "export: only frame N (0-based, in file order)", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError(kCommand, parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand, Positionals::Allowed)) {
+        return *exit;
     }
     const std::string action = args.positional().empty() ? std::string() : args.positional()[0];
     if (action == "info") {

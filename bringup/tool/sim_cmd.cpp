@@ -510,12 +510,8 @@ int runSim(int argc, char** argv)
           "reflectance 0..1)",
           false},
          {"glossy", "REFL", "simulator scene: the whole floor mirrors with this reflectance (0..1)", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError("sim", parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, "sim")) {
+        return *exit;
     }
     if (args.has("list")) {
         std::string conditions;

@@ -309,12 +309,8 @@ int runSoak(int argc, char** argv)
                {"json", "OUT", "write the windows and the service's report as JSON", false},
                {"max-rss-growth-kb", "KB", "exit 3 when the RSS grew more than this after warm-up", false},
                {"config", "FILE", "service config (default: built-in defaults)", false}});
-    if (auto parsed = args.parse(argc, argv, 2); !parsed) {
-        return reportUsageError(kCommand, parsed.error());
-    }
-    if (args.helpRequested()) {
-        std::cout << args.usage();
-        return 0;
+    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+        return *exit;
     }
     const auto plan = readPlan(args);
     if (!plan) {
