@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 host (see README "Quick start"):
 #   toolchain/host.sh run    install missing packages, build (release), run the main job on the embedded default
-#   toolchain/host.sh test   install missing packages, build (release + asan), run every test with a summary
+#   toolchain/host.sh test   install missing packages, build (release, asan, tsan), run every test with a summary
 #   toolchain/host.sh deps   only install the Debian packages
 #   toolchain/host.sh build  only configure and build the release preset
 #   toolchain/host.sh package  build the release preset and the Debian package (build/release/package/*.deb)
-# Environment: UGV_SHARED_DATA (real test data, default ../shared/data), UGV_SKIP_ASAN=1 (test: release only).
+# Environment: UGV_SHARED_DATA (real test data, default ../shared/data), UGV_SKIP_ASAN=1, UGV_SKIP_TSAN=1 (test: skip that preset).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -106,6 +106,11 @@ run_tests() {
         ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:new_delete_type_mismatch=0 \
             UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
             ctest --preset asan -j "$(nproc)" || status=1
+    fi
+    if [ "${UGV_SKIP_TSAN:-0}" != 1 ]; then
+        build tsan
+        echo "== tsan (thread sanitizer): the unit tests that start threads (platform, rt, the service)"
+        ctest --preset tsan -j "$(nproc)" || status=1
     fi
     return $status
 }

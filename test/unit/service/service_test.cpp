@@ -287,7 +287,7 @@ TEST_F(ServiceTest, AStalledBusNeverHoldsUpAFrame)
                 static_cast<unsigned long long>(bus.frames.load()), static_cast<unsigned long long>(during.busDrops));
     EXPECT_EQ(during.framesPublished + during.framesDropped, kFrames);
     // One frame stuck in onFrame, 8 in the ring (SpscRing<BusFrame, 8> holds 7 or 8), the rest dropped.
-    EXPECT_GE(during.busDrops, during.framesPublished - 9);
+    EXPECT_GE(during.busDrops + 9, during.framesPublished); // (a slow build publishes fewer than 9)
     EXPECT_LE(bus.frames.load(), 10U);
     EXPECT_EQ(report.framesPublished, during.framesPublished);
 }
