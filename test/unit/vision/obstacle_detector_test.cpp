@@ -189,7 +189,8 @@ TEST(ObstacleDetector, MismatchLabelsMarkThePoleOnTheLeftGrid)
         for (int x = 0; x < labels.width(); ++x) {
             if (labels.at(x, y) == static_cast<std::uint8_t>(GroundLabel::Positive)) {
                 ++positive;
-                onPole += frame.labels.at<std::uint8_t>(kRoi.y + y, x) == 1 ? 1 : 0;
+                const auto truth = static_cast<sim::Label>(frame.labels.at<std::uint8_t>(kRoi.y + y, x));
+                onPole += truth == sim::Label::Positive ? 1 : 0;
             }
         }
     }

@@ -130,7 +130,7 @@ TEST(RoiMatcher, PoleAtFiveMetresWithinHalfPixel)
     for (int y = kFirstRow; y < frame.disparity.rows; ++y) {
         for (int x = 0; x < frame.disparity.cols; ++x) {
             const std::int16_t d = sut.disparity16().at<std::int16_t>(y - kRoiY, x);
-            if (frame.labels.at<std::uint8_t>(y, x) == 1 && d >= 0) {
+            if (static_cast<sim::Label>(frame.labels.at<std::uint8_t>(y, x)) == sim::Label::Positive && d >= 0) {
                 errors.push_back(std::fabs(d / 16.0 - frame.disparity.at<float>(y, x)));
             }
         }
