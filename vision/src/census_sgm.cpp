@@ -209,8 +209,7 @@ Result<CensusSgm, Error> CensusSgm::create(const CensusSgmConfig& config, cv::Si
 
 std::uint8_t* CensusSgm::pathEntry(int half, int path, int entry) noexcept
 {
-    const auto index = static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
-    return paths_.data() + index * static_cast<std::size_t>(stride_) + kPad;
+    return paths_.data() + entryIndex(half, path, entry) * static_cast<std::size_t>(stride_) + kPad;
 }
 
 void CensusSgm::census(ConstImageViewU8 image, std::uint8_t* planes, bool reversed) noexcept
@@ -309,46 +308,76 @@ void CensusSgm::searchRanges() noexcept
     searchedFraction_ = static_cast<double>(searched) / (static_cast<double>(d_) * height_);
 }
 
-void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int y) noexcept
-{
-    const bool useSimd = config_.simd;
-    const bool vertical = config_.paths >= 3;
-    const bool diagonals = config_.paths == 5;
-    // This row searches [lo, d_) (searchRanges). The path entries keep the full range's layout (entry k at index k:
-    // the next row reads them at its own range); cost_ and sum_ hold only this row's n entries per column (entry k
-    // at k - lo), so that a shorter range also touches less memory.
-    const int lo = rowLo_[static_cast<std::size_t>(y)];
-    const int n = d_ - lo;
-    const auto step = [&](const std::uint8_t* prev, int minPrev, const std::uint8_t* cost, std::uint8_t* out) {
+/// One row's search range [lo, lo + n) and the path step over it. The path entries keep the full range's layout
+/// (entry k at index k: the next row reads them at its own range); cost_ and sum_ hold only the row's n entries per
+/// column (entry k at k - lo), so that a shorter range also touches less memory.
+struct CensusSgm::RowRange {
+    int lo = 0;
+    int n = 0;
+    int p1 = 0;
+    int p2 = 0;
+    bool simd = false;
+
+    /// out = the path's costs at this column from prev, its costs at the previous column; @return min over out.
+    std::uint8_t step(const std::uint8_t* prev, int minPrev, const std::uint8_t* cost, std::uint8_t* out) const noexcept
+    {
 #if (CV_SIMD || CV_SIMD_SCALABLE)
-        if (useSimd) {
-            return simd::pathStepSimd(prev + lo, minPrev, cost, out + lo, n, config_.p1, config_.p2);
+        if (simd) {
+            return simd::pathStepSimd(prev + lo, minPrev, cost, out + lo, n, p1, p2);
         }
 #endif
-        return pathStepScalar(prev + lo, minPrev, cost, out + lo, n, config_.p1, config_.p2);
-    };
-    const auto guard = [lo](std::uint8_t* entry) {
+        return pathStepScalar(prev + lo, minPrev, cost, out + lo, n, p1, p2);
+    }
+
+    /// Saturates the kRangeGuard entries below lo (see kRangeGuard).
+    void guard(std::uint8_t* entry) const noexcept
+    {
         if (lo > 0) {
             std::memset(entry + lo - kRangeGuard, 255, kRangeGuard);
         }
-    };
-    const int prev = parity_;
-    const int cur = 1 - parity_;
+    }
+};
+
+std::size_t CensusSgm::entryIndex(int half, int path, int entry) const noexcept
+{
+    return static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
+}
+
+std::uint8_t* CensusSgm::horizontalEntry(int i) noexcept
+{
+    return horizontal_.data() + (1 + (i & 1)) * stride_ + kPad;
+}
+
+void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int y) noexcept
+{
+    const int lo = rowLo_[static_cast<std::size_t>(y)];
+    const RowRange range{lo, d_ - lo, config_.p1, config_.p2, config_.simd};
     // A row that searches lower than the row above: the row above's entries below its range hold values of older
     // rows. Saturate them (rare: the floor falls down the image only on a plane with b < 0).
     const int loAbove = y > 0 ? rowLo_[static_cast<std::size_t>(y - 1)] : 0;
-    if (loAbove > lo && (vertical || diagonals)) {
+    if (loAbove > lo && config_.paths >= 3) {
         const int from = std::max(0, lo - kRangeGuard);
         for (int path = 0; path < kPaths; ++path) {
             for (int e = 1; e <= cols_; ++e) {
-                std::memset(pathEntry(prev, path, e) + from, 255, static_cast<std::size_t>(loAbove - from));
+                std::memset(pathEntry(parity_, path, e) + from, 255, static_cast<std::size_t>(loAbove - from));
             }
         }
     }
-    const auto minIndex = [this](int half, int path, int entry) {
-        return static_cast<std::size_t>((half * kPaths + path) * (cols_ + 2) + entry);
-    };
-    std::uint8_t* border = horizontal_.data() + kPad; // never written: all 255
+    range.guard(horizontalEntry(0)); // the horizontal paths read the entry below lo of the previous column's
+    range.guard(horizontalEntry(1));
+    forwardPaths(range, above, y);
+    backwardPaths(range, disp);
+    parity_ = 1 - parity_;
+}
+
+void CensusSgm::forwardPaths(RowRange range, const std::int16_t* above, int y) noexcept
+{
+    const bool vertical = config_.paths >= 3;
+    const bool diagonals = config_.paths == 5;
+    const int lo = range.lo;
+    const int n = range.n;
+    const int prev = parity_;
+    const int cur = 1 - parity_;
     // The ground's step from the row above to this one (see setGroundPrior); the row above's ground at column x is
     // aboveGround0 + groundA_ x.
     const int groundStep = groundPrior_ && above != nullptr
@@ -356,18 +385,13 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
                                : 0;
     const double aboveGround0 = groundB_ * (y - 1) + groundC_;
     const double tolerance16 = config_.groundPriorTolerancePx * kScale;
-    const auto horizontal = [this](int i) { return horizontal_.data() + (1 + (i & 1)) * stride_ + kPad; };
-    guard(horizontal(0)); // the horizontal paths read the entry below lo of the previous column's
-    guard(horizontal(1));
-
-    // Forward: left-to-right, top, top-left and top-right; their sum into sum_.
-    const std::uint8_t* hPrev = border;
+    const std::uint8_t* hPrev = horizontal_.data() + kPad; // the border: never written, all 255
     int hMin = 255;
     for (int i = 0; i < cols_; ++i) {
         const int e = i + 1;
         const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * n;
-        std::uint8_t* h = horizontal(i);
-        hMin = step(hPrev, hMin, cost, h);
+        std::uint8_t* h = horizontalEntry(i);
+        hMin = range.step(hPrev, hMin, cost, h);
         hPrev = h;
         const std::uint8_t* top = zeros_.data();
         if (vertical) {
@@ -379,9 +403,9 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
                 shift = std::abs(onGround) < tolerance16 ? groundStep : 0;
             }
             // Entry k continues entry k - shift of the row above; the pads (255) stand in past the range ends.
-            pathMin_[minIndex(cur, 0, e)] =
-                step(pathEntry(prev, 0, e) - shift, pathMin_[minIndex(prev, 0, e)], cost, t);
-            guard(t);
+            pathMin_[entryIndex(cur, 0, e)] =
+                range.step(pathEntry(prev, 0, e) - shift, pathMin_[entryIndex(prev, 0, e)], cost, t);
+            range.guard(t);
             top = t;
         }
         const std::uint8_t* topLeft = zeros_.data();
@@ -389,39 +413,43 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
         if (diagonals) {
             std::uint8_t* tl = pathEntry(cur, 1, e);
             std::uint8_t* tr = pathEntry(cur, 2, e);
-            pathMin_[minIndex(cur, 1, e)] =
-                step(pathEntry(prev, 1, e - 1), pathMin_[minIndex(prev, 1, e - 1)], cost, tl);
-            pathMin_[minIndex(cur, 2, e)] =
-                step(pathEntry(prev, 2, e + 1), pathMin_[minIndex(prev, 2, e + 1)], cost, tr);
-            guard(tl);
-            guard(tr);
+            pathMin_[entryIndex(cur, 1, e)] =
+                range.step(pathEntry(prev, 1, e - 1), pathMin_[entryIndex(prev, 1, e - 1)], cost, tl);
+            pathMin_[entryIndex(cur, 2, e)] =
+                range.step(pathEntry(prev, 2, e + 1), pathMin_[entryIndex(prev, 2, e + 1)], cost, tr);
+            range.guard(tl);
+            range.guard(tr);
             topLeft = tl;
             topRight = tr;
         }
         std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * n;
 #if (CV_SIMD || CV_SIMD_SCALABLE)
-        if (useSimd) {
+        if (range.simd) {
             simd::sumFourSimd(h + lo, top + lo, topLeft + lo, topRight + lo, sum, n);
             continue;
         }
 #endif
         sumFourScalar(h + lo, top + lo, topLeft + lo, topRight + lo, sum, n);
     }
+}
 
-    // Backward: right-to-left completes each column's sum, then the winner of that column.
+void CensusSgm::backwardPaths(RowRange range, std::int16_t* disp) noexcept
+{
+    const int lo = range.lo;
+    const int n = range.n;
     std::fill(disp2Cost_.begin(), disp2Cost_.end(), kNoCost);
     std::fill(disp2_.begin(), disp2_.end(), kInvalid);
-    hPrev = border;
-    hMin = 255;
+    const std::uint8_t* hPrev = horizontal_.data() + kPad; // the border: never written, all 255
+    int hMin = 255;
     for (int i = cols_ - 1; i >= 0; --i) {
         const std::uint8_t* cost = cost_.data() + static_cast<std::ptrdiff_t>(i) * n;
-        std::uint8_t* h = horizontal(i);
-        hMin = step(hPrev, hMin, cost, h);
+        std::uint8_t* h = horizontalEntry(i);
+        hMin = range.step(hPrev, hMin, cost, h);
         hPrev = h;
         std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * n;
         std::uint16_t minSum = 0;
 #if (CV_SIMD || CV_SIMD_SCALABLE)
-        if (useSimd) {
+        if (range.simd) {
             minSum = simd::addAndMinSimd(h + lo, sum, n);
         } else {
             minSum = addAndMinScalar(h + lo, sum, n);
@@ -431,7 +459,6 @@ void CensusSgm::aggregateRow(std::int16_t* disp, const std::int16_t* above, int 
 #endif
         winner(i, lo, minSum, disp);
     }
-    parity_ = cur;
 }
 
 void CensusSgm::winner(int i, int lo, std::uint16_t minSum, std::int16_t* disp) noexcept

@@ -82,10 +82,14 @@ inline int slideAndIntersect(std::int16_t* window, const std::int16_t* enter, co
     return common;
 }
 
-} // namespace
+/// First ROI row [px]: roiTopFraction of the image height, rounded.
+int roiTopRow(const ColourFreeSpaceConfig& config, cv::Size imageSize)
+{
+    return static_cast<int>(std::lround(imageSize.height * config.roiTopFraction));
+}
 
-Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConfig& config, cv::Size imageSize,
-                                                       const RectifiedProjection& projection, const GroundPlane& ground)
+/// The config's sizes, fractions and thresholds against each other and the image size.
+Result<void, Error> checkConfig(const ColourFreeSpaceConfig& config, cv::Size imageSize)
 {
     const int r = config.windowRadius;
     const int win = 2 * r + 1;
@@ -102,7 +106,7 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
         return Unexpected(configError("roiTopFraction " + std::to_string(config.roiTopFraction) + " is outside [0, 1)",
                                       "use e.g. 0.5 (bottom half)"));
     }
-    const int roiTop = static_cast<int>(std::lround(imageSize.height * config.roiTopFraction));
+    const int roiTop = roiTopRow(config, imageSize);
     if (imageSize.height - roiTop < win) {
         return Unexpected(configError("the ROI has fewer rows than the window (" + std::to_string(win) + ")",
                                       "lower roiTopFraction or windowRadius"));
@@ -133,6 +137,17 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
         return Unexpected(configError("distances must be positive with dangerDistanceM <= cautionDistanceM",
                                       "use e.g. maxRangeM 50, danger 1.5, caution 5"));
     }
+    return {};
+}
+
+} // namespace
+
+Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConfig& config, cv::Size imageSize,
+                                                       const RectifiedProjection& projection, const GroundPlane& ground)
+{
+    if (auto valid = checkConfig(config, imageSize); !valid) {
+        return Unexpected(valid.error());
+    }
     if (!(projection.fx > 0.0) || !(projection.fy > 0.0)) {
         return Unexpected(Error{"RectifiedProjection", "focal length must be positive", "pass the calibration's"});
     }
@@ -146,8 +161,9 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
     sut.projection_ = projection;
     sut.ground_ = ground;
     sut.hfovDeg_ = static_cast<float>(2.0 * std::atan(imageSize.width / (2.0 * projection.fx)) * kRadToDeg);
+    const int roiTop = roiTopRow(config, imageSize);
     sut.roiTop_ = roiTop;
-    sut.binTop_ = std::max(0, roiTop - r);
+    sut.binTop_ = std::max(0, roiTop - config.windowRadius);
     sut.thresholdScore_ = static_cast<int>(std::lround(config.matchThreshold * kScoreMax));
     sut.selfScore_ = static_cast<int>(std::lround(config.patchSelfMatch * kScoreMax));
     sut.bins_ = Image<std::uint8_t>(imageSize.width, imageSize.height - sut.binTop_);

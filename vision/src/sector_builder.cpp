@@ -47,10 +47,7 @@ Error configError(const std::string& what)
     return Error{"SectorBuilderConfig", what, "see vision/include/ugv/vision/sector_builder.hpp"};
 }
 
-} // namespace
-
-Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& config,
-                                                   const RectifiedProjection& projection, Rect roi, int firstRow)
+Result<void, Error> checkConfig(const SectorBuilderConfig& config)
 {
     if (config.sectorCount < 1 || config.sectorCount > kMaxSectors) {
         return Unexpected(configError("sectorCount " + std::to_string(config.sectorCount) + " is not in 1.." +
@@ -83,6 +80,44 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
         return Unexpected(configError("a local-ground or drop-evidence setting is out of range (band, bin > 0, "
                                       "minPoints >= 1, share in [0, 1], maxWallSlope > 0, the others >= 0)"));
     }
+    return {};
+}
+
+/// The config with its vote counts scaled to this rig's pixels and maxRangeM from the rig when it is 0.
+SectorBuilderConfig rigConfig(const SectorBuilderConfig& config, const RectifiedProjection& projection)
+{
+    SectorBuilderConfig rig = config;
+    // Vote counts are pixels: a face of a given size at a given range covers (columns per sector) x (fy x its
+    // height / range) of them. The counts are set for the reference rig and scale with this rig's pixel density.
+    const double columnsPerSector = (2.0 * projection.cx + 1.0) / config.sectorCount;
+    const double pixelScale = columnsPerSector / static_cast<double>(config.referenceColumnsPerSector) * projection.fy /
+                              static_cast<double>(config.referenceFocalPx);
+    const auto scaled = [&](int count) { return std::max(1, static_cast<int>(std::lround(count * pixelScale))); };
+    rig.minSupport = scaled(config.minSupport);
+    rig.minFaceSupport = scaled(config.minFaceSupport);
+    rig.minTallVotes = scaled(config.minTallVotes);
+    rig.minFarTallVotes = scaled(config.minFarTallVotes);
+    rig.minDropSupport = scaled(config.minDropSupport);
+    rig.maxStrayVotes = scaled(config.maxStrayVotes);
+    rig.maxStrayDropVotes = scaled(config.maxStrayDropVotes);
+    rig.minRimVotes = config.minRimVotes == 0 ? 0 : scaled(config.minRimVotes);
+    rig.minClearFarVotes = config.minClearFarVotes == 0 ? 0 : scaled(config.minClearFarVotes);
+    rig.dropProfileMinPixels = scaled(config.dropProfileMinPixels);
+    if (config.maxRangeM == 0.0F) {
+        rig.maxRangeM =
+            static_cast<float>(projection.fx * projection.baselineM / static_cast<double>(config.maxRangeDisparityPx));
+    }
+    return rig;
+}
+
+} // namespace
+
+Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& config,
+                                                   const RectifiedProjection& projection, Rect roi, int firstRow)
+{
+    if (auto valid = checkConfig(config); !valid) {
+        return Unexpected(valid.error());
+    }
     if (!(projection.fx > 0.0) || !(projection.fy > 0.0) || !(projection.baselineM > 0.0)) {
         return Unexpected(Error{"SectorBuilder::create", "projection has no positive focal length and baseline", ""});
     }
@@ -92,27 +127,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     }
 
     SectorBuilder sut;
-    sut.config_ = config;
-    // Vote counts are pixels: a face of a given size at a given range covers (columns per sector) x (fy x its
-    // height / range) of them. The counts are set for the reference rig and scale with this rig's pixel density.
-    const double columnsPerSector = (2.0 * projection.cx + 1.0) / config.sectorCount;
-    const double pixelScale = columnsPerSector / static_cast<double>(config.referenceColumnsPerSector) * projection.fy /
-                              static_cast<double>(config.referenceFocalPx);
-    const auto scaled = [&](int count) { return std::max(1, static_cast<int>(std::lround(count * pixelScale))); };
-    sut.config_.minSupport = scaled(config.minSupport);
-    sut.config_.minFaceSupport = scaled(config.minFaceSupport);
-    sut.config_.minTallVotes = scaled(config.minTallVotes);
-    sut.config_.minFarTallVotes = scaled(config.minFarTallVotes);
-    sut.config_.minDropSupport = scaled(config.minDropSupport);
-    sut.config_.maxStrayVotes = scaled(config.maxStrayVotes);
-    sut.config_.maxStrayDropVotes = scaled(config.maxStrayDropVotes);
-    sut.config_.minRimVotes = config.minRimVotes == 0 ? 0 : scaled(config.minRimVotes);
-    sut.config_.minClearFarVotes = config.minClearFarVotes == 0 ? 0 : scaled(config.minClearFarVotes);
-    sut.config_.dropProfileMinPixels = scaled(config.dropProfileMinPixels);
-    if (config.maxRangeM == 0.0F) {
-        sut.config_.maxRangeM =
-            static_cast<float>(projection.fx * projection.baselineM / static_cast<double>(config.maxRangeDisparityPx));
-    }
+    sut.config_ = rigConfig(config, projection);
     if (!(sut.config_.maxRangeM > config.rangeBinM)) {
         return Unexpected(
             configError("maxRangeM " + std::to_string(sut.config_.maxRangeM) + " is not above rangeBinM"));
@@ -125,49 +140,60 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     const double width = 2.0 * projection.cx + 1.0;
     sut.hfovDeg_ = static_cast<float>(2.0 * std::atan(width / (2.0 * projection.fx)) * kRadToDeg);
     initSectors(sut.sectors_, config.sectorCount, sut.hfovDeg_);
+    sut.allocate();
+    sut.initSectorGeometry();
+    return sut;
+}
 
-    const auto n = static_cast<std::size_t>(config.sectorCount);
-    sut.histograms_.assign(n * kKinds * static_cast<std::size_t>(sut.bins_), 0U);
-    sut.extremes_.assign(sut.histograms_.size(), 0.0F);
-    sut.tallVotes_.assign(n * static_cast<std::size_t>(sut.bins_), 0U);
-    sut.groundByRange_.assign(sut.tallVotes_.size(), 0U);
-    sut.dropDistance_.assign(sut.tallVotes_.size(), 0.0F);
-    sut.wallBinRatio_ = std::max(1, static_cast<int>(std::lround(kWallBinM / config.rangeBinM)));
-    sut.wallBins_ = sut.bins_ / sut.wallBinRatio_ + 1;
-    sut.wallSums_.assign(n * static_cast<std::size_t>(sut.wallBins_), WallSums{});
-    sut.groundVotes_.assign(n, 0U);
-    sut.farGroundVotes_.assign(n, 0U);
-    sut.profileRows_ = roi.y + roi.height - firstRow;
-    sut.rowCount_.assign(n * static_cast<std::size_t>(sut.profileRows_), 0U);
-    sut.rowResidual_.assign(sut.rowCount_.size(), 0.0F);
-    sut.rowCrossing_.assign(sut.rowCount_.size(), 0.0F);
-    sut.rowDisparity_.assign(sut.rowCount_.size(), 0.0F);
-    sut.rowDropLabels_.assign(sut.rowCount_.size(), 0U);
-    sut.noiseHistogram_.assign(256, 0U);
-    sut.kindVotes_.assign(n * kKinds, 0U);
-    sut.points_.resize(static_cast<std::size_t>(roi.width) * static_cast<std::size_t>(sut.profileRows_));
-    sut.localGround_.configure(config.localGround, config.sectorCount, sut.config_.maxRangeM);
-    sut.pixelsPerSector_.assign(n, 0U);
-    const float binDeg = sut.hfovDeg_ / static_cast<float>(config.sectorCount);
-    sut.boundaryCos_.assign(n + 1, 0.0);
-    sut.boundarySin_.assign(n + 1, 0.0);
-    sut.boundary0_.assign(n + 1, 0.0);
-    sut.boundary1_.assign(n + 1, 0.0);
+void SectorBuilder::allocate()
+{
+    const auto n = static_cast<std::size_t>(config_.sectorCount);
+    const auto bins = static_cast<std::size_t>(bins_);
+    histograms_.assign(n * kKinds * bins, 0U);
+    extremes_.assign(histograms_.size(), 0.0F);
+    tallVotes_.assign(n * bins, 0U);
+    groundByRange_.assign(tallVotes_.size(), 0U);
+    dropDistance_.assign(tallVotes_.size(), 0.0F);
+    wallBinRatio_ = std::max(1, static_cast<int>(std::lround(kWallBinM / config_.rangeBinM)));
+    wallBins_ = bins_ / wallBinRatio_ + 1;
+    wallSums_.assign(n * static_cast<std::size_t>(wallBins_), WallSums{});
+    groundVotes_.assign(n, 0U);
+    farGroundVotes_.assign(n, 0U);
+    profileRows_ = roi_.y + roi_.height - firstRow_;
+    rowCount_.assign(n * static_cast<std::size_t>(profileRows_), 0U);
+    rowResidual_.assign(rowCount_.size(), 0.0F);
+    rowCrossing_.assign(rowCount_.size(), 0.0F);
+    rowDisparity_.assign(rowCount_.size(), 0.0F);
+    rowDropLabels_.assign(rowCount_.size(), 0U);
+    noiseHistogram_.assign(256, 0U);
+    kindVotes_.assign(n * kKinds, 0U);
+    points_.resize(static_cast<std::size_t>(roi_.width) * static_cast<std::size_t>(profileRows_));
+    localGround_.configure(config_.localGround, config_.sectorCount, config_.maxRangeM);
+    pixelsPerSector_.assign(n, 0U);
+    boundaryCos_.assign(n + 1, 0.0);
+    boundarySin_.assign(n + 1, 0.0);
+    boundary0_.assign(n + 1, 0.0);
+    boundary1_.assign(n + 1, 0.0);
+}
+
+void SectorBuilder::initSectorGeometry() noexcept
+{
+    const auto n = static_cast<std::size_t>(config_.sectorCount);
+    const float binDeg = hfovDeg_ / static_cast<float>(config_.sectorCount);
     for (std::size_t k = 0; k <= n; ++k) {
         // The reference's sector is floor((bearing + hfov / 2) / binDeg) in float: boundary k at k binDeg - hfov / 2.
-        const double b = (static_cast<double>(k) * binDeg - sut.hfovDeg_ / 2.0) / kRadToDeg;
-        sut.boundaryCos_[k] = std::cos(b);
-        sut.boundarySin_[k] = std::sin(b);
+        const double b = (static_cast<double>(k) * binDeg - hfovDeg_ / 2.0) / kRadToDeg;
+        boundaryCos_[k] = std::cos(b);
+        boundarySin_[k] = std::sin(b);
     }
-    const auto rows = static_cast<std::uint32_t>(roi.y + roi.height - firstRow);
-    for (int x = 0; x < roi.width; ++x) {
-        const double bearing = std::atan2(projection.cx - (x + roi.x), projection.fx) * kRadToDeg;
-        const int s = static_cast<int>(std::floor((static_cast<float>(bearing) + sut.hfovDeg_ / 2.0F) / binDeg));
-        if (s >= 0 && s < config.sectorCount) {
-            sut.pixelsPerSector_[static_cast<std::size_t>(s)] += rows;
+    const auto rows = static_cast<std::uint32_t>(roi_.y + roi_.height - firstRow_);
+    for (int x = 0; x < roi_.width; ++x) {
+        const double bearing = std::atan2(projection_.cx - (x + roi_.x), projection_.fx) * kRadToDeg;
+        const int s = static_cast<int>(std::floor((static_cast<float>(bearing) + hfovDeg_ / 2.0F) / binDeg));
+        if (s >= 0 && s < config_.sectorCount) {
+            pixelsPerSector_[static_cast<std::size_t>(s)] += rows;
         }
     }
-    return sut;
 }
 
 void SectorBuilder::setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) noexcept
@@ -291,45 +317,38 @@ SectorBuilder::Cluster SectorBuilder::nearestCluster(const std::uint32_t* histog
     return Cluster{};
 }
 
-SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
+SectorBuilder::ProfileRow SectorBuilder::profileRow(int s, int v) const noexcept
 {
-    constexpr int kMaxBlendRows = 2;
-    constexpr int kMaxWallRows = 12; ///< rows above the wall that may show the far rim
     const int first = std::max(0, s - 1);
     const int last = std::min(config_.sectorCount - 1, s + 1);
     const auto rows = static_cast<std::size_t>(profileRows_);
-    struct Row {
-        std::uint32_t count = 0;
-        std::uint32_t labels = 0; ///< negative labels
-        float residual = 0.0F;    ///< mean [px]
-        float crossing = 0.0F;    ///< mean [m]
-        float disparity = 0.0F;   ///< mean [px]
-    };
-    const auto rowOf = [&](int v) noexcept {
-        Row r;
-        for (int k = first; k <= last; ++k) {
-            const std::size_t i = static_cast<std::size_t>(k) * rows + static_cast<std::size_t>(v);
-            r.count += rowCount_[i];
-            r.labels += rowDropLabels_[i];
-            r.residual += rowResidual_[i];
-            r.crossing += rowCrossing_[i];
-            r.disparity += rowDisparity_[i];
-        }
-        if (r.count > 0) {
-            r.disparity /= static_cast<float>(r.count);
-            r.residual /= static_cast<float>(r.count);
-            r.crossing /= static_cast<float>(r.count);
-        }
-        return r;
-    };
+    ProfileRow r;
+    for (int k = first; k <= last; ++k) {
+        const std::size_t i = static_cast<std::size_t>(k) * rows + static_cast<std::size_t>(v);
+        r.count += rowCount_[i];
+        r.labels += rowDropLabels_[i];
+        r.residual += rowResidual_[i];
+        r.crossing += rowCrossing_[i];
+        r.disparity += rowDisparity_[i];
+    }
+    if (r.count > 0) {
+        r.disparity /= static_cast<float>(r.count);
+        r.residual /= static_cast<float>(r.count);
+        r.crossing /= static_cast<float>(r.count);
+    }
+    return r;
+}
+
+float SectorBuilder::profileThreshold(int s) const noexcept
+{
+    // dropProfileResidualPx, or the spread of this frame's row means over the far rows (1.4826 x their median
+    // absolute value: the far rows' residuals from the plane, centred on 0) times the noise factor, whichever is
+    // larger.
     const auto minPixels = static_cast<std::uint32_t>(config_.dropProfileMinPixels);
-    // The threshold: dropProfileResidualPx, or the spread of this frame's row means over the far rows (1.4826 x
-    // their median absolute value: the far rows' residuals from the plane, centred on 0) times the noise
-    // factor, whichever is larger.
     std::array<float, kMaxProfileRows> spread{};
     int spreadCount = 0;
     for (int v = 0; v < profileRows_ && spreadCount < kMaxProfileRows; ++v) {
-        const Row r = rowOf(v);
+        const ProfileRow r = profileRow(s, v);
         if (r.count >= minPixels && r.crossing >= config_.dropProfileMinRangeM && r.crossing < config_.maxRangeM) {
             spread[static_cast<std::size_t>(spreadCount++)] = std::abs(r.residual);
         }
@@ -340,11 +359,50 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
         std::nth_element(spread.data(), middle, spread.data() + spreadCount);
         noise = 1.4826F * *middle;
     }
-    const float tau = std::max(config_.dropProfileResidualPx, config_.dropProfileNoiseFactor * noise);
+    return std::max(config_.dropProfileResidualPx, config_.dropProfileNoiseFactor * noise);
+}
+
+bool SectorBuilder::ownRowsBelow(int s, int w1, int w2, float tau) const noexcept
+{
+    const std::size_t own = static_cast<std::size_t>(s) * static_cast<std::size_t>(profileRows_);
+    const std::uint32_t ownCount =
+        rowCount_[own + static_cast<std::size_t>(w1)] + rowCount_[own + static_cast<std::size_t>(w2)];
+    const float ownResidual =
+        rowResidual_[own + static_cast<std::size_t>(w1)] + rowResidual_[own + static_cast<std::size_t>(w2)];
+    return ownCount != 0 && ownResidual < -tau * static_cast<float>(ownCount) * 0.5F;
+}
+
+bool SectorBuilder::farRimAbove(int s, int w2, float tau) const noexcept
+{
+    constexpr int kMaxWallRows = 12; ///< rows above the wall that may show the far rim
+    const auto minPixels = static_cast<std::uint32_t>(config_.dropProfileMinPixels);
+    bool farRim = false;
+    for (int w = w2 - 1; w >= std::max(0, w2 - kMaxWallRows) && !farRim; --w) {
+        const ProfileRow r = profileRow(s, w);
+        farRim = r.count >= minPixels && r.residual > -0.5F * tau;
+    }
+    return farRim;
+}
+
+bool SectorBuilder::profileWall(const ProfileRow& wall1, const ProfileRow& wall2) const noexcept
+{
+    const float groundStep = (wall1.disparity - wall1.residual) - (wall2.disparity - wall2.residual);
+    const float slope = (wall1.disparity - wall2.disparity) / groundStep;
+    const float slopeError =
+        disparityNoisePx_ * std::sqrt(1.0F / static_cast<float>(wall1.count) + 1.0F / static_cast<float>(wall2.count)) /
+        std::abs(groundStep);
+    return std::abs(slope) + config_.wallSlopeSigmas * slopeError < config_.maxWallSlope;
+}
+
+SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
+{
+    constexpr int kMaxBlendRows = 2;
+    const auto minPixels = static_cast<std::uint32_t>(config_.dropProfileMinPixels);
+    const float tau = profileThreshold(s);
     bool suspect = false;
     // From the nearest row up: the first rim beyond dropProfileMinRangeM.
     for (int v = profileRows_ - 1; v >= 2; --v) {
-        const Row rim = rowOf(v);
+        const ProfileRow rim = profileRow(s, v);
         if (rim.count < minPixels || rim.crossing < config_.dropProfileMinRangeM) {
             continue;
         }
@@ -359,7 +417,7 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
         // verifier removes much of that row: its windows straddle the rim).
         for (int gap = 0; gap <= kMaxBlendRows && v - gap - 2 >= 0; ++gap) {
             if (gap > 0) {
-                const Row blend = rowOf(v - gap);
+                const ProfileRow blend = profileRow(s, v - gap);
                 // A row with no valid pixel is no evidence that the wall goes on down to the rim.
                 if (blend.count == 0 || (blend.count >= minPixels && !(blend.residual < -0.5F * tau))) {
                     break;
@@ -367,43 +425,25 @@ SectorBuilder::Cluster SectorBuilder::profileDrop(int s) const noexcept
             }
             const int w1 = v - gap - 1;
             const int w2 = v - gap - 2;
-            const Row wall1 = rowOf(w1);
-            const Row wall2 = rowOf(w2);
+            const ProfileRow wall1 = profileRow(s, w1);
+            const ProfileRow wall2 = profileRow(s, w2);
             if (wall1.count < minPixels || wall2.count < minPixels || !(wall1.residual < -tau) ||
                 !(wall2.residual < -tau)) {
                 continue;
             }
             // The sector itself must see the wall, not only a neighbour.
-            const std::size_t own = static_cast<std::size_t>(s) * rows;
-            const std::uint32_t ownCount =
-                rowCount_[own + static_cast<std::size_t>(w1)] + rowCount_[own + static_cast<std::size_t>(w2)];
-            const float ownResidual =
-                rowResidual_[own + static_cast<std::size_t>(w1)] + rowResidual_[own + static_cast<std::size_t>(w2)];
-            if (ownCount == 0 || !(ownResidual < -tau * static_cast<float>(ownCount) * 0.5F)) {
+            if (!ownRowsBelow(s, w1, w2, tau)) {
                 continue;
-            }
-            // The far rim: above the wall, within kMaxWallRows, the ground comes back to its plane. A road that
-            // bends down (a grade change) goes on below the plane and has none.
-            bool farRim = false;
-            for (int w = w2 - 1; w >= std::max(0, w2 - kMaxWallRows) && !farRim; --w) {
-                const Row r = rowOf(w);
-                farRim = r.count >= minPixels && r.residual > -0.5F * tau;
             }
             // A wall seen by one cue only, or with no far rim, is not a drop; but the ground is not seen to be
             // free there either (Unknown, never Clear).
-            if (!farRim || wall1.labels + wall2.labels < static_cast<std::uint32_t>(config_.dropProfileMinLabels)) {
+            if (!farRimAbove(s, w2, tau) ||
+                wall1.labels + wall2.labels < static_cast<std::uint32_t>(config_.dropProfileMinLabels)) {
                 suspect = true;
                 continue;
             }
-            // ... and the two wall rows are a wall: their disparity stays put while the ground's changes from one to
-            // the other (the slope of the one on the other, by the frame's pixel noise; see maxWallSlope).
-            const float groundStep = (wall1.disparity - wall1.residual) - (wall2.disparity - wall2.residual);
-            const float slope = (wall1.disparity - wall2.disparity) / groundStep;
-            const float slopeError =
-                disparityNoisePx_ *
-                std::sqrt(1.0F / static_cast<float>(wall1.count) + 1.0F / static_cast<float>(wall2.count)) /
-                std::abs(groundStep);
-            if (!(std::abs(slope) + config_.wallSlopeSigmas * slopeError < config_.maxWallSlope)) {
+            // ... and the two wall rows are a wall.
+            if (!profileWall(wall1, wall2)) {
                 suspect = true;
                 continue;
             }

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -115,34 +117,35 @@ double median(std::vector<double> values)
     return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationPair>& pairs,
-                                                  const CalibratorConfig& config)
+/// Why a pair cannot be calibrated from, before its board is looked for (an empty or non-grey image, sizes that
+/// differ from each other or from the pairs taken so far, imageSize, empty before the first); empty when it can.
+std::string imageProblem(const CalibrationPair& pair, cv::Size imageSize)
 {
-    CalibrationReport report;
+    if (pair.left.empty() || pair.right.empty()) {
+        return std::string("empty image (") + (pair.left.empty() ? "left" : "right") + ")";
+    }
+    if (pair.left.type() != CV_8UC1 || pair.right.type() != CV_8UC1) {
+        return "not an 8-bit grey image";
+    }
+    if (pair.left.size() != pair.right.size()) {
+        return "size mismatch: left " + std::to_string(pair.left.cols) + "x" + std::to_string(pair.left.rows) +
+               ", right " + std::to_string(pair.right.cols) + "x" + std::to_string(pair.right.rows);
+    }
+    if (!imageSize.empty() && pair.left.size() != imageSize) {
+        return "size mismatch: " + std::to_string(pair.left.cols) + "x" + std::to_string(pair.left.rows) +
+               ", other pairs " + std::to_string(imageSize.width) + "x" + std::to_string(imageSize.height);
+    }
+    return {};
+}
+
+/// The board corners of every usable pair, and their image size; each other pair goes to report.rejected with why.
+std::vector<Detection> detectBoards(const std::vector<CalibrationPair>& pairs, const CalibratorConfig& config,
+                                    CalibrationReport& report, cv::Size& imageSize)
+{
     std::vector<Detection> detections;
-    cv::Size imageSize;
     for (const auto& pair : pairs) {
-        if (pair.left.empty() || pair.right.empty()) {
-            report.rejected.push_back(
-                {pair.name, std::string("empty image (") + (pair.left.empty() ? "left" : "right") + ")"});
-            continue;
-        }
-        if (pair.left.type() != CV_8UC1 || pair.right.type() != CV_8UC1) {
-            report.rejected.push_back({pair.name, "not an 8-bit grey image"});
-            continue;
-        }
-        if (pair.left.size() != pair.right.size()) {
-            report.rejected.push_back({pair.name, "size mismatch: left " + std::to_string(pair.left.cols) + "x" +
-                                                      std::to_string(pair.left.rows) + ", right " +
-                                                      std::to_string(pair.right.cols) + "x" +
-                                                      std::to_string(pair.right.rows)});
-            continue;
-        }
-        if (!imageSize.empty() && pair.left.size() != imageSize) {
-            report.rejected.push_back({pair.name, "size mismatch: " + std::to_string(pair.left.cols) + "x" +
-                                                      std::to_string(pair.left.rows) + ", other pairs " +
-                                                      std::to_string(imageSize.width) + "x" +
-                                                      std::to_string(imageSize.height)});
+        if (std::string problem = imageProblem(pair, imageSize); !problem.empty()) {
+            report.rejected.push_back({pair.name, std::move(problem)});
             continue;
         }
         Detection detection{pair.name, {}, {}};
@@ -156,16 +159,11 @@ Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationP
         imageSize = pair.left.size();
         detections.push_back(std::move(detection));
     }
-    const auto tooFew = [&](std::size_t usable) {
-        return Error{"calibration",
-                     "only " + std::to_string(usable) + " usable pair(s), need at least " +
-                         std::to_string(config.minPairs),
-                     "take more pairs with the whole board visible in both cameras"};
-    };
-    if (detections.size() < static_cast<std::size_t>(config.minPairs)) {
-        return Unexpected(tooFew(detections.size()));
-    }
+    return detections;
+}
 
+std::vector<cv::Point3f> boardPoints(const CalibratorConfig& config)
+{
     std::vector<cv::Point3f> board;
     for (int row = 0; row < config.innerCorners.height; ++row) {
         for (int col = 0; col < config.innerCorners.width; ++col) {
@@ -173,8 +171,14 @@ Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationP
                                0.0F);
         }
     }
-    StereoRun run = runStereo(detections, board, imageSize);
-    report.rmsBeforeOutliersPx = run.calib.rmsPx;
+    return board;
+}
+
+/// Drops the worst pair and recalibrates without it, one pair a round, while its error is over the limit, at least
+/// minPairs stay and the RMS improves; each dropped pair goes to report.rejected.
+void dropOutliers(StereoRun& run, std::vector<Detection>& detections, const std::vector<cv::Point3f>& board,
+                  cv::Size imageSize, const CalibratorConfig& config, CalibrationReport& report)
+{
     for (int round = 0; round < config.maxOutlierRounds; ++round) {
         const double medianPx = median(run.pairErrorsPx);
         const double limitPx = std::max(config.outlierFactor * medianPx, config.outlierFloorPx);
@@ -200,6 +204,24 @@ Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationP
         report.rejected.push_back(std::move(dropped));
         ++report.outlierRounds;
     }
+}
+
+Result<CalibrationReport, Error> calibrateChecked(const std::vector<CalibrationPair>& pairs,
+                                                  const CalibratorConfig& config)
+{
+    CalibrationReport report;
+    cv::Size imageSize;
+    std::vector<Detection> detections = detectBoards(pairs, config, report, imageSize);
+    if (detections.size() < static_cast<std::size_t>(config.minPairs)) {
+        return Unexpected(Error{"calibration",
+                                "only " + std::to_string(detections.size()) + " usable pair(s), need at least " +
+                                    std::to_string(config.minPairs),
+                                "take more pairs with the whole board visible in both cameras"});
+    }
+    const std::vector<cv::Point3f> board = boardPoints(config);
+    StereoRun run = runStereo(detections, board, imageSize);
+    report.rmsBeforeOutliersPx = run.calib.rmsPx;
+    dropOutliers(run, detections, board, imageSize, config, report);
     for (std::size_t i = 0; i < detections.size(); ++i) {
         report.perPair.push_back({detections[i].name, run.pairErrorsPx[i]});
     }

@@ -17,6 +17,7 @@
 /// Vectorised with OpenCV universal intrinsics (census_sgm.simd.hpp); a scalar reference (config.simd = false)
 /// gives bit-identical results (test unit-vision-detect CensusSgm.SimdMatchesScalar).
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -106,9 +107,18 @@ private:
     void searchRanges() noexcept;
     void costRow(int y) noexcept;
     void aggregateRow(std::int16_t* disp, const std::int16_t* above, int y) noexcept;
+    struct RowRange;
+    /// Left-to-right, top, top-left and top-right paths of the row; their sum into sum_.
+    void forwardPaths(RowRange range, const std::int16_t* above, int y) noexcept;
+    /// Right-to-left path: completes each column's sum, then the winner of that column.
+    void backwardPaths(RowRange range, std::int16_t* disp) noexcept;
     void winner(int i, int lo, std::uint16_t minSum, std::int16_t* disp) noexcept;
     void leftRightCheck(std::int16_t* disp) const noexcept;
     [[nodiscard]] std::uint8_t* pathEntry(int half, int path, int entry) noexcept;
+    /// Index of a path entry in pathMin_ (and, times stride_, in paths_).
+    [[nodiscard]] std::size_t entryIndex(int half, int path, int entry) const noexcept;
+    /// The left-to-right or right-to-left path's entry at column i (two entries, alternating).
+    [[nodiscard]] std::uint8_t* horizontalEntry(int i) noexcept;
 
     CensusSgmConfig config_;
     int width_ = 0;

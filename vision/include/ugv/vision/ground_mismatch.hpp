@@ -104,6 +104,8 @@ private:
     template <bool kSimd>
     GroundMismatchStatus runImpl(ConstImageViewU8 left, ConstImageViewU8 right, ConstImageViewU8 warped,
                                  std::span<const WarpSpan> spans, const DisparityPlane& plane, int y0) noexcept;
+    /// Every pixel NotTested with residual 0, and gradient_ from `right`.
+    void resetAndGradient(ConstImageViewU8 right) noexcept;
 
     GroundMismatchConfig config_;
     Image<std::uint8_t> labels_;

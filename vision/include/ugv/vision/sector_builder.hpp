@@ -213,6 +213,10 @@ public:
 
 private:
     SectorBuilder() = default;
+    /// create(): every buffer at its size for the config, the ROI and the range bins.
+    void allocate();
+    /// create(): the bearings of the sector boundaries and the analysed pixels whose column lies in each sector.
+    void initSectorGeometry() noexcept;
     struct Cluster {
         int votes = 0;
         float rangeM = 0.0F;
@@ -301,6 +305,28 @@ private:
     std::vector<double> boundarySin_;
     /// Nearest far drop of sector s by the row profile, or a Cluster with no votes.
     [[nodiscard]] Cluster profileDrop(int s) const noexcept;
+    /// One analysed row of the row profile over a sector and its neighbours.
+    struct ProfileRow {
+        std::uint32_t count = 0;
+        std::uint32_t labels = 0; ///< negative labels
+        float residual = 0.0F;    ///< mean [px]
+        float crossing = 0.0F;    ///< mean [m]
+        float disparity = 0.0F;   ///< mean [px]
+    };
+    /// Row v of the profile of sector s and its two neighbours (sums, then means over their valid pixels). Inline
+    /// (defined in the .cpp, its only user): called for every analysed row of every sector in each frame.
+    [[nodiscard]] inline ProfileRow profileRow(int s, int v) const noexcept;
+    /// [px] The residual below minus which a profile row is below the ground: dropProfileResidualPx, or the frame's
+    /// row-mean spread over the far rows times dropProfileNoiseFactor, whichever is larger.
+    [[nodiscard]] float profileThreshold(int s) const noexcept;
+    /// Whether sector s's own rows w1 and w2 (not only its neighbours') lie below -tau on average.
+    [[nodiscard]] bool ownRowsBelow(int s, int w1, int w2, float tau) const noexcept;
+    /// The far rim: within a few rows above the wall's top row w2, the ground comes back to its plane. A road that
+    /// bends down (a grade change) goes on below the plane and has none.
+    [[nodiscard]] bool farRimAbove(int s, int w2, float tau) const noexcept;
+    /// Whether two wall rows are a wall: their disparity stays put while the ground's changes from one to the other
+    /// (the slope of the one on the other, by the frame's pixel noise; see maxWallSlope).
+    [[nodiscard]] bool profileWall(const ProfileRow& wall1, const ProfileRow& wall2) const noexcept;
     /// `out` reports the obstacle of its neighbour `from`, at half its confidence (widenDrops, closeGaps).
     void reportNeighbour(Sector& out, const Sector& from) const noexcept;
     /// Clear sectors within dropEdgeSectors of a negative obstacle take it over (see the definition).
