@@ -6,7 +6,9 @@ set -u
 tool=$1 unit=$2
 domain=$((150 + $$ % 80))
 part="listen_types_$$"
-UGV_DDS_TEST_ROLE=writer UGV_DDS_TEST_DOMAIN=$domain UGV_DDS_TEST_PARTITION=$part \
+# 110 s: eleven listen processes one after another took more than the writer's default 30 s under ASan in a
+# parallel ctest run (the last topic found no publisher); the trap stops it.
+UGV_DDS_TEST_ROLE=writer UGV_DDS_TEST_DOMAIN=$domain UGV_DDS_TEST_PARTITION=$part UGV_DDS_TEST_WRITER_S=110 \
     "$unit" --gtest_filter=DdsTwoProcess.EveryTypeRoundTripsWithAllFields >/dev/null &
 writer=$!
 trap 'kill $writer 2>/dev/null; wait $writer 2>/dev/null' EXIT

@@ -35,6 +35,9 @@ constexpr const char* kDomainVar = "UGV_DDS_TEST_DOMAIN";
 constexpr const char* kPartitionVar = "UGV_DDS_TEST_PARTITION";
 constexpr auto kReceiveTimeout = std::chrono::seconds(15);
 constexpr auto kWriterLifetime = std::chrono::seconds(30); ///< the child ends by itself if the parent died
+/// Overrides kWriterLifetime [s]: a caller that reads many topics one process at a time (listen_types_test.sh) needs
+/// longer on a loaded sanitizer build; it stops the writer itself at the end.
+constexpr const char* kLifetimeVar = "UGV_DDS_TEST_WRITER_S";
 
 // ---- the samples: every field distinctive (no two fields of a struct alike, no default value) ----
 
@@ -324,7 +327,11 @@ int runWriter()
     }
     const auto samples = std::make_tuple(sectors(), health(), pose(), observation(), uav(), confirmation(),
                                          correction(), correlated(), scan(), cloud(), graphInfo());
-    const auto until = std::chrono::steady_clock::now() + kWriterLifetime;
+    auto lifetime = std::chrono::duration_cast<std::chrono::steady_clock::duration>(kWriterLifetime);
+    if (const char* seconds = std::getenv(kLifetimeVar); seconds != nullptr && std::atoi(seconds) > 0) {
+        lifetime = std::chrono::seconds(std::atoi(seconds));
+    }
+    const auto until = std::chrono::steady_clock::now() + lifetime;
     while (!g_writerStop.load() && std::chrono::steady_clock::now() < until) {
         w.sectors.write(std::get<0>(samples));
         w.health.write(std::get<1>(samples));
