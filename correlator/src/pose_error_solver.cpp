@@ -119,18 +119,45 @@ void extendOffsets(UgvPoseErrors& poses, const Layout& l)
     }
 }
 
-/// The terms of one window of one track of the object at `xo`: its samples share their unknowns, so their
-/// normal-equation terms are summed first.
+/// The sums of one window's normal-equation terms: its samples share their unknowns.
+struct WindowSums {
+    Eigen::Matrix2d w = Eigen::Matrix2d::Zero();  // sum W
+    Eigen::Vector2d wr = Eigen::Vector2d::Zero(); // sum W r
+    Eigen::Vector2d wj = Eigen::Vector2d::Zero(); // sum W jh
+    double jwj = 0.0;                             // sum jh' W jh
+    double jwr = 0.0;                             // sum jh' W r
+
+    /// Huber on the window's mean: a window whose mean is off its object by more than the gate (the chi-square of
+    /// the mean of its stored samples, each `weight` in the sums, under the configured noise: a track on the wrong
+    /// object of a close pair, a reading of the other post, clutter) pulls with a bounded force instead of one that
+    /// grows with its distance; recomputed at every Gauss-Newton step (iteratively reweighted). The configured noise
+    /// is the floor of the learnt one, so in a noisier world more windows are bounded: the estimate tends to the
+    /// median-like L1 fit, which is what a misassociated window must not move.
+    void bound(double weight, double gateChi2)
+    {
+        if (w.determinant() <= 0.0 || weight <= 0.0) {
+            return;
+        }
+        const double m2 = wr.dot(w.inverse() * wr) / weight;
+        if (m2 <= gateChi2) {
+            return;
+        }
+        const double k = std::sqrt(gateChi2 / m2);
+        w *= k;
+        wr *= k;
+        wj *= k;
+        jwj *= k;
+        jwr *= k;
+    }
+};
+
+/// The terms of one window of one track of the object at `xo`.
 void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow& tw, const Eigen::Vector2d& objectMean,
                     int xo, const UgvPoseErrors& poses, const Layout& l, const PoseCorrectedConfig& config,
                     SampleWeights weights, NormalEquations& eq)
 {
     const auto u = static_cast<std::size_t>(track.ugv);
-    Eigen::Matrix2d sumW = Eigen::Matrix2d::Zero();   // sum W
-    Eigen::Vector2d sumWr = Eigen::Vector2d::Zero();  // sum W r
-    Eigen::Vector2d sumWj = Eigen::Vector2d::Zero();  // sum W jh
-    double sumJWj = 0.0;                              // sum jh' W jh
-    double sumJWr = 0.0;                              // sum jh' W r
+    WindowSums sums;
     Eigen::Matrix2d fixedW = Eigen::Matrix2d::Zero(); // samples under a pose correction
     Eigen::Vector2d fixedWr = Eigen::Vector2d::Zero();
     const bool test = weights == SampleWeights::Test;
@@ -160,30 +187,31 @@ void addWindowTerms(const StaticMap::Track& track, const StaticMap::TrackWindow&
         const Eigen::Matrix2d w = weight * rayInformation(ray, sr, sc);
         const Eigen::Vector2d r = p - objectMean;
         const Eigen::Vector2d jh = smp.rangeM * acrossOf(ray); // d p / d heading
-        sumW += w;
-        sumWr += w * r;
-        sumWj += w * jh;
-        sumJWj += jh.dot(w * jh);
-        sumJWr += jh.dot(w * r);
+        sums.w += w;
+        sums.wr += w * r;
+        sums.wj += w * jh;
+        sums.jwj += jh.dot(w * jh);
+        sums.jwr += jh.dot(w * r);
     }
-    addBlock(eq.h, xo, xo, (sumW + fixedW).eval());
-    eq.g.segment<2>(xo) -= sumWr + fixedWr;
-    if (l.ugvBase[u] < 0 || sumW.determinant() <= 0.0) {
+    sums.bound(weight, config.gateChi2);
+    addBlock(eq.h, xo, xo, (sums.w + fixedW).eval());
+    eq.g.segment<2>(xo) -= sums.wr + fixedWr;
+    if (l.ugvBase[u] < 0 || sums.w.determinant() <= 0.0) {
         return;
     }
     const int th = l.ugvBase[u];
     const int ow = th + 1 + 2 * (tw.window - l.firstWindow[u]);
-    const Eigen::Matrix<double, 1, 1> jj(sumJWj);
+    const Eigen::Matrix<double, 1, 1> jj(sums.jwj);
     addBlock(eq.h, th, th, jj);
-    addBlock(eq.h, th, ow, sumWj.transpose());
-    addBlock(eq.h, ow, th, sumWj);
-    addBlock(eq.h, ow, ow, sumW);
-    addBlock(eq.h, th, xo, (-sumWj).transpose());
-    addBlock(eq.h, xo, th, (-sumWj).eval());
-    addBlock(eq.h, ow, xo, (-sumW).eval());
-    addBlock(eq.h, xo, ow, (-sumW).eval());
-    eq.g(th) += sumJWr;
-    eq.g.segment<2>(ow) += sumWr;
+    addBlock(eq.h, th, ow, sums.wj.transpose());
+    addBlock(eq.h, ow, th, sums.wj);
+    addBlock(eq.h, ow, ow, sums.w);
+    addBlock(eq.h, th, xo, (-sums.wj).transpose());
+    addBlock(eq.h, xo, th, (-sums.wj).eval());
+    addBlock(eq.h, ow, xo, (-sums.w).eval());
+    addBlock(eq.h, xo, ow, (-sums.w).eval());
+    eq.g(th) += sums.jwr;
+    eq.g.segment<2>(ow) += sums.wr;
 }
 
 void addObservationTerms(const StaticMap& map, const UgvPoseErrors& poses, const Layout& l,

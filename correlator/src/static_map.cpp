@@ -77,7 +77,8 @@ StaticMap::TrackEstimate estimateOf(const StaticMap::StaticObject& part)
     }
     e.valid = true;
     e.mean = part.info.ldlt().solve(part.infoMean);
-    e.cov = part.measurementInfo.inverse() + part.poseCovSum / part.weightSum;
+    e.measurementCov = part.measurementInfo.inverse();
+    e.cov = e.measurementCov + part.poseCovSum / part.weightSum;
     return e;
 }
 
@@ -384,6 +385,40 @@ Eigen::Vector2d StaticMap::trackMean(int trackIndex, const UgvPoseErrors& poses,
     return weight > 0.0 ? Eigen::Vector2d(sum / weight) : Eigen::Vector2d::Zero();
 }
 
+/// The estimate of a group of tracks: their own means fused by their measurement information (the pose error is
+/// common to one UGV's tracks; the merge test's floor stands for what is left of it).
+StaticMap::TrackEstimate StaticMap::groupEstimate(const std::vector<int>& group) const
+{
+    Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d infoMean = Eigen::Vector2d::Zero();
+    for (const int ti : group) {
+        const TrackEstimate& e = trackEstimates_[static_cast<std::size_t>(ti)];
+        if (e.valid && e.measurementCov.determinant() > 0.0) {
+            const Eigen::Matrix2d i = e.measurementCov.inverse();
+            info += i;
+            infoMean += i * e.mean;
+        }
+    }
+    TrackEstimate fused;
+    if (info.determinant() > 0.0) {
+        fused.valid = true;
+        fused.cov = info.inverse();
+        fused.mean = fused.cov * infoMean;
+    }
+    return fused;
+}
+
+/// Two groups of one object's tracks are two objects only if the merge test (sameObject's gate) tells them apart:
+/// a split the gate cannot tell from noise is merged again at the next rebuild, and each split and merge moves
+/// the object's id.
+bool StaticMap::groupsApart(const std::vector<int>& a, const std::vector<int>& b) const
+{
+    const TrackEstimate ea = groupEstimate(a);
+    const TrackEstimate eb = groupEstimate(b);
+    return ea.valid && eb.valid &&
+           mahalanobis2(ea.mean - eb.mean, ea.cov + eb.cov + 2.0 * floorCovariance()) >= config_.gateChi2;
+}
+
 void StaticMap::splitAll(const UgvPoseErrors& poses, ObjectIds& ids)
 {
     const std::size_t count = objects_.size();
@@ -395,9 +430,9 @@ void StaticMap::splitAll(const UgvPoseErrors& poses, ObjectIds& ids)
 }
 
 /// An object whose tracks form two groups far apart (two objects associated while the UGVs' pose errors were
-/// still unknown) splits: the group with more observations keeps the id, the other becomes a new object, unless the
-/// split undoes a merge: then the absorbed object comes back with its id (hysteresis). Tracks with no samples left
-/// (all folded into the prior) have no position and stay.
+/// still unknown), apart for the merge test too (groupsApart), splits: the group with more observations keeps the id,
+/// the other becomes a new object, unless the split undoes a merge: then the absorbed object comes back with its id
+/// (hysteresis). Tracks with no samples left (all folded into the prior) have no position and stay.
 void StaticMap::split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids)
 {
     std::vector<int> tracks;
@@ -423,6 +458,9 @@ void StaticMap::split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids)
     std::vector<int> groupB;
     for (std::size_t i = 0; i < tracks.size(); ++i) {
         (g.inB[i] ? groupB : groupA).push_back(tracks[i]);
+    }
+    if (!groupsApart(groupA, groupB)) {
+        return;
     }
     // The group that undoes a merge leaves (the other keeps this object's id); else the smaller one.
     const int originA = absorbedOrigin(groupA, j, ids);

@@ -3,8 +3,9 @@
 /// @file
 /// Mode `pose-corrected`'s estimate of the UGVs' pose errors: every solvePeriodS, each UGV's heading bias
 /// (constant) and position offset (per offsetWindowS window, a random walk between windows) are estimated jointly
-/// with the static objects by sparse Gauss-Newton least squares (Eigen); the UAV's anchors (UavAnchors) tie the
-/// UGVs' poses to the absolute frame, and zero-mean priors fix what no anchor reaches (the fleet on average is
+/// with the static objects by sparse Gauss-Newton least squares (Eigen), each track window's pull bounded (Huber on
+/// its mean, iteratively reweighted: a track on the wrong object moves nothing far); the UAV's anchors (UavAnchors) tie
+/// the UGVs' poses to the absolute frame, and zero-mean priors fix what no anchor reaches (the fleet on average is
 /// unbiased). If the evidence cannot show a pose error, nothing moves: the estimates of all UGVs, tested jointly
 /// against their posterior covariance (the information of the samples stored, under the learnt noise), within the
 /// chi-square quantile at the gates' significance are set to zero. Then each UGV's noise is learnt from its

@@ -54,6 +54,7 @@ public:
         bool valid = false; ///< false: no samples left
         Eigen::Vector2d mean = Eigen::Vector2d::Zero();
         Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+        Eigen::Matrix2d measurementCov = Eigen::Matrix2d::Identity(); ///< the measurement noise averaged alone
     };
     struct Apart {
         int track = -1;
@@ -153,6 +154,9 @@ private:
     /// Recomputes an object's estimate from its tracks' stored samples under the current pose model, and each of
     /// its tracks' own estimate (trackEstimates_).
     void refit(StaticObject& object, const UgvPoseErrors& poses);
+    /// A group of tracks' own estimates fused, and whether two groups are apart for the merge test (a split must be).
+    [[nodiscard]] TrackEstimate groupEstimate(const std::vector<int>& group) const;
+    [[nodiscard]] bool groupsApart(const std::vector<int>& a, const std::vector<int>& b) const;
     void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
     void split(std::size_t object, const UgvPoseErrors& poses, ObjectIds& ids);
     /// The object most of `tracks`' observations first joined, if a merge folded it into the object at `into`
