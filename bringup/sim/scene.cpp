@@ -165,12 +165,23 @@ std::pair<double, double> obstacleCentre(const Obstacle& obstacle) noexcept
     return {r * std::cos(b), r * std::sin(b)};
 }
 
-Obstacle pole(double rangeM, double bearingDeg, double radiusM, double heightM)
+namespace {
+
+/// An obstacle of `type` at `rangeM` along `bearingDeg` (the factories below give its shape).
+Obstacle placed(ObstacleType type, double rangeM, double bearingDeg)
 {
     Obstacle o;
-    o.type = ObstacleType::Pole;
+    o.type = type;
     o.rangeM = rangeM;
     o.bearingDeg = bearingDeg;
+    return o;
+}
+
+} // namespace
+
+Obstacle pole(double rangeM, double bearingDeg, double radiusM, double heightM)
+{
+    Obstacle o = placed(ObstacleType::Pole, rangeM, bearingDeg);
     o.radiusM = radiusM;
     o.heightM = heightM;
     o.albedo = 0.45;
@@ -179,10 +190,7 @@ Obstacle pole(double rangeM, double bearingDeg, double radiusM, double heightM)
 
 Obstacle tableLegs(double rangeM, double bearingDeg, double lengthM, double widthM, double heightM, double yawDeg)
 {
-    Obstacle o;
-    o.type = ObstacleType::TableLegs;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::TableLegs, rangeM, bearingDeg);
     o.lengthM = lengthM;
     o.widthM = widthM;
     o.heightM = heightM;
@@ -194,10 +202,7 @@ Obstacle tableLegs(double rangeM, double bearingDeg, double lengthM, double widt
 
 Obstacle box(double rangeM, double bearingDeg, double lengthM, double widthM, double heightM, double yawDeg)
 {
-    Obstacle o;
-    o.type = ObstacleType::Box;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::Box, rangeM, bearingDeg);
     o.lengthM = lengthM;
     o.widthM = widthM;
     o.heightM = heightM;
@@ -224,10 +229,7 @@ Obstacle curb(double rangeM, double heightM, double lengthM, double bearingDeg)
 Obstacle meshFence(double rangeM, double bearingDeg, double widthM, double heightM, double spacingM, double wireM,
                    double yawDeg)
 {
-    Obstacle o;
-    o.type = ObstacleType::MeshFence;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::MeshFence, rangeM, bearingDeg);
     o.widthM = widthM;
     o.heightM = heightM;
     o.spacingM = spacingM;
@@ -240,10 +242,7 @@ Obstacle meshFence(double rangeM, double bearingDeg, double widthM, double heigh
 
 Obstacle wallWithDoorway(double rangeM, double bearingDeg, double doorWidthM)
 {
-    Obstacle o;
-    o.type = ObstacleType::WallWithDoorway;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::WallWithDoorway, rangeM, bearingDeg);
     o.lengthM = kWallThicknessM;
     o.widthM = kWallLengthM;
     o.heightM = kWallHeightM;
@@ -256,10 +255,7 @@ Obstacle wallWithDoorway(double rangeM, double bearingDeg, double doorWidthM)
 
 Obstacle trench(double rangeM, double widthM, double depthM, double bearingDeg)
 {
-    Obstacle o;
-    o.type = ObstacleType::Trench;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::Trench, rangeM, bearingDeg);
     o.lengthM = widthM;
     o.widthM = kAcrossLengthM;
     o.depthM = depthM;
@@ -269,10 +265,7 @@ Obstacle trench(double rangeM, double widthM, double depthM, double bearingDeg)
 
 Obstacle hole(double rangeM, double bearingDeg, double diameterM, double depthM, bool round)
 {
-    Obstacle o;
-    o.type = ObstacleType::Hole;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::Hole, rangeM, bearingDeg);
     o.radiusM = diameterM / 2.0;
     o.lengthM = diameterM;
     o.widthM = diameterM;
@@ -284,10 +277,7 @@ Obstacle hole(double rangeM, double bearingDeg, double diameterM, double depthM,
 
 Obstacle person(double rangeM, double bearingDeg, double heightM)
 {
-    Obstacle o;
-    o.type = ObstacleType::Person;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::Person, rangeM, bearingDeg);
     o.heightM = heightM;
     o.lengthM = kPersonTorsoDepthM * heightM / kPersonRefHeightM;
     o.yawDeg = bearingDeg;
@@ -297,10 +287,7 @@ Obstacle person(double rangeM, double bearingDeg, double heightM)
 
 Obstacle overhang(double rangeM, double bearingDeg, double elevationM, double lengthM, double widthM)
 {
-    Obstacle o;
-    o.type = ObstacleType::Overhang;
-    o.rangeM = rangeM;
-    o.bearingDeg = bearingDeg;
+    Obstacle o = placed(ObstacleType::Overhang, rangeM, bearingDeg);
     o.elevationM = elevationM;
     o.heightM = elevationM + kOverhangThicknessM;
     o.lengthM = lengthM;

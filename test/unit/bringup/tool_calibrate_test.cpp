@@ -7,42 +7,22 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <sys/wait.h>
 
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "run_command.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
-
 namespace {
 
-struct ToolRun {
-    int exitCode = -1;
-    std::string output;
-};
+using ToolRun = ugv::test::CommandRun;
 
-ToolRun runCommand(const std::string& commandLine)
-{
-    const std::string command = commandLine + " 2>&1";
-    ToolRun result;
-    FILE* pipe = popen(command.c_str(), "r"); // NOLINT(cert-env33-c) test harness runs our own binary
-    if (pipe == nullptr) {
-        return result;
-    }
-    char buffer[512];
-    while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
-        result.output += buffer;
-    }
-    const int status = pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
-
+/// The built `ugvsense` with `args`.
 ToolRun run(const std::string& args)
 {
-    return runCommand(std::string(UGVSENSE_PATH) + " " + args);
+    return ugv::test::runCommand(std::string(UGVSENSE_PATH) + " " + args);
 }
 
 std::filesystem::path tempDir(const std::string& name)
@@ -225,7 +205,7 @@ TEST(ToolHostile, ADeepCalibrationInsideARecordingIsRefusedByEveryReader)
     for (const std::string& command : {std::string(UGVSENSE_PATH) + " recording info " + (dir / "deep.ugvrec").string(),
                                        std::string(UGVSENSE_PATH) + " check-config " + (dir / "config.yaml").string(),
                                        std::string(UGVSENSED_PATH) + " --config " + (dir / "config.yaml").string()}) {
-        const ToolRun sut = runCommand(command);
+        const ToolRun sut = ugv::test::runCommand(command);
 
         EXPECT_EQ(sut.exitCode, 1) << command << "\n" << sut.output;
         EXPECT_NE(sut.output.find(expected), std::string::npos) << command << "\n" << sut.output;

@@ -10,35 +10,20 @@
 #include <limits>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "eval_suite.hpp"
-
+#include "run_command.hpp"
 namespace {
 
-struct ToolRun {
-    int exitCode = -1;
-    std::string output;
-};
+using ToolRun = ugv::test::CommandRun;
 
+/// The built `ugvsense` with `args`.
 ToolRun run(const std::string& args)
 {
-    const std::string command = std::string(UGVSENSE_PATH) + " " + args + " 2>&1";
-    ToolRun result;
-    FILE* pipe = popen(command.c_str(), "r"); // NOLINT(cert-env33-c) test harness runs our own binary
-    if (pipe == nullptr) {
-        return result;
-    }
-    char buffer[512];
-    while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
-        result.output += buffer;
-    }
-    const int status = pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
+    return ugv::test::runCommand(std::string(UGVSENSE_PATH) + " " + args);
 }
 
 bool contains(const std::string& text, const std::string& part)

@@ -1,0 +1,26 @@
+#include "run_command.hpp"
+
+#include <cstdio>
+
+#include <sys/wait.h>
+
+namespace ugv::test {
+
+CommandRun runCommand(const std::string& commandLine)
+{
+    const std::string command = commandLine + " 2>&1";
+    CommandRun result;
+    FILE* pipe = popen(command.c_str(), "r"); // NOLINT(cert-env33-c) test harness runs our own binary
+    if (pipe == nullptr) {
+        return result;
+    }
+    char buffer[512];
+    while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
+        result.output += buffer;
+    }
+    const int status = pclose(pipe);
+    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return result;
+}
+
+} // namespace ugv::test
