@@ -8,8 +8,8 @@
 // repeated, a number written in, a splice with another input) and runs it through the target; under the asan preset
 // every run is checked by ASan and UBSan. It is blind (no coverage feedback, unlike libFuzzer's long runs with
 // toolchain/fuzz.sh), but it reaches the inputs a few edits away from every kept one on every test run. The edits
-// follow from the seed alone; on a crash (a sanitizer's report, an abort, a fatal signal) the input that caused it is
-// (or a hang: one run longer than 10 s) written to FILE (default fuzz-crash-<pid>) and named on stderr: replay it
+// follow from the seed alone. On a crash (a sanitizer's report, an abort, a fatal signal) or a hang (one run longer
+// than 10 s) the input that caused it is written to FILE (default fuzz-crash-<pid>) and named on stderr: replay it
 // with `fuzz-<target> FILE`.
 #include <algorithm>
 #include <array>
@@ -25,6 +25,7 @@
 #include <iterator>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fcntl.h>
@@ -154,6 +155,12 @@ void run(const Bytes& input)
 void edit(Bytes& b, const std::vector<Bytes>& corpus, std::mt19937_64& rng)
 {
     const auto pick = [&rng](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+    // 1 to kMaxInsert bytes of a non-empty `b`.
+    const auto pickRange = [&b, &pick] {
+        const std::size_t at = pick(b.size());
+        const std::size_t n = 1 + pick(std::min(b.size() - at, kMaxInsert));
+        return std::pair{b.begin() + static_cast<std::ptrdiff_t>(at), b.begin() + static_cast<std::ptrdiff_t>(at + n)};
+    };
     static constexpr std::array<std::uint8_t, 8> kBoundary{0x00, 0x01, 0x7f, 0x80, 0xff, '-', '9', '\n'};
     static constexpr std::array<const char*, 8> kNumbers{"0",   "-1",  "1e308",      "-1e308",
                                                          "nan", "inf", "4294967296", "99999999999999999999"};
@@ -179,18 +186,15 @@ void edit(Bytes& b, const std::vector<Bytes>& corpus, std::mt19937_64& rng)
     }
     case 3: // erase a range
         if (!b.empty()) {
-            const std::size_t at = pick(b.size());
-            const std::size_t n = 1 + pick(std::min(b.size() - at, kMaxInsert));
-            b.erase(b.begin() + static_cast<std::ptrdiff_t>(at), b.begin() + static_cast<std::ptrdiff_t>(at + n));
+            const auto [first, last] = pickRange();
+            b.erase(first, last);
         }
         break;
     case 4: // repeat a range
         if (!b.empty()) {
-            const std::size_t at = pick(b.size());
-            const std::size_t n = 1 + pick(std::min(b.size() - at, kMaxInsert));
-            const Bytes range(b.begin() + static_cast<std::ptrdiff_t>(at),
-                              b.begin() + static_cast<std::ptrdiff_t>(at + n));
-            b.insert(b.begin() + static_cast<std::ptrdiff_t>(at), range.begin(), range.end());
+            const auto [first, last] = pickRange();
+            const Bytes range(first, last);
+            b.insert(first, range.begin(), range.end());
         }
         break;
     case 5: { // write a number in
@@ -260,19 +264,19 @@ int main(int argc, char** argv)
     std::vector<std::string> paths;
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
-        if ((arg == "--mutate" || arg == "--seed" || arg == "--crash") && i + 1 < argc) {
+        if (arg == "--crash" && i + 1 < argc) {
+            crash = argv[++i];
+        } else if ((arg == "--mutate" || arg == "--seed") && i + 1 < argc) {
             const std::string value = argv[++i];
             char* end = nullptr;
             if (arg == "--mutate") {
                 mutateSeconds = std::strtod(value.c_str(), &end);
-            } else if (arg == "--seed") {
-                seed = std::strtoull(value.c_str(), &end, 10);
             } else {
-                crash = value;
-                end = nullptr;
+                seed = std::strtoull(value.c_str(), &end, 10);
             }
-            if (end != nullptr && (*end != '\0' || value.empty())) {
-                std::fprintf(stderr, "fuzz replay: error: %s wants a number, not '%s'\n", arg.c_str(), value.c_str());
+            if (value.empty() || *end != '\0' || (arg == "--mutate" && !(mutateSeconds >= 0.0))) {
+                std::fprintf(stderr, "fuzz replay: error: %s wants a number (seconds >= 0), not '%s'\n", arg.c_str(),
+                             value.c_str());
                 return 2;
             }
         } else if (!arg.empty() && arg[0] == '-') {
@@ -281,8 +285,13 @@ int main(int argc, char** argv)
             paths.push_back(arg);
         }
     }
-    if (paths.empty() || crash.size() >= gCrashPath.size()) {
+    if (paths.empty()) {
         return usage(argv[0]);
+    }
+    if (crash.size() >= gCrashPath.size()) {
+        std::fprintf(stderr, "fuzz replay: error: --crash path longer than %zu characters: give a shorter one\n",
+                     gCrashPath.size() - 1);
+        return 2;
     }
     std::vector<std::filesystem::path> files;
     if (!collect(paths, files)) {
