@@ -94,7 +94,7 @@ dds:
 correlator:
   enabled: true
   period_s: 1
-  # Below the worst delay of this scenario: UGV 2's restarted process first replays ~160 duplicates at 40/s (4 s)
+  # Below the worst delay of this scenario: UGV 2's restarted process first replays ~120 duplicates at 40/s (3 s)
   # before its new messages, which arrive after the others' later ones were applied: the late window puts them
   # in place.
   reorder_ms: 1000
@@ -151,12 +151,14 @@ declare -A sender_pid
 start_gcs first
 sleep 1
 start_sender ugv-1 "$work/ugv-1.jsonl" ugv-1
-start_sender ugv-2 "$work/ugv-2.jsonl" ugv-2
+start_sender ugv-2 "$work/ugv-2.jsonl" ugv-2 --rate 20 # slower: 12.5 s for its 250, so the kill below lands mid-way
 start_sender ugv-3 "$work/ugv-3.jsonl" ugv-3
 start_sender uav "$work/uav.jsonl" uav
 # Kill UGV 2's process once it is under way, and start it again: it replays its file from the first line.
 for _ in $(seq 600); do grep -q "^sending" "$work/ugv-2.log" && break; sleep 0.1; done # discovered the station
-sleep 4 # about 160 of its 250 observations sent at 40/s (2 s was too early on a loaded machine: no repeats)
+# About 120 of its 250 observations sent at 20/s. At 40/s a kill 2 s, and once (a clean-clone CI mirror) 4 s, after
+# "sending" found nothing delivered yet (no repeats); at 20/s it has 6.5 s more before its last message.
+sleep 6
 kill -9 "${sender_pid[ugv-2]}"
 wait "${sender_pid[ugv-2]}" 2>/dev/null
 # Up to 60 s for the station: a clean-clone CI mirror once saw the restarted process match no reader in 20 s, send
