@@ -119,7 +119,7 @@ void printSectors(const ObstacleSectors& sectors)
     }
 }
 
-/// The one-camera mode's result: the ground it used (the mount), its reference patch and the sectors.
+/// The one-camera mode's result: the ground it used (the mount), what its reference band taught, the sectors.
 bool writeMonoJson(const std::string& path, const vision::GroundPlane& g, const vision::ColourFreeSpace& colour,
                    const ObstacleSectors& sectors)
 {
@@ -130,9 +130,8 @@ bool writeMonoJson(const std::string& path, const vision::GroundPlane& g, const 
     const vision::ColourReference& ref = colour.reference();
     out << "{\n  \"detector\": \"colour\",\n  \"ground\": {\"height_m\": " << jsonNumber(g.heightM)
         << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg()) << ", \"roll_deg\": " << jsonNumber(g.rollDeg())
-        << ", \"source\": \"configured mount\"},\n  \"reference\": {\"mean_saturation\": "
-        << jsonNumber(ref.meanSaturation) << ", \"mean_value\": " << jsonNumber(ref.meanValue)
-        << ", \"consistency\": " << jsonNumber(ref.consistency)
+        << ", \"source\": \"configured mount\"},\n  \"reference\": {\"mean_value\": " << jsonNumber(ref.meanValue)
+        << ", \"coverage\": " << jsonNumber(ref.coverage) << ", \"ground_colours\": " << ref.groundColours
         << ", \"ground_like\": " << (ref.groundLike ? "true" : "false")
         << "},\n  \"degraded\": " << (sectors.degraded ? "true" : "false") << ",\n  \"count\": " << sectors.count
         << ",\n  \"sectors\": " << sectorsJsonArray(sectors, 4) << "\n}\n";
@@ -188,8 +187,8 @@ int runMono(const Args& args, const vision::StereoCalibration& calib, const Dete
     (void)colour->process(bgrViewOf(left), sectors); // the size was checked: always Ok
     const vision::ColourReference& ref = colour->reference();
     std::printf("one camera (ColourFreeSpace): ground from the mount: height %.3f m, pitch %.2f deg, roll %.2f deg; "
-                "reference patch: saturation %.1f, value %.1f, consistency %.2f -> %s\n",
-                ground.heightM, ground.pitchDeg(), ground.rollDeg(), ref.meanSaturation, ref.meanValue, ref.consistency,
+                "reference band: value %.1f, %d ground colours covering %.2f of it -> %s\n",
+                ground.heightM, ground.pitchDeg(), ground.rollDeg(), ref.meanValue, ref.groundColours, ref.coverage,
                 ref.groundLike ? "ground-like" : "NOT ground-like (all sectors Unknown)");
     printSectors(sectors);
     if (args.has("json")) {

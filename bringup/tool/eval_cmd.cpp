@@ -173,7 +173,7 @@ public:
         return detector_.status() == vision::DetectorStatus::Ok;
     }
     [[nodiscard]] const ObstacleSectors& sectors() const { return colour_ ? colourSectors_ : detector_.sectors(); }
-    /// Colour detector: frames so far whose reference patch was not ground-like (all sectors Unknown).
+    /// Colour detector: frames so far whose reference band was not ground-like (all sectors Unknown).
     [[nodiscard]] int notGroundLikeFrames() const { return notGroundLike_; }
     /// The rig's ground (its mount) as a disparity model of the rectified left image.
     [[nodiscard]] const vision::DisparityPlane& ground() const { return ground_; }
@@ -192,7 +192,7 @@ public:
 
 private:
     /// The scene with a lawn of its own per frame (Scene::colourSeed): the ground's texture is fixed in the world and
-    /// the reference patch sees the same piece of it in every scene, so without this all grass frames would judge one
+    /// the reference band sees the same piece of it in every scene, so without this all grass frames would judge one
     /// hue pattern.
     Result<sim::RenderResult, Error> renderColour(const sim::Scene& scene) const
     {
@@ -580,7 +580,7 @@ int runColourSuite(const SimOptions& o, std::ostringstream& json)
     rows.push_back({"box_ground_colour", "box", true});
     std::printf("\none-camera mode: ColourFreeSpace on the left colour image, default rig (640x480, level, 0.59 m), "
                 "%zu range(s) per band at 1-6 m, %zu bearing(s) taking turns, %d seed(s); the stereo suite's scorer. "
-                "ref_bad = frames whose reference patch was not ground-like (all Unknown)\n",
+                "ref_bad = frames whose reference band was not ground-like (all Unknown)\n",
                 o.rangesPerBand.size(), o.bearings.size(), o.seeds);
     std::printf("%-*s %-8s %6s %6s %7s %7s %7s %10s %7s %11s %11s\n", kColourLabelColumn, "type", "ground", "frames",
                 "gt", "det1-3", "det3-6", "det1-6", "p95err_m", "ref_bad", "spill/frame", "fclear/frm");
@@ -1113,7 +1113,7 @@ Args evalArgs()
          {"detector", "NAME",
           "simulator suite: stereo (default) or colour: the one-camera mode (ColourFreeSpace on the left colour "
           "image) on asphalt, grass and floor at 1-6 m, scored by the same scorer, and its false sectors on empty "
-          "ground",
+          "ground; real: the one-camera mode scored beside the stereo detector on the same pairs",
           false},
          {"json", "OUT", "write all figures as JSON", false},
          {"data", "DIR", "shared data root, default $UGV_SHARED_DATA or ../shared/data", false},
@@ -1178,9 +1178,11 @@ std::optional<int> readChoices(const Args& args, EvalChoices& c)
                                               "use stereo or colour"});
     }
     c.colourDetector = detectorName == "colour";
-    if (c.colourDetector && (!args.has("sim") || args.has("approach") || args.has("hole-signal"))) {
-        return reportUsageError("eval", Error{"ugvsense eval --detector colour", "runs with --sim only",
-                                              "give --sim (the approach and hole signal are stereo measures)"});
+    if (c.colourDetector && ((!args.has("sim") && !args.has("real")) || args.has("approach") ||
+                             args.has("hole-signal") || args.has("middlebury"))) {
+        return reportUsageError("eval", Error{"ugvsense eval --detector colour", "runs with --sim and --real only",
+                                              "give --sim or --real (the approach, hole signal and Middlebury are "
+                                              "stereo measures)"});
     }
     if (args.has("ground-range")) {
         const std::string value = args.get("ground-range");
@@ -1312,14 +1314,15 @@ int runSimulated(const Args& args, const SimOptions& o, std::ostringstream& json
 }
 
 /// --real: the options of the real-pair suite, run.
-int runReal(const Args& args, bool groundRange, std::ostringstream& json)
+int runReal(const Args& args, const EvalChoices& choices, std::ostringstream& json)
 {
     RealEvalOptions real;
+    real.colour = choices.colourDetector;
     real.dir = args.get("real");
     real.overlayDir = args.get("overlay-dir");
     real.mount = args.get("mount");
     real.verbose = args.has("verbose");
-    real.groundRange = groundRange;
+    real.groundRange = choices.groundRange;
     std::stringstream list(args.get("pairs"));
     for (std::string name; std::getline(list, name, ',');) {
         real.pairs.push_back(name);
@@ -1373,7 +1376,7 @@ int runEval(int argc, char** argv)
     }
     if (args.has("real")) {
         json << (simulated || args.has("middlebury") ? ",\n" : "");
-        if (const int rc = runReal(args, choices.groundRange, json); rc != 0) {
+        if (const int rc = runReal(args, choices, json); rc != 0) {
             return rc;
         }
     }

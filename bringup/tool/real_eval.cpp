@@ -538,10 +538,71 @@ struct RealRun {
     RealScoringRules rules;
     RealTally ours;
     RealTally baseline;
+    RealTally colour;         ///< the one-camera mode (options.colour)
     double searchedSum = 0.0; ///< CensusSgm::searchedFraction over the pairs
     int searchedPairs = 0;
     bool firstJson = true;
 };
+
+/// The one-camera mode on a pair: its sectors (the layout equals the stereo detector's: same sector count and field
+/// of view) and what its reference band taught.
+struct ColourRun {
+    ObstacleSectors sectors;
+    vision::ColourReference reference;
+};
+
+/// --detector colour: ColourFreeSpace on the pair's left colour image, the ground of the mount (or the stereo
+/// detector's estimate: what a calibrated mount would give).
+Result<ColourRun, Error> colourSectors(const RealPair& pair, const RealImages& images, const RealRun& r,
+                                       const PairDetection& run)
+{
+    std::string why;
+    const cv::Mat bgr = readImage(pair.left, cv::IMREAD_COLOR, &why);
+    if (bgr.empty() || bgr.cols != pair.width || bgr.rows != pair.height) {
+        return Unexpected(
+            Error{pair.left.string(),
+                  "cannot read it in colour at the index's size" + (why.empty() ? std::string() : ": " + why),
+                  "give index.csv's left image"});
+    }
+    vision::ColourFreeSpaceConfig config;
+    config.sectorCount = r.config.sectors.sectorCount;
+    config.dangerDistanceM = r.config.sectors.dangerDistanceM;
+    config.cautionDistanceM = r.config.sectors.cautionDistanceM;
+    const vision::GroundPlane ground =
+        images.calib.mount ? vision::GroundPlane::fromMount(*images.calib.mount) : run.detector->ground();
+    auto colour = vision::ColourFreeSpace::create(config, bgr.size(), run.rectifier->projection(), ground);
+    if (!colour) {
+        return Unexpected(colour.error());
+    }
+    ColourRun out;
+    (void)colour->process(bgrViewOf(bgr), out.sectors); // the size was checked: always Ok
+    out.reference = colour->reference();
+    return out;
+}
+
+/// Whether the truth of a pair holds a drop (in any sector).
+bool hasDrop(const std::vector<SectorTruth>& truth, const RealScoringRules& rules)
+{
+    return std::any_of(truth.begin(), truth.end(),
+                       [&](const SectorTruth& t) { return t.dropPoints >= rules.minPoints; });
+}
+
+/// The one-camera mode's tally of a pair, its line printed (below the pair's).
+RealTally scoreColour(const ColourRun& mono, const std::vector<SectorTruth>& truth, const RealRun& r)
+{
+    RealTally c;
+    int unknown = 0;
+    for (int s = 0; s < mono.sectors.count; ++s) {
+        const auto k = static_cast<std::size_t>(s);
+        c.add(scoreRealSector(truth[k], mono.sectors.sectors[k], r.rules), truth[k], mono.sectors.sectors[k]);
+        unknown += mono.sectors.sectors[k].state == SectorState::Unknown ? 1 : 0;
+    }
+    std::printf("%-12s colour: %4d correct %4d missed %4d too near %4d false, %d of %d sectors Unknown; band: value "
+                "%.0f, %d ground colours covering %.2f\n",
+                "", c.correct, c.missed, c.tooNear, c.falseSectors, unknown, mono.sectors.count,
+                mono.reference.meanValue, mono.reference.groundColours, mono.reference.coverage);
+    return c;
+}
 
 /// One pair: ours and the baseline scored against the truth, the pair's line and JSON, the overlay.
 /// @return 0, or 1 on a pair that cannot be read or run, or an overlay that cannot be written.
@@ -566,9 +627,15 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
     }
     const std::vector<SectorTruth> truth = sectorTruth(images->gt, firstRow, *road, projection, ours, r.rules);
     const ObstacleSectors baseline = baselineSectors(*baseDisparity, firstRow, projection, ours, r.rules);
-    bool truthHasDrop = false;
-    for (const SectorTruth& t : truth) {
-        truthHasDrop = truthHasDrop || t.dropPoints >= r.rules.minPoints;
+    const bool truthHasDrop = hasDrop(truth, r.rules);
+    std::optional<ColourRun> mono;
+    if (r.options.colour) {
+        auto made = colourSectors(pair, *images, r, *run);
+        if (!made) {
+            std::cerr << "ugvsense eval: error: " << pair.name << ": " << made.error().message() << '\n';
+            return 1;
+        }
+        mono = std::move(made).value();
     }
     RealTally o;
     RealTally b;
@@ -586,8 +653,13 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
                 pair.name.c_str(), o.gtObstacle, o.correct, o.missed, o.tooNear, o.falseSectors, o.negativeNoDrop,
                 g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct, b.missed,
                 b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
+    const RealTally c = mono ? scoreColour(*mono, truth, r) : RealTally{};
     if (r.options.verbose) {
         printSectorLines(ours, truth, r.rules);
+        if (mono) {
+            std::printf("    one camera (colour):\n");
+            printSectorLines(mono->sectors, truth, r.rules);
+        }
     }
     json << (r.firstJson ? "\n" : ",\n") << "    {\"pair\": \"" << pair.name
          << "\", \"truth_has_drop\": " << (truthHasDrop ? "true" : "false")
@@ -597,7 +669,8 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
          << "}, \"image_noise_grey\": " << jsonNumber(run->detector->verifier().noiseSigma())
          << ", \"verifier_contrast_grey\": " << jsonNumber(run->detector->verifier().requiredContrast())
          << ", \"searched_fraction\": " << jsonNumber(run->detector->searchedFraction())
-         << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b) << "}";
+         << ", \"ours\": " << tallyJson(o) << ", \"opencv\": " << tallyJson(b)
+         << (mono ? ", \"colour\": " + tallyJson(c) : std::string()) << "}";
     r.firstJson = false;
     r.searchedSum += run->detector->searchedFraction();
     ++r.searchedPairs;
@@ -610,6 +683,7 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
     }
     r.ours.merge(o);
     r.baseline.merge(b);
+    r.colour.merge(c);
     return 0;
 }
 
@@ -622,6 +696,9 @@ void reportRealTotals(const RealRun& r, std::ostringstream& json)
                 r.config.matcher.groundRange ? "on" : "off", 100.0 * searched);
     printTally("ours", r.ours);
     printTally("opencv", r.baseline);
+    if (r.options.colour) {
+        printTally("colour", r.colour);
+    }
     const auto verdict = [](bool ok) { return ok ? "PASS" : "FAIL"; };
     const bool noWorse = r.ours.correctRate() >= r.baseline.correctRate() &&
                          r.ours.tooNear + r.ours.falseSectors <= r.baseline.tooNear + r.baseline.falseSectors;
@@ -631,7 +708,8 @@ void reportRealTotals(const RealRun& r, std::ostringstream& json)
                 verdict(r.ours.negativeNoDrop == 0));
     std::printf("against the plain OpenCV pipeline: correct no lower and too near + false no more: %s\n",
                 verdict(noWorse));
-    json << "\n  ], \"ours\": " << tallyJson(r.ours) << ", \"opencv\": " << tallyJson(r.baseline) << "}";
+    json << "\n  ], \"ours\": " << tallyJson(r.ours) << ", \"opencv\": " << tallyJson(r.baseline)
+         << (r.options.colour ? ", \"colour\": " + tallyJson(r.colour) : std::string()) << "}";
 }
 
 } // namespace
@@ -643,7 +721,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         std::cerr << "ugvsense eval: error: " << index.error().message() << '\n';
         return 1;
     }
-    RealRun r{options, std::nullopt, detectorConfig(DetectionOptions{}), RealScoringRules{}, {}, {}};
+    RealRun r{options, std::nullopt, detectorConfig(DetectionOptions{}), RealScoringRules{}, {}, {}, {}};
     if (!options.mount.empty()) {
         auto parsed = parseMount(options.mount);
         if (!parsed) {

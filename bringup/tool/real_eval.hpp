@@ -10,6 +10,7 @@
 /// Scoring per sector (scoreRealSector): a reported obstacle within max(1 m, 10 %) of the truth, or of the kerb,
 /// is correct; nearer is too near; farther, Clear or Unknown is missed; an obstacle reported where the truth has
 /// none (and no kerb at that range) is false.
+/// With `colour`, the one-camera mode on the left colour image is scored by the same rules beside them.
 /// The baseline in the same run: OpenCV StereoSGBM (128 disparities, block 5) on the full frame, its own RANSAC
 /// ground (fitGround) and a 0.25 m height threshold, through the same per-sector rule as the truth.
 /// Host tool only (allocates). Thread-safety: reentrant.
@@ -104,6 +105,9 @@ struct RealEvalOptions {
     std::vector<std::string> pairs;   ///< only these pairs (empty: all)
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
     bool groundRange = false;         ///< RoiMatcherConfig::groundRange (detectPair then runs each pair twice)
+    /// --detector colour: also the one-camera mode (vision::ColourFreeSpace on the left colour image, the ground of
+    /// --mount, else of the stereo detector's estimate as a calibrated mount would give it), scored the same way
+    bool colour = false;
 };
 
 /// "HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.

@@ -7,15 +7,15 @@
 #include <string>
 
 #include "ugv/platform/angles.hpp"
-#include <opencv2/core/hal/intrin.hpp>
 
 namespace ugv::vision {
 namespace {
 
-constexpr int kMaxWindowRadius = 15; // int16 window counts: (2 r + 1)^2 <= 961, far below 32767
+constexpr int kMaxWindowRadius = 15; // int16 column sums: 2 r + 1 <= 31 rows
+constexpr int kMaxSlices = 32;
 constexpr int kScoreMax = 255;
 constexpr int kHueRange = 180; // OpenCV 8-bit hue 0..179
-constexpr int kSatShift = 5;   // 256 / kSatBins
+constexpr int kGreyShift = 4;  // 256 / kGreyBins
 constexpr int kBlurTaps = 9;   // 3x3 box
 
 Error configError(const std::string& what, const std::string& fix)
@@ -23,63 +23,31 @@ Error configError(const std::string& what, const std::string& fix)
     return Error{"ColourFreeSpaceConfig", what, fix};
 }
 
-/// OpenCV's 8-bit BGR -> HSV (hue 0..179, saturation and value 0..255), reduced to the bin index.
-inline std::uint8_t colourBin(int b, int g, int r, int& sat, int& value) noexcept
+/// The colour bin of a blurred BGR pixel: grey by brightness below kGreyChroma, else OpenCV's 8-bit HSV hue
+/// (0..179) and saturation (0..255) reduced to kHueBins x kSatBins.
+inline std::uint8_t colourBin(int b, int g, int r, int& value) noexcept
 {
     const int v = std::max({b, g, r});
     const int diff = v - std::min({b, g, r});
     value = v;
-    sat = v == 0 ? 0 : (diff * kScoreMax + v / 2) / v;
-    int hue2 = 0; // hue in [0, 360) degrees
-    if (diff > 0) {
-        if (v == r) {
-            hue2 = 60 * (g - b) / diff;
-        } else if (v == g) {
-            hue2 = 120 + 60 * (b - r) / diff;
-        } else {
-            hue2 = 240 + 60 * (r - g) / diff;
-        }
-        if (hue2 < 0) {
-            hue2 += 360;
-        }
+    if (diff < kGreyChroma) {
+        return static_cast<std::uint8_t>(kChromaticBins + (v >> kGreyShift));
+    }
+    const int sat = (diff * kScoreMax + v / 2) / v; // v >= diff > 0
+    int hue2 = 0;                                   // hue in [0, 360) degrees
+    if (v == r) {
+        hue2 = 60 * (g - b) / diff;
+    } else if (v == g) {
+        hue2 = 120 + 60 * (b - r) / diff;
+    } else {
+        hue2 = 240 + 60 * (r - g) / diff;
+    }
+    if (hue2 < 0) {
+        hue2 += 360;
     }
     const int hue = std::min(hue2 / 2, kHueRange - 1);
     const int hueBin = hue * kHueBins / kHueRange;
-    return static_cast<std::uint8_t>(hueBin * kSatBins + (sat >> kSatShift));
-}
-
-/// Intersection sum_b min(window_b, ref_b); at most the window area (<= 961), so int16 lanes cannot overflow.
-inline int intersect(const std::int16_t* window, const std::int16_t* ref) noexcept
-{
-    int common = 0;
-    for (int b = 0; b < kColourBins; ++b) {
-        common += std::min(window[b], ref[b]);
-    }
-    return common;
-}
-
-/// window += enter - leave (one column in, one out), then intersect(window, ref). Counts stay within
-/// [0, window area], so the saturating 16-bit lane arithmetic of the vector path equals the scalar one.
-inline int slideAndIntersect(std::int16_t* window, const std::int16_t* enter, const std::int16_t* leave,
-                             const std::int16_t* ref) noexcept
-{
-    int b = 0;
-    int common = 0;
-#if CV_SIMD128
-    constexpr int kLanes = cv::v_int16x8::nlanes;
-    cv::v_int16x8 sum = cv::v_setzero_s16();
-    for (; b + kLanes <= kColourBins; b += kLanes) {
-        const cv::v_int16x8 w = cv::v_load(window + b) + cv::v_load(enter + b) - cv::v_load(leave + b);
-        cv::v_store(window + b, w);
-        sum += cv::v_min(w, cv::v_load(ref + b));
-    }
-    common = cv::v_reduce_sum(sum);
-#endif
-    for (; b < kColourBins; ++b) {
-        window[b] = static_cast<std::int16_t>(window[b] + enter[b] - leave[b]);
-        common += std::min(window[b], ref[b]);
-    }
-    return common;
+    return static_cast<std::uint8_t>(hueBin * kSatBins + sat * kSatBins / (kScoreMax + 1));
 }
 
 /// First ROI row [px]: roiTopFraction of the image height, rounded.
@@ -111,18 +79,22 @@ Result<void, Error> checkConfig(const ColourFreeSpaceConfig& config, cv::Size im
         return Unexpected(configError("the ROI has fewer rows than the window (" + std::to_string(win) + ")",
                                       "lower roiTopFraction or windowRadius"));
     }
-    if (config.patchWidth < win || config.patchHeight < win || config.patchWidth > imageSize.width ||
-        config.patchHeight > imageSize.height - roiTop) {
-        return Unexpected(configError("reference patch " + std::to_string(config.patchWidth) + "x" +
-                                          std::to_string(config.patchHeight) + " does not fit the ROI",
-                                      "the patch must be at least one window and lie inside the ROI rows"));
+    if (config.bandRows < win || config.bandRows > imageSize.height - roiTop) {
+        return Unexpected(configError("bandRows " + std::to_string(config.bandRows) + " does not fit the ROI",
+                                      "the reference band must be at least one window (" + std::to_string(win) +
+                                          " rows) and lie inside the ROI rows, e.g. 40"));
+    }
+    if (config.bandSlices < 2 || config.bandSlices > kMaxSlices || imageSize.width / config.bandSlices < win) {
+        return Unexpected(configError("bandSlices " + std::to_string(config.bandSlices) + " is out of range",
+                                      "use 2.." + std::to_string(kMaxSlices) + " slices at least one window wide"));
     }
     if (!(config.matchThreshold > 0.0 && config.matchThreshold <= 1.0) ||
-        !(config.patchSelfMatch > 0.0 && config.patchSelfMatch <= 1.0) ||
-        !(config.minPatchConsistency >= 0.0 && config.minPatchConsistency <= 1.0)) {
-        return Unexpected(configError("matchThreshold, patchSelfMatch and minPatchConsistency must lie in (0, 1], "
-                                      "(0, 1] and [0, 1]",
-                                      "use e.g. 0.5, 0.65 and 0.7"));
+        !(config.minColourShare > 0.0 && config.minColourShare <= 1.0) ||
+        !(config.minSliceFraction > 0.0 && config.minSliceFraction <= 1.0) ||
+        !(config.minGroundCoverage >= 0.0 && config.minGroundCoverage <= 1.0)) {
+        return Unexpected(configError("matchThreshold, minColourShare, minSliceFraction and minGroundCoverage must "
+                                      "lie in (0, 1], (0, 1], (0, 1] and [0, 1]",
+                                      "use e.g. 0.5, 0.02, 0.5 and 0.7"));
     }
     if (config.minObstacleRows < 1 || config.minObstacleRows > imageSize.height - roiTop) {
         return Unexpected(configError("minObstacleRows " + std::to_string(config.minObstacleRows) + " is out of range",
@@ -165,10 +137,10 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
     sut.roiTop_ = roiTop;
     sut.binTop_ = std::max(0, roiTop - config.windowRadius);
     sut.thresholdScore_ = static_cast<int>(std::lround(config.matchThreshold * kScoreMax));
-    sut.selfScore_ = static_cast<int>(std::lround(config.patchSelfMatch * kScoreMax));
     sut.bins_ = Image<std::uint8_t>(imageSize.width, imageSize.height - sut.binTop_);
     sut.scores_ = Image<std::uint8_t>(imageSize.width, imageSize.height - roiTop);
-    sut.colHist_.assign(static_cast<std::size_t>(imageSize.width) * kColourBins, 0);
+    sut.colSum_.assign(static_cast<std::size_t>(imageSize.width), 0);
+    sut.sliceCounts_.assign(static_cast<std::size_t>(config.bandSlices) * kColourBins, 0);
     const auto w = static_cast<std::size_t>(imageSize.width);
     sut.columnRange_.assign(w, 0.0F);
     sut.columnBearing_.assign(w, 0.0F);
@@ -225,12 +197,9 @@ void ColourFreeSpace::computeBins(ConstBgrView image) noexcept
 {
     const int width = size_.width;
     const int height = size_.height;
-    const int patchX0 = (width - config_.patchWidth) / 2;
-    const int patchX1 = patchX0 + config_.patchWidth;
-    const int patchY0 = height - config_.patchHeight;
-    patchCounts_.fill(0);
-    std::int64_t satSum = 0;
-    std::int64_t valueSum = 0;
+    const int bandTop = height - config_.bandRows;
+    std::fill(sliceCounts_.begin(), sliceCounts_.end(), 0);
+    bandValueSum_ = 0;
     std::uint16_t* sums = rowSum_.data();
     for (int y = binTop_; y < height; ++y) {
         // 3x3 box blur with replicated borders: vertical 3-row sums, then 3 horizontal taps.
@@ -243,7 +212,7 @@ void ColourFreeSpace::computeBins(ConstBgrView image) noexcept
             sums[3 * x + 2] = static_cast<std::uint16_t>(above[x].r + centre[x].r + below[x].r);
         }
         std::uint8_t* binRow = bins_.view().row(y - binTop_);
-        const bool inPatchRows = y >= patchY0;
+        const bool inBand = y >= bandTop;
         for (int x = 0; x < width; ++x) {
             const int left = 3 * std::max(x - 1, 0);
             const int mid = 3 * x;
@@ -251,31 +220,67 @@ void ColourFreeSpace::computeBins(ConstBgrView image) noexcept
             const int b = (sums[left] + sums[mid] + sums[right] + kBlurTaps / 2) / kBlurTaps;
             const int g = (sums[left + 1] + sums[mid + 1] + sums[right + 1] + kBlurTaps / 2) / kBlurTaps;
             const int r = (sums[left + 2] + sums[mid + 2] + sums[right + 2] + kBlurTaps / 2) / kBlurTaps;
-            int sat = 0;
             int value = 0;
-            const std::uint8_t bin = colourBin(b, g, r, sat, value);
+            const std::uint8_t bin = colourBin(b, g, r, value);
             binRow[x] = bin;
-            if (inPatchRows && x >= patchX0 && x < patchX1) {
-                ++patchCounts_[bin];
-                satSum += sat;
-                valueSum += value;
+            if (inBand) {
+                const int slice = x * config_.bandSlices / width;
+                ++sliceCounts_[static_cast<std::size_t>(slice) * kColourBins + bin];
+                bandValueSum_ += value;
             }
         }
     }
-    const double patchArea = static_cast<double>(config_.patchWidth) * config_.patchHeight;
-    reference_.meanSaturation = static_cast<double>(satSum) / patchArea;
-    reference_.meanValue = static_cast<double>(valueSum) / patchArea;
 }
 
 void ColourFreeSpace::computeReference() noexcept
 {
-    const int win = 2 * config_.windowRadius + 1;
-    const std::int64_t area = static_cast<std::int64_t>(win) * win;
-    const std::int64_t patchArea = static_cast<std::int64_t>(config_.patchWidth) * config_.patchHeight;
-    for (int b = 0; b < kColourBins; ++b) {
-        ref_[static_cast<std::size_t>(b)] =
-            static_cast<std::int16_t>((patchCounts_[static_cast<std::size_t>(b)] * area + patchArea / 2) / patchArea);
+    const int width = size_.width;
+    const int slices = config_.bandSlices;
+    const int needSlices = static_cast<int>(std::ceil(config_.minSliceFraction * slices - 1e-9));
+    std::array<std::int32_t, kMaxSlices> minCount{};
+    for (int s = 0; s < slices; ++s) {
+        const int x0 = (s * width + slices - 1) / slices; // first x with x * slices / width == s
+        const int x1 = ((s + 1) * width + slices - 1) / slices;
+        const double pixels = static_cast<double>(x1 - x0) * config_.bandRows;
+        minCount[static_cast<std::size_t>(s)] =
+            std::max(1, static_cast<std::int32_t>(std::ceil(config_.minColourShare * pixels)));
     }
+    std::int64_t covered = 0;
+    int colours = 0;
+    for (int bin = 0; bin < kColourBins; ++bin) {
+        int present = 0;
+        std::int64_t count = 0;
+        for (int s = 0; s < slices; ++s) {
+            const std::int32_t c = sliceCounts_[static_cast<std::size_t>(s) * kColourBins + bin];
+            present += c >= minCount[static_cast<std::size_t>(s)] ? 1 : 0;
+            count += c;
+        }
+        const bool ground = present >= needSlices;
+        learnt_[static_cast<std::size_t>(bin)] = ground ? 1 : 0;
+        covered += ground ? count : 0;
+        colours += ground ? 1 : 0;
+    }
+    // A hue one bin from a learnt colour's (same saturation) is ground too: the bins' edges are arbitrary, and a
+    // ground whose hue drifts across an edge (a lawn from lush to dry, the light's colour from sun to shade) must not
+    // turn into an obstacle there. Brightness and saturation are not widened: they are what tells concrete from
+    // asphalt, or a grey post from the road.
+    for (int bin = 0; bin < kColourBins; ++bin) {
+        std::uint8_t near = learnt_[static_cast<std::size_t>(bin)];
+        if (bin < kChromaticBins) {
+            const int hue = bin / kSatBins;
+            const int sat = bin % kSatBins;
+            for (const int h : {(hue + kHueBins - 1) % kHueBins, (hue + 1) % kHueBins}) { // hue is circular
+                near |= learnt_[static_cast<std::size_t>(h * kSatBins + sat)];
+            }
+        }
+        groundColour_[static_cast<std::size_t>(bin)] = near;
+    }
+    const double bandPixels = static_cast<double>(width) * config_.bandRows;
+    reference_.meanValue = static_cast<double>(bandValueSum_) / bandPixels;
+    reference_.coverage = static_cast<double>(covered) / bandPixels;
+    reference_.groundColours = colours;
+    reference_.groundLike =
+        reference_.meanValue >= config_.minBandValue && reference_.coverage >= config_.minGroundCoverage;
 }
 
 void ColourFreeSpace::computeScores() noexcept
@@ -289,32 +294,27 @@ void ColourFreeSpace::computeScores() noexcept
     const int yLast = height - 1 - r;
     const ConstImageViewU8 bins = bins_.view();
     const ImageViewU8 scores = scores_.view();
-    std::int16_t* colHist = colHist_.data();
-    const std::int16_t* ref = ref_.data();
+    std::int16_t* colSum = colSum_.data();
+    const std::uint8_t* ground = groundColour_.data();
 
-    std::fill(colHist_.begin(), colHist_.end(), std::int16_t{0});
+    std::fill(colSum_.begin(), colSum_.end(), std::int16_t{0});
     for (int y = yFirst - r; y <= yFirst + r; ++y) {
         const std::uint8_t* row = bins.row(y - binTop_);
         for (int x = 0; x < width; ++x) {
-            ++colHist[x * kColourBins + row[x]];
+            colSum[x] = static_cast<std::int16_t>(colSum[x] + ground[row[x]]);
         }
     }
-    std::array<std::int16_t, kColourBins> window{};
     for (int y = yFirst; y <= yLast; ++y) {
-        window.fill(0);
+        int window = 0;
         for (int x = 0; x < win; ++x) {
-            const std::int16_t* column = colHist + x * kColourBins;
-            for (int b = 0; b < kColourBins; ++b) {
-                window[static_cast<std::size_t>(b)] =
-                    static_cast<std::int16_t>(window[static_cast<std::size_t>(b)] + column[b]);
-            }
+            window += colSum[x];
         }
         std::uint8_t* scoreRow = scores.row(y - roiTop_);
         for (int x = r; x <= width - 1 - r; ++x) {
-            const int common = x > r ? slideAndIntersect(window.data(), colHist + (x + r) * kColourBins,
-                                                         colHist + (x - r - 1) * kColourBins, ref)
-                                     : intersect(window.data(), ref);
-            scoreRow[x] = static_cast<std::uint8_t>(std::min((common * kScoreMax + area / 2) / area, kScoreMax));
+            if (x > r) {
+                window += colSum[x + r] - colSum[x - r - 1];
+            }
+            scoreRow[x] = static_cast<std::uint8_t>((window * kScoreMax + area / 2) / area);
         }
         std::fill(scoreRow, scoreRow + r, scoreRow[r]);
         std::fill(scoreRow + width - r, scoreRow + width, scoreRow[width - 1 - r]);
@@ -322,8 +322,7 @@ void ColourFreeSpace::computeScores() noexcept
             const std::uint8_t* leaveRow = bins.row(y - r - binTop_);
             const std::uint8_t* enterRow = bins.row(y + r + 1 - binTop_);
             for (int x = 0; x < width; ++x) {
-                --colHist[x * kColourBins + leaveRow[x]];
-                ++colHist[x * kColourBins + enterRow[x]];
+                colSum[x] = static_cast<std::int16_t>(colSum[x] + ground[enterRow[x]] - ground[leaveRow[x]]);
             }
         }
     }
@@ -333,23 +332,6 @@ void ColourFreeSpace::computeScores() noexcept
     for (int y = yLast + 1; y < height; ++y) {
         std::copy_n(scores.row(yLast - roiTop_), width, scores.row(y - roiTop_));
     }
-
-    // The patch must match itself: a patch that is partly occluded or mixed does not (a window of one part
-    // shares only that part's share with the whole-patch histogram).
-    const int patchX0 = (width - config_.patchWidth) / 2;
-    const int patchY0 = height - config_.patchHeight;
-    int matching = 0;
-    for (int y = patchY0; y < height; ++y) {
-        const std::uint8_t* scoreRow = scores.row(y - roiTop_);
-        for (int x = patchX0; x < patchX0 + config_.patchWidth; ++x) {
-            matching += scoreRow[x] >= selfScore_ ? 1 : 0;
-        }
-    }
-    reference_.consistency =
-        static_cast<double>(matching) / (static_cast<double>(config_.patchWidth) * config_.patchHeight);
-    reference_.groundLike = reference_.meanSaturation >= config_.minPatchSaturation &&
-                            reference_.meanValue >= config_.minPatchValue &&
-                            reference_.consistency >= config_.minPatchConsistency;
 }
 
 void ColourFreeSpace::scanColumns() noexcept
@@ -415,7 +397,7 @@ void ColourFreeSpace::fillSectors(ObstacleSectors& out) noexcept
         } else {
             continue; // the free run ends at the ROI top short of the caution distance: not known to be free
         }
-        s.confidence = static_cast<float>(reference_.consistency);
+        s.confidence = static_cast<float>(reference_.coverage);
         s.danger = classify(s.state, s.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);
     }
 }

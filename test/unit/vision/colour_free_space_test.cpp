@@ -1,5 +1,5 @@
-// Colour-histogram free space on simulator scenes tinted by their ground-truth labels (the simulator renders grey):
-// green textured ground, brown or grey obstacles, blue-ish sky. Ranges are checked against the simulator's
+// Colour free space on simulator scenes tinted by their ground-truth labels: green textured ground, brown or grey
+// obstacles, blue-ish sky (or the grey render itself, for grey ground). Ranges are checked against the simulator's
 // ground-truth sectors.
 
 #include "ugv/vision/colour_free_space.hpp"
@@ -112,7 +112,7 @@ TEST(ColourFreeSpace, EmptyGrassIsClearEverywhere)
     const auto status = sut.process(bgrView(tintByLabels(frame, {})), out);
 
     ASSERT_EQ(status, ColourFreeSpaceStatus::Ok);
-    EXPECT_TRUE(sut.reference().groundLike) << sut.reference().meanSaturation << " " << sut.reference().consistency;
+    EXPECT_TRUE(sut.reference().groundLike) << sut.reference().meanValue << " " << sut.reference().coverage;
     ASSERT_EQ(out.count, 64);
     for (int i = 0; i < out.count; ++i) {
         EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << "sector " << i;
@@ -137,8 +137,8 @@ void expectObstacleAt(double rangeM, double bearingDeg, const Tint& tint)
     EXPECT_EQ(out.sectors[hit].state, SectorState::Obstacle);
     EXPECT_EQ(out.sectors[hit].kind, ugv::ObstacleKind::Positive);
     EXPECT_NEAR(out.sectors[hit].rangeM, truth.rangeM, 0.05 * truth.rangeM) << "truth " << truth.rangeM;
-    std::printf("box at %.1f m, %.0f deg: free range %.3f m, truth %.3f m, patch consistency %.2f\n", rangeM,
-                bearingDeg, out.sectors[hit].rangeM, truth.rangeM, sut.reference().consistency);
+    std::printf("box at %.1f m, %.0f deg: free range %.3f m, truth %.3f m, band coverage %.2f\n", rangeM, bearingDeg,
+                out.sectors[hit].rangeM, truth.rangeM, sut.reference().coverage);
     // Sectors well away from the box (10 deg beyond its bearing, on the far side of the axis) are clear.
     const std::size_t away = sectorAt(out, bearingDeg > 0.0 ? bearingDeg - 20.0 : bearingDeg + 20.0);
     EXPECT_EQ(out.sectors[away].state, SectorState::Clear);
@@ -159,37 +159,119 @@ TEST(ColourFreeSpace, BoxToTheRightAtThreeMetres)
     expectObstacleAt(3.0, -15.0, {});
 }
 
-TEST(ColourFreeSpace, GreyOnGreyIsUnknownNotClear)
+TEST(ColourFreeSpace, GreyGroundHasColoursToo)
 {
-    const auto scene = catalogue("box", 5.0, 0.0);
+    // Asphalt-like: no hue anywhere. The grey ground's brightness is its colour, and a box twice as bright stands out.
+    const auto scene = catalogue("box", 4.0, 0.0);
     const auto frame = renderScene(scene);
+    cv::Mat bgr;
+    cv::cvtColor(frame.left, bgr, cv::COLOR_GRAY2BGR);
+    const cv::Mat box = frame.labels != static_cast<std::uint8_t>(ugv::sim::Label::Ground);
+    bgr.setTo(cv::Scalar(200, 200, 200), box);
     auto sut = makeSut(scene.rig);
     ObstacleSectors out;
 
-    ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, Tint{0, 0, true})), out), ColourFreeSpaceStatus::Ok);
+    ASSERT_EQ(sut.process(bgrView(bgr), out), ColourFreeSpaceStatus::Ok);
 
-    EXPECT_FALSE(sut.reference().groundLike);
-    EXPECT_LT(sut.reference().meanSaturation, ColourFreeSpaceConfig{}.minPatchSaturation);
-    for (int i = 0; i < out.count; ++i) {
-        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown) << "sector " << i;
-        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].confidence, 0.0F);
-    }
+    EXPECT_TRUE(sut.reference().groundLike) << sut.reference().coverage;
+    const std::size_t hit = sectorAt(out, 0.0);
+    const auto& truth = frame.sectors.sectors[hit];
+    ASSERT_EQ(truth.state, SectorState::Obstacle);
+    EXPECT_EQ(out.sectors[hit].state, SectorState::Obstacle);
+    EXPECT_NEAR(out.sectors[hit].rangeM, truth.rangeM, 0.05 * truth.rangeM);
+    EXPECT_EQ(out.sectors[sectorAt(out, 20.0)].state, SectorState::Clear);
 }
 
-TEST(ColourFreeSpace, PartlyOccludedReferencePatchIsUnknown)
+TEST(ColourFreeSpace, AnObstacleStandingInPartOfTheBandIsNotGround)
 {
+    // A brown post at 1.4 m stands in the reference band (its base is in the band's rows): its colour holds one slice
+    // of the band, the grass all of them, so the post is an obstacle and the rest is clear.
     ugv::sim::Scene scene = catalogue("empty", 5.0, 0.0);
-    scene.obstacles.push_back(ugv::sim::box(1.8, 0.0, 0.5, 0.4, 0.5)); // covers about a third of the patch
+    constexpr double kBearingDeg = 12.0;
+    scene.obstacles.push_back(ugv::sim::box(1.4, kBearingDeg, 0.15, 0.15, 0.8));
     const auto frame = renderScene(scene);
     auto sut = makeSut(scene.rig);
     ObstacleSectors out;
 
     ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, {})), out), ColourFreeSpaceStatus::Ok);
 
+    EXPECT_TRUE(sut.reference().groundLike);
+    const std::size_t hit = sectorAt(out, kBearingDeg);
+    EXPECT_EQ(out.sectors[hit].state, SectorState::Obstacle);
+    EXPECT_LT(out.sectors[hit].rangeM, 1.6F);
+    EXPECT_EQ(out.sectors[sectorAt(out, -20.0)].state, SectorState::Clear);
+}
+
+TEST(ColourFreeSpace, AGroundWhoseHueDriftsAcrossABinEdgeStaysClear)
+{
+    // The band's grass has hue 52 (bin 4 of 0..179 in 16 bins); beyond 3 m it dries to hue 44 (bin 3), a colour the
+    // band never showed. Without the one-bin hue tolerance every sector would end at 3 m.
+    const auto scene = catalogue("empty", 5.0, 0.0);
+    const auto frame = renderScene(scene);
+    cv::Mat bgr = tintByLabels(frame, {});
+    cv::Mat hsv;
+    cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+    const double rowAt3m = scene.rig.cy() + scene.rig.focalPx * scene.rig.heightM / 3.0;
+    for (int y = 0; y < hsv.rows; ++y) {
+        for (int x = 0; x < hsv.cols; ++x) {
+            auto& p = hsv.at<cv::Vec3b>(y, x);
+            if (frame.labels.at<std::uint8_t>(y, x) == static_cast<std::uint8_t>(ugv::sim::Label::Ground)) {
+                p[0] = y < rowAt3m ? 44 : 52;
+            }
+        }
+    }
+    cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(bgr), out), ColourFreeSpaceStatus::Ok);
+
+    ASSERT_TRUE(sut.reference().groundLike);
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << "sector " << i;
+    }
+}
+
+TEST(ColourFreeSpace, ABandWithNoColourAlongHalfOfItIsUnknownNotClear)
+{
+    // Clutter: blocks of random colours, none of them along half the band. No colour is the ground's with any
+    // certainty, so every sector is Unknown (never Clear).
+    const ugv::sim::Rig rig;
+    cv::Mat hsv(rig.height, rig.width, CV_8UC3);
+    cv::RNG random(7);
+    constexpr int kBlock = 40;
+    for (int y = 0; y < rig.height; y += kBlock) {
+        for (int x = 0; x < rig.width; x += kBlock) {
+            const cv::Scalar colour(random.uniform(0, 180), random.uniform(80, 256), random.uniform(60, 256));
+            hsv(cv::Rect(x, y, std::min(kBlock, rig.width - x), std::min(kBlock, rig.height - y))).setTo(colour);
+        }
+    }
+    cv::Mat bgr;
+    cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+    auto sut = makeSut(rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(bgr), out), ColourFreeSpaceStatus::Ok);
+
+    EXPECT_FALSE(sut.reference().groundLike) << sut.reference().coverage;
+    EXPECT_LT(sut.reference().coverage, ColourFreeSpaceConfig{}.minGroundCoverage);
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown) << "sector " << i;
+        EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].confidence, 0.0F);
+    }
+}
+
+TEST(ColourFreeSpace, ATooDarkBandIsUnknownNotClear)
+{
+    const auto scene = catalogue("empty", 5.0, 0.0);
+    const cv::Mat night = tintByLabels(renderScene(scene), {}) * 0.15;
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(night), out), ColourFreeSpaceStatus::Ok);
+
+    EXPECT_LT(sut.reference().meanValue, ColourFreeSpaceConfig{}.minBandValue);
     EXPECT_FALSE(sut.reference().groundLike);
-    EXPECT_LT(sut.reference().consistency, ColourFreeSpaceConfig{}.minPatchConsistency);
-    std::printf("occluded patch: consistency %.2f, mean saturation %.0f\n", sut.reference().consistency,
-                sut.reference().meanSaturation);
     for (int i = 0; i < out.count; ++i) {
         EXPECT_EQ(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Unknown) << "sector " << i;
     }
@@ -209,24 +291,23 @@ TEST(ColourFreeSpace, IncrementalScoresEqualPerWindowRecomputation)
     const int area = (2 * r + 1) * (2 * r + 1);
     const auto bins = sut.bins();
     const auto scores = sut.scores();
-    const auto& ref = sut.referenceHistogram();
+    const auto& ground = sut.groundColours();
     int mismatches = 0;
+    int checked = 0;
     for (int y = sut.roiTop(); y < scene.rig.height - r; y += 3) {
         for (int x = r; x < scene.rig.width - r; x += 2) {
-            std::array<int, ugv::vision::kColourBins> hist{};
+            int common = 0;
             for (int v = y - r; v <= y + r; ++v) {
                 for (int u = x - r; u <= x + r; ++u) {
-                    ++hist[bins.at(u, v - sut.binTop())];
+                    common += ground[bins.at(u, v - sut.binTop())];
                 }
             }
-            int common = 0;
-            for (std::size_t b = 0; b < hist.size(); ++b) {
-                common += std::min(hist[b], static_cast<int>(ref[b]));
-            }
-            const int expected = std::min((common * 255 + area / 2) / area, 255);
+            const int expected = (common * 255 + area / 2) / area;
             mismatches += scores.at(x, y - sut.roiTop()) == expected ? 0 : 1;
+            ++checked;
         }
     }
+    EXPECT_GT(checked, 10000);
     EXPECT_EQ(mismatches, 0);
 }
 
@@ -271,23 +352,23 @@ TEST(ColourFreeSpace, CreateRejectsBadConfigNamingIt)
     const auto ground = ugv::vision::GroundPlane::fromMount({0.59, 0.0, 0.0});
     ColourFreeSpaceConfig window;
     window.windowRadius = 0;
-    ColourFreeSpaceConfig patch;
-    patch.patchHeight = 300;
+    ColourFreeSpaceConfig band;
+    band.bandRows = 300;
     ColourFreeSpaceConfig threshold;
     threshold.matchThreshold = 0.0;
     ColourFreeSpaceConfig sectors;
     sectors.sectorCount = ugv::kMaxSectors + 1;
 
     const auto badWindow = ColourFreeSpace::create(window, {640, 480}, projection, ground);
-    const auto badPatch = ColourFreeSpace::create(patch, {640, 480}, projection, ground);
+    const auto badBand = ColourFreeSpace::create(band, {640, 480}, projection, ground);
     const auto badThreshold = ColourFreeSpace::create(threshold, {640, 480}, projection, ground);
     const auto badSectors = ColourFreeSpace::create(sectors, {640, 480}, projection, ground);
     const auto badGround = ColourFreeSpace::create({}, {640, 480}, projection, ugv::vision::GroundPlane{});
 
     ASSERT_FALSE(badWindow.has_value());
     EXPECT_NE(badWindow.error().what.find("windowRadius"), std::string::npos);
-    ASSERT_FALSE(badPatch.has_value());
-    EXPECT_NE(badPatch.error().what.find("patch"), std::string::npos);
+    ASSERT_FALSE(badBand.has_value());
+    EXPECT_NE(badBand.error().what.find("bandRows"), std::string::npos);
     ASSERT_FALSE(badThreshold.has_value());
     EXPECT_NE(badThreshold.error().what.find("matchThreshold"), std::string::npos);
     ASSERT_FALSE(badSectors.has_value());

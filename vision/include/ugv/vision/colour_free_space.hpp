@@ -1,24 +1,31 @@
 #pragma once
 
 /// @file
-/// Single-camera colour free space: "the ground looks like the patch in front of the vehicle".
+/// Single-camera colour free space: "the ground looks like the ground just in front of the vehicle".
 ///
-/// From one BGR image: 3x3 box blur, hue-saturation bins (kHueBins x kSatBins, OpenCV's HSV scales: hue
-/// 0..179, saturation 0..255), the histogram of a reference patch at the bottom centre of the image, and a
-/// sliding-window comparison of every ROI pixel's (2 radius + 1)^2 window histogram against the reference by
-/// histogram intersection (sum_b min(window_b, reference_b) / window area, in [0, 1]). The window histograms are
-/// updated incrementally (per-column vertical histograms rolled down the rows, and a horizontal running window
-/// histogram), so the cost per pixel is O(bins) whatever the window size. Then each column is scanned upwards from
-/// the bottom to the first non-free pixel; that row's ground point (ray of the pixel meets the ground plane)
-/// gives the free range and bearing, and each sector takes the minimum over its columns.
+/// From one BGR image: 3x3 box blur, then one colour bin per pixel: a chromatic pixel (max - min of B, G, R at
+/// least kGreyChroma) by hue and saturation (kHueBins x kSatBins, OpenCV's HSV scales), an achromatic one by its
+/// brightness (kGreyBins), so that grey ground (asphalt, concrete) has colours too; hue is noise below that chroma
+/// whatever the brightness. The ground's colours are learnt from the reference band, the bottom bandRows rows over
+/// the whole width, cut into bandSlices column slices: a bin is a ground colour when it holds at least
+/// minColourShare of the pixels of at least minSliceFraction of the slices. A colour seen along half the band is
+/// ground; an obstacle standing in a smaller part of it (a post, a parked car at the side) is not, and neither are
+/// the few pixels of noise in stray bins. A hue one bin from a ground colour's (same saturation) is ground too: bin
+/// edges are arbitrary, and a ground whose hue drifts across one must not become an obstacle there. Every ROI pixel's
+/// (2 radius + 1)^2 window scores the share of its pixels with ground colours (a running box sum: O(1) per pixel); the
+/// window is free when that share reaches matchThreshold, i.e. when most of it looks like ground however the ground's
+/// colours mix (a lawn drifting between lush and dry stays free as long as both were seen in the band). Then each
+/// column is scanned upwards from the bottom to the first non-free run; that row's ground point (ray of the pixel meets
+/// the ground plane) gives the free range and bearing, and each sector takes the minimum over its columns.
 ///
 /// Sector states: Obstacle (kind Positive) when a column's free run ends inside the ROI; Clear when every column of
 /// the sector reaches the ROI top (or the horizon, i.e. maxRangeM) beyond the caution distance; Unknown when the
-/// reference patch is not ground-like (too little saturation or brightness for hue to mean anything, or the patch
-/// does not match itself, i.e. it is occluded or mixed) or the free run reaches the ROI top short of the caution
-/// distance. Output sectors are marked `degraded` (a single-camera fallback) and carry heightM 0.
+/// band is not ground-like (too dark for colour to mean anything, or less than minGroundCoverage of it in ground
+/// colours: the band is mostly obstacle or clutter) or the free run reaches the ROI top short of the caution
+/// distance. Output sectors are marked `degraded` (a single-camera mode) and carry heightM 0.
 ///
-/// This is the method of the original system, whose per-window recomputation was too slow; here it is linear.
+/// Limits, by design of a colour cue: an obstacle in the ground's own colours is not seen; one across the whole band
+/// (nearer than the band's far edge, about 1.6 m on the default rig) becomes ground.
 
 #include <array>
 #include <cstdint>
@@ -46,25 +53,28 @@ static_assert(sizeof(BgrPixel) == 3, "BgrPixel must match CV_8UC3");
 /// A view of a BGR image; width in pixels, stride in bytes (as cv::Mat::step).
 using ConstBgrView = ImageView<const BgrPixel>;
 
-inline constexpr int kHueBins = 16;                     ///< over OpenCV hue 0..179
-inline constexpr int kSatBins = 8;                      ///< over saturation 0..255
-inline constexpr int kColourBins = kHueBins * kSatBins; ///< bin index = hueBin * kSatBins + satBin
+inline constexpr int kHueBins = 16;                            ///< over OpenCV hue 0..179
+inline constexpr int kSatBins = 7;                             ///< over saturation 0..255
+inline constexpr int kGreyBins = 16;                           ///< over brightness 0..255
+inline constexpr int kChromaticBins = kHueBins * kSatBins;     ///< bin = hueBin * kSatBins + satBin
+inline constexpr int kColourBins = kChromaticBins + kGreyBins; ///< grey bins follow: kChromaticBins + value / 16
+inline constexpr int kGreyChroma = 16; ///< max - min of B, G, R (after the blur) below which a pixel is grey
 
 struct ColourFreeSpaceConfig {
-    double roiTopFraction = 0.5;      ///< first analysed row = round(height * roiTopFraction)
-    int patchWidth = 160;             ///< [px] reference patch, centred horizontally
-    int patchHeight = 120;            ///< [px] reference patch, ending at the bottom row
-    int windowRadius = 7;             ///< [px] comparison window (2 r + 1)^2, r in [1, 15]
-    double matchThreshold = 0.5;      ///< intersection >= this => free, in (0, 1]
-    int minObstacleRows = 3;          ///< [px] consecutive non-free rows that end a column's free run
-    double minPatchSaturation = 40.0; ///< mean saturation (0..255) of the patch below which it is not ground-like
-    double minPatchValue = 30.0;      ///< mean brightness (0..255) below which hue is noise
-    double patchSelfMatch = 0.65;     ///< a window of the patch matches the patch when its intersection >= this
-    double minPatchConsistency = 0.7; ///< fraction of the patch's own windows that must match the patch
-    double maxRangeM = 50.0;          ///< [m] rows farther than this count as the horizon (end of the scan)
-    int sectorCount = 64;             ///< sectors over the horizontal field of view, 1..kMaxSectors
-    float dangerDistanceM = 1.5F;     ///< [m] classify(): Red below
-    float cautionDistanceM = 5.0F;    ///< [m] classify(): Blue below; a free run must reach this to be Clear
+    double roiTopFraction = 0.5;    ///< first analysed row = round(height * roiTopFraction)
+    int bandRows = 40;              ///< [px] reference band: the bottom rows of the image, the whole width
+    int bandSlices = 8;             ///< column slices of the band, 2..32
+    double minColourShare = 0.02;   ///< a bin is present in a slice holding at least this share of its pixels
+    double minSliceFraction = 0.5;  ///< a ground colour is present in at least this fraction of the slices
+    double minGroundCoverage = 0.5; ///< share of the band in ground colours below which it is not ground-like
+    double minBandValue = 30.0;     ///< mean brightness (0..255) of the band below which colour is noise
+    int windowRadius = 7;           ///< [px] comparison window (2 r + 1)^2, r in [1, 15]
+    double matchThreshold = 0.5;    ///< share of a window's pixels in ground colours >= this => free, in (0, 1]
+    int minObstacleRows = 3;        ///< [px] consecutive non-free rows that end a column's free run
+    double maxRangeM = 50.0;        ///< [m] rows farther than this count as the horizon (end of the scan)
+    int sectorCount = 64;           ///< sectors over the horizontal field of view, 1..kMaxSectors
+    float dangerDistanceM = 1.5F;   ///< [m] classify(): Red below
+    float cautionDistanceM = 5.0F;  ///< [m] classify(): Blue below; a free run must reach this to be Clear
 };
 
 /// Outcome of ColourFreeSpace::process; no strings on the frame path.
@@ -73,12 +83,12 @@ enum class ColourFreeSpaceStatus : std::uint8_t {
     WrongInputSize, ///< the image is not the configured size; sectors set to all Unknown
 };
 
-/// Statistics of the last frame's reference patch.
+/// What the last frame's reference band taught.
 struct ColourReference {
-    double meanSaturation = 0.0; ///< 0..255, after the blur
-    double meanValue = 0.0;      ///< 0..255
-    double consistency = 0.0;    ///< fraction of patch windows whose intersection >= patchSelfMatch
-    bool groundLike = false;     ///< all three above their thresholds
+    double meanValue = 0.0;  ///< 0..255, the band's mean brightness after the blur
+    double coverage = 0.0;   ///< share of the band's pixels in ground colours
+    int groundColours = 0;   ///< bins found to be ground colours
+    bool groundLike = false; ///< meanValue >= minBandValue and coverage >= minGroundCoverage
 };
 
 /// Colour-histogram free space for one camera. All buffers are allocated in create().
@@ -102,17 +112,17 @@ public:
     /// @return Ok, or WrongInputSize (then all sectors Unknown).
     ColourFreeSpaceStatus process(ConstBgrView image, ObstacleSectors& out) noexcept;
 
-    /// Last frame's reference patch statistics.
+    /// Last frame's reference band statistics.
     [[nodiscard]] const ColourReference& reference() const noexcept { return reference_; }
-    /// Hue-saturation bin of every pixel of rows [binTop(), height) (after the blur).
+    /// Colour bin of every pixel of rows [binTop(), height) (after the blur).
     [[nodiscard]] ConstImageViewU8 bins() const noexcept { return bins_.view(); }
     [[nodiscard]] int binTop() const noexcept { return binTop_; }
-    /// Window intersection score 0..255 (= round(255 * intersection)) of rows [roiTop(), height); border rows and
-    /// columns where the window does not fit copy the nearest computed score.
+    /// Window score 0..255 (= round(255 * share of ground-coloured pixels)) of rows [roiTop(), height); border rows
+    /// and columns where the window does not fit copy the nearest computed score.
     [[nodiscard]] ConstImageViewU8 scores() const noexcept { return scores_.view(); }
     [[nodiscard]] int roiTop() const noexcept { return roiTop_; }
-    /// Reference histogram scaled to the window area (what each window is intersected with).
-    [[nodiscard]] const std::array<std::int16_t, kColourBins>& referenceHistogram() const noexcept { return ref_; }
+    /// Last frame's ground colours: 1 for a bin learnt as ground, 0 otherwise.
+    [[nodiscard]] const std::array<std::uint8_t, kColourBins>& groundColours() const noexcept { return groundColour_; }
     /// Last frame's free range [m] of each column: to the end of its free run, or to the top of the scan (ROI top or
     /// horizon) when columnHit() is 0; 0 when the column sees no ground.
     [[nodiscard]] const std::vector<float>& columnRangeM() const noexcept { return columnRange_; }
@@ -136,17 +146,18 @@ private:
     int roiTop_ = 0;
     int binTop_ = 0;
     int thresholdScore_ = 0; ///< matchThreshold on the 0..255 scale
-    int selfScore_ = 0;      ///< patchSelfMatch on the 0..255 scale
     Image<std::uint8_t> bins_;
     Image<std::uint8_t> scores_;
-    std::vector<std::int16_t> colHist_; ///< width x kColourBins, vertical window histograms of the current row
-    std::array<std::int16_t, kColourBins> ref_{};
-    std::vector<float> columnRange_;      ///< [m]
-    std::vector<float> columnBearing_;    ///< [deg]
-    std::vector<std::uint8_t> columnHit_; ///< 1: run ended at an obstacle; 0: reached the top
-    std::vector<int> topRow_;             ///< per column: first ROI row whose ground point is within maxRangeM
-    std::vector<std::uint16_t> rowSum_;   ///< 3 x width vertical 3-row sums of B, G, R (blur)
-    std::array<std::int32_t, kColourBins> patchCounts_{};
+    std::vector<std::int16_t> colSum_;                     ///< per column: ground pixels of the window's rows
+    std::vector<std::int32_t> sliceCounts_;                ///< bandSlices x kColourBins, the band's histograms
+    std::array<std::uint8_t, kColourBins> learnt_{};       ///< 1: a colour of the band
+    std::array<std::uint8_t, kColourBins> groundColour_{}; ///< 1: a ground colour (learnt, or next to one)
+    std::vector<float> columnRange_;                       ///< [m]
+    std::vector<float> columnBearing_;                     ///< [deg]
+    std::vector<std::uint8_t> columnHit_;                  ///< 1: run ended at an obstacle; 0: reached the top
+    std::vector<int> topRow_;           ///< per column: first ROI row whose ground point is within maxRangeM
+    std::vector<std::uint16_t> rowSum_; ///< 3 x width vertical 3-row sums of B, G, R (blur)
+    std::int64_t bandValueSum_ = 0;
     ColourReference reference_;
 };
 
