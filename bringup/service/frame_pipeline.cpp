@@ -27,8 +27,29 @@ vision::DetectorConfig detectorConfigFrom(const bringup::ServiceConfig& config)
     return d;
 }
 
-FramePipeline::FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector, int width, int height)
-    : rectifier_(std::move(rectifier)), detector_(std::move(detector)), width_(width), height_(height)
+namespace {
+
+/// The one-camera detector on the rectifier's left ROI image: its rows are the image it sees (the projection's
+/// principal point moved up by the ROI's top), and the rows above the analysed ones are the matcher's margin.
+Result<vision::ColourFreeSpace, Error> makeColour(const vision::Rectifier& rectifier,
+                                                  const vision::DetectorConfig& detectorConfig,
+                                                  const vision::GroundPlane& ground)
+{
+    const Rect roi = rectifier.roi();
+    vision::RectifiedProjection projection = rectifier.projection();
+    projection.cy -= roi.y;
+    vision::ColourFreeSpaceConfig config = vision::colourConfigFor(detectorConfig.sectors);
+    config.roiTopFraction = static_cast<double>(detectorConfig.marginRows) / roi.height;
+    return vision::ColourFreeSpace::create(config, cv::Size(roi.width, roi.height), projection, ground);
+}
+
+} // namespace
+
+FramePipeline::FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector,
+                             std::optional<vision::ColourFreeSpace> colour, bringup::DetectorMode mode, int width,
+                             int height)
+    : rectifier_(std::move(rectifier)), detector_(std::move(detector)), colour_(std::move(colour)), mode_(mode),
+      width_(width), height_(height)
 {
     detector_.setStageClock(&MonotonicClock::nowNs); // where the time goes, per stage (the service's report)
 }
@@ -58,13 +79,51 @@ Result<std::unique_ptr<FramePipeline>, Error> FramePipeline::create(const vision
     if (!rectifier) {
         return Unexpected(rectifier.error());
     }
-    auto detector = vision::ObstacleDetector::create(detectorConfig, rectifier->projection(), rectifier->roi(),
-                                                     vision::GroundPlane::fromMount(*calibration.mount));
+    const vision::GroundPlane ground = vision::GroundPlane::fromMount(*calibration.mount);
+    auto detector = vision::ObstacleDetector::create(detectorConfig, rectifier->projection(), rectifier->roi(), ground);
     if (!detector) {
         return Unexpected(detector.error());
     }
-    return std::unique_ptr<FramePipeline>(
-        new FramePipeline(std::move(*rectifier), std::move(*detector), width, height));
+    std::optional<vision::ColourFreeSpace> colour;
+    if (config.obstacles.detector != bringup::DetectorMode::Stereo) {
+        auto made = makeColour(*rectifier, detectorConfig, ground);
+        if (!made) {
+            return Unexpected(made.error());
+        }
+        colour = std::move(made).value();
+    }
+    return std::unique_ptr<FramePipeline>(new FramePipeline(
+        std::move(*rectifier), std::move(*detector), std::move(colour), config.obstacles.detector, width, height));
+}
+
+const ObstacleSectors& FramePipeline::sectors() const noexcept
+{
+    switch (mode_) {
+    case bringup::DetectorMode::Colour:
+        return colourSectors_;
+    case bringup::DetectorMode::Both:
+        return fused_;
+    case bringup::DetectorMode::Stereo:
+        break;
+    }
+    return detector_.sectors();
+}
+
+void FramePipeline::fuse() noexcept
+{
+    fused_ = detector_.sectors();
+    if (colourSectors_.count != fused_.count) {
+        return; // never: both are made with the same sector count over the same image width
+    }
+    for (int i = 0; i < fused_.count; ++i) {
+        // The one-camera cue adds obstacles where stereo cannot tell, never Clear: it cannot see an obstacle of the
+        // ground's colour (or grey level), so its Clear is no evidence against stereo's Unknown.
+        Sector& s = fused_.sectors[static_cast<std::size_t>(i)];
+        const Sector& c = colourSectors_.sectors[static_cast<std::size_t>(i)];
+        if (s.state == SectorState::Unknown && c.state == SectorState::Obstacle) {
+            s = c;
+        }
+    }
 }
 
 PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence,
@@ -79,12 +138,27 @@ PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 ri
         return PipelineStatus::RectifyFailed;
     }
     rectifiedNs = MonotonicClock::nowNs();
+    if (mode_ != bringup::DetectorMode::Stereo) {
+        // The ROI view's size is the one colour_ was made for: always Ok.
+        (void)colour_->process(rectifier_.rectifiedLeft(), colourSectors_);
+        colourSectors_.sequence = sequence;
+        colourSectors_.captureStampNs = stampNs;
+        if (mode_ == bringup::DetectorMode::Colour) {
+            return PipelineStatus::Ok;
+        }
+    }
     if (groundOnly) {
         detector_.processGroundOnly(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), sequence, stampNs);
     } else {
         detector_.process(rectifier_.rectifiedLeft(), rectifier_.rectifiedRight(), sequence, stampNs);
     }
-    return detector_.status() == vision::DetectorStatus::Ok ? PipelineStatus::Ok : PipelineStatus::DetectorFailed;
+    if (detector_.status() != vision::DetectorStatus::Ok) {
+        return PipelineStatus::DetectorFailed;
+    }
+    if (mode_ == bringup::DetectorMode::Both) {
+        fuse();
+    }
+    return PipelineStatus::Ok;
 }
 
 } // namespace ugv::service

@@ -419,7 +419,8 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             state.degradedInARow = 0;
             const auto took = static_cast<double>(detectedNs - rectifiedNs);
             state.fullMeanNs = state.fullMeanNs > 0.0 ? 0.8 * state.fullMeanNs + 0.2 * took : took;
-            if (done == PipelineStatus::Ok && state.frames >= static_cast<std::uint64_t>(options_.warmupFrames)) {
+            if (done == PipelineStatus::Ok && state.frames >= static_cast<std::uint64_t>(options_.warmupFrames) &&
+                pipeline_->mode() != bringup::DetectorMode::Colour) { // the stereo detector's stages: it ran
                 recordDetectStages(pipeline_->detector().stageTimes());
             }
         }

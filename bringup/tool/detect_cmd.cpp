@@ -174,12 +174,9 @@ int runMono(const Args& args, const vision::StereoCalibration& calib, const Dete
                               "check the calibration file"});
         }
     }
-    vision::ColourFreeSpaceConfig config;
-    config.sectorCount = options.sectorCount;
-    config.dangerDistanceM = options.dangerM;
-    config.cautionDistanceM = options.cautionM;
     const vision::GroundPlane ground = vision::GroundPlane::fromMount(*calib.mount);
-    auto colour = vision::ColourFreeSpace::create(config, calib.imageSize, rectifier->projection(), ground);
+    auto colour = vision::ColourFreeSpace::create(vision::colourConfigFor(detectorConfig(options).sectors),
+                                                  calib.imageSize, rectifier->projection(), ground);
     if (!colour) {
         return fail(colour.error());
     }

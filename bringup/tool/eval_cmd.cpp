@@ -133,13 +133,9 @@ public:
             vision::GroundPlane::fromMount(*calib.mount).disparityPlane(rectifier->projection());
         std::optional<vision::ColourFreeSpace> colourFreeSpace;
         if (colour) {
-            vision::ColourFreeSpaceConfig colourConfig;
-            colourConfig.sectorCount = config.sectors.sectorCount;
-            colourConfig.dangerDistanceM = config.sectors.dangerDistanceM;
-            colourConfig.cautionDistanceM = config.sectors.cautionDistanceM;
-            auto made =
-                vision::ColourFreeSpace::create(colourConfig, cv::Size(rig.width, rig.height), rectifier->projection(),
-                                                vision::GroundPlane::fromMount(*calib.mount));
+            auto made = vision::ColourFreeSpace::create(vision::colourConfigFor(config.sectors),
+                                                        cv::Size(rig.width, rig.height), rectifier->projection(),
+                                                        vision::GroundPlane::fromMount(*calib.mount));
             if (!made) {
                 return Unexpected(made.error());
             }

@@ -564,13 +564,10 @@ Result<ColourRun, Error> colourSectors(const RealPair& pair, const RealImages& i
                   "cannot read it in colour at the index's size" + (why.empty() ? std::string() : ": " + why),
                   "give index.csv's left image"});
     }
-    vision::ColourFreeSpaceConfig config;
-    config.sectorCount = r.config.sectors.sectorCount;
-    config.dangerDistanceM = r.config.sectors.dangerDistanceM;
-    config.cautionDistanceM = r.config.sectors.cautionDistanceM;
     const vision::GroundPlane ground =
         images.calib.mount ? vision::GroundPlane::fromMount(*images.calib.mount) : run.detector->ground();
-    auto colour = vision::ColourFreeSpace::create(config, bgr.size(), run.rectifier->projection(), ground);
+    auto colour = vision::ColourFreeSpace::create(vision::colourConfigFor(r.config.sectors), bgr.size(),
+                                                  run.rectifier->projection(), ground);
     if (!colour) {
         return Unexpected(colour.error());
     }

@@ -114,6 +114,15 @@ Result<void, Error> checkConfig(const ColourFreeSpaceConfig& config, cv::Size im
 
 } // namespace
 
+ColourFreeSpaceConfig colourConfigFor(const SectorBuilderConfig& sectors) noexcept
+{
+    ColourFreeSpaceConfig config;
+    config.sectorCount = sectors.sectorCount;
+    config.dangerDistanceM = sectors.dangerDistanceM;
+    config.cautionDistanceM = sectors.cautionDistanceM;
+    return config;
+}
+
 Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConfig& config, cv::Size imageSize,
                                                        const RectifiedProjection& projection, const GroundPlane& ground)
 {
@@ -177,6 +186,17 @@ bool ColourFreeSpace::groundPoint(double x, double y, double& rangeM, double& be
 
 ColourFreeSpaceStatus ColourFreeSpace::process(ConstBgrView image, ObstacleSectors& out) noexcept
 {
+    return processImage(image, out);
+}
+
+ColourFreeSpaceStatus ColourFreeSpace::process(ConstImageViewU8 grey, ObstacleSectors& out) noexcept
+{
+    return processImage(grey, out);
+}
+
+template <class Pixel>
+ColourFreeSpaceStatus ColourFreeSpace::processImage(ImageView<const Pixel> image, ObstacleSectors& out) noexcept
+{
     if (image.empty() || image.width() != size_.width || image.height() != size_.height) {
         initSectors(out, config_.sectorCount, hfovDeg_);
         out.degraded = true;
@@ -193,8 +213,31 @@ ColourFreeSpaceStatus ColourFreeSpace::process(ConstBgrView image, ObstacleSecto
     return ColourFreeSpaceStatus::Ok;
 }
 
-void ColourFreeSpace::computeBins(ConstBgrView image) noexcept
+namespace {
+
+/// The channels of a pixel: B, G, R of a colour image; the one grey level of a grey image (whose bin is then always a
+/// grey one).
+template <class Pixel>
+struct Channels;
+
+template <>
+struct Channels<BgrPixel> {
+    static constexpr int kCount = 3;
+    static int at(const BgrPixel& p, int c) noexcept { return c == 0 ? p.b : (c == 1 ? p.g : p.r); }
+};
+
+template <>
+struct Channels<std::uint8_t> {
+    static constexpr int kCount = 1;
+    static int at(std::uint8_t p, int /*c*/) noexcept { return p; }
+};
+
+} // namespace
+
+template <class Pixel>
+void ColourFreeSpace::computeBins(ImageView<const Pixel> image) noexcept
 {
+    constexpr int kChannels = Channels<Pixel>::kCount;
     const int width = size_.width;
     const int height = size_.height;
     const int bandTop = height - config_.bandRows;
@@ -203,25 +246,35 @@ void ColourFreeSpace::computeBins(ConstBgrView image) noexcept
     std::uint16_t* sums = rowSum_.data();
     for (int y = binTop_; y < height; ++y) {
         // 3x3 box blur with replicated borders: vertical 3-row sums, then 3 horizontal taps.
-        const BgrPixel* above = image.row(std::max(y - 1, 0));
-        const BgrPixel* centre = image.row(y);
-        const BgrPixel* below = image.row(std::min(y + 1, height - 1));
+        const Pixel* above = image.row(std::max(y - 1, 0));
+        const Pixel* centre = image.row(y);
+        const Pixel* below = image.row(std::min(y + 1, height - 1));
         for (int x = 0; x < width; ++x) {
-            sums[3 * x] = static_cast<std::uint16_t>(above[x].b + centre[x].b + below[x].b);
-            sums[3 * x + 1] = static_cast<std::uint16_t>(above[x].g + centre[x].g + below[x].g);
-            sums[3 * x + 2] = static_cast<std::uint16_t>(above[x].r + centre[x].r + below[x].r);
+            for (int c = 0; c < kChannels; ++c) {
+                sums[kChannels * x + c] =
+                    static_cast<std::uint16_t>(Channels<Pixel>::at(above[x], c) + Channels<Pixel>::at(centre[x], c) +
+                                               Channels<Pixel>::at(below[x], c));
+            }
         }
         std::uint8_t* binRow = bins_.view().row(y - binTop_);
         const bool inBand = y >= bandTop;
         for (int x = 0; x < width; ++x) {
-            const int left = 3 * std::max(x - 1, 0);
-            const int mid = 3 * x;
-            const int right = 3 * std::min(x + 1, width - 1);
-            const int b = (sums[left] + sums[mid] + sums[right] + kBlurTaps / 2) / kBlurTaps;
-            const int g = (sums[left + 1] + sums[mid + 1] + sums[right + 1] + kBlurTaps / 2) / kBlurTaps;
-            const int r = (sums[left + 2] + sums[mid + 2] + sums[right + 2] + kBlurTaps / 2) / kBlurTaps;
+            const int left = kChannels * std::max(x - 1, 0);
+            const int mid = kChannels * x;
+            const int right = kChannels * std::min(x + 1, width - 1);
+            std::array<int, kChannels> blurred{};
+            for (int c = 0; c < kChannels; ++c) {
+                blurred[static_cast<std::size_t>(c)] =
+                    (sums[left + c] + sums[mid + c] + sums[right + c] + kBlurTaps / 2) / kBlurTaps;
+            }
             int value = 0;
-            const std::uint8_t bin = colourBin(b, g, r, value);
+            std::uint8_t bin = 0;
+            if constexpr (kChannels == 3) {
+                bin = colourBin(blurred[0], blurred[1], blurred[2], value);
+            } else {
+                value = blurred[0];
+                bin = static_cast<std::uint8_t>(kChromaticBins + (value >> kGreyShift));
+            }
             binRow[x] = bin;
             if (inBand) {
                 const int slice = x * config_.bandSlices / width;

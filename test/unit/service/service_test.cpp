@@ -110,61 +110,63 @@ protected:
 ipc::EmbeddedRouDi* ServiceTest::roudi_ = nullptr;
 
 std::unique_ptr<Service> makeService(const Course& course, const hal::ReplayOptions& replay,
-                                     const ServiceOptions& options = {})
+                                     const ServiceOptions& options = {},
+                                     const bringup::ServiceConfig& config = bringup::ServiceConfig{})
 {
     auto camera = hal::ReplayCamera::open(course.path, replay);
     EXPECT_TRUE(camera.has_value()) << (camera ? "" : camera.error().message());
     auto calibration = bringup::parseCalibration(course.calibration, "course");
     EXPECT_TRUE(calibration.has_value());
-    auto service = Service::create(bringup::ServiceConfig{}, *calibration, std::move(*camera), options);
+    auto service = Service::create(config, *calibration, std::move(*camera), options);
     EXPECT_TRUE(service.has_value()) << (service ? "" : service.error().message());
     return service ? std::move(*service) : nullptr;
 }
 
-TEST_F(ServiceTest, HardwareInTheLoopCourseSectorsMatchTheGroundTruth)
+/// A course replayed through the service with `config`, every published frame taken by a planner-like subscriber
+/// and scored against the simulator's truth: a truth obstacle within 8 m counts as detected when its sector or a
+/// neighbour reports Obstacle; a red sector with no truth obstacle in it or a neighbour is a false red.
+struct HilRun {
+    ServiceReport report;
+    std::map<std::uint64_t, ObstacleSectors> received;
+    std::uint64_t malformed = 0;
+    int truthObstacles = 0;
+    int detected = 0;
+    int falseRed = 0;
+    int degradedFrames = 0;
+};
+
+HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bringup::ServiceConfig{})
 {
-    constexpr std::size_t kFrames = 40;
-    const Course course = writeCourse(dir_, kFrames);
+    HilRun out;
     auto planner = ipc::SectorsSubscriber::create(256).value(); // a local consumer on the sectors topic
     hal::ReplayOptions replay;
     replay.pace = hal::ReplayPace::Forced;
     // Slow enough that no frame is dropped on a loaded 2-core machine; a sanitizer build runs the matcher several
     // times slower (measured: a 5 fps replay dropped one frame in 40 there).
     replay.forcedFps = test::mallocFamilyCounted() ? 5.0 : 2.0;
-    auto service = makeService(course, replay);
-    ASSERT_NE(service, nullptr);
-
+    auto service = makeService(course, replay, {}, config);
+    if (service == nullptr) {
+        return out;
+    }
     service->start();
-    std::map<std::uint64_t, ObstacleSectors> received;
     ipc::SectorsMessage message;
     while (!service->finished() || planner->take(message, milliseconds(0)) == ipc::TakeStatus::Frame) {
         if (planner->take(message, milliseconds(50)) == ipc::TakeStatus::Frame) {
-            received[message.sectors.sequence] = message.sectors;
+            out.received[message.sectors.sequence] = message.sectors;
         }
     }
     while (planner->take(message, milliseconds(100)) == ipc::TakeStatus::Frame) {
-        received[message.sectors.sequence] = message.sectors;
+        out.received[message.sectors.sequence] = message.sectors;
     }
     service->stop();
-    const ServiceReport report = service->report();
-
-    EXPECT_EQ(report.framesCaptured, kFrames);
-    EXPECT_EQ(report.framesPublished, kFrames);
-    EXPECT_EQ(report.framesDropped, 0U);
-    EXPECT_EQ(report.badFrames, 0U);
-    EXPECT_EQ(planner->malformed(), 0U);
-    ASSERT_EQ(received.size(), kFrames);
-
-    // Every ground-truth obstacle within 8 m is reported in its sector or a neighbour; no red where the truth
-    // has no obstacle nearby.
-    int truthObstacles = 0;
-    int detected = 0;
-    int falseRed = 0;
-    for (std::size_t k = 0; k < kFrames; ++k) {
+    out.report = service->report();
+    out.malformed = planner->malformed();
+    for (const auto& [k, got] : out.received) {
+        if (k >= course.truth.size() || got.count != course.truth[k].count) {
+            continue;
+        }
         const ObstacleSectors& want = course.truth[k];
-        const ObstacleSectors& got = received[k];
-        ASSERT_EQ(got.count, want.count);
-        EXPECT_EQ(got.captureStampNs > 0, true);
+        out.degradedFrames += got.degraded ? 1 : 0;
         for (int i = 0; i < want.count; ++i) {
             const auto at = [&](const ObstacleSectors& s, int j) -> const Sector& {
                 return s.sectors[static_cast<std::size_t>(std::clamp(j, 0, s.count - 1))];
@@ -174,22 +176,103 @@ TEST_F(ServiceTest, HardwareInTheLoopCourseSectorsMatchTheGroundTruth)
                                   at(got, i).state == SectorState::Obstacle ||
                                   at(got, i + 1).state == SectorState::Obstacle;
             if (w.state == SectorState::Obstacle && w.rangeM <= 8.0F) {
-                ++truthObstacles;
-                detected += reported ? 1 : 0;
+                ++out.truthObstacles;
+                out.detected += reported ? 1 : 0;
             }
             const bool truthNear = at(want, i - 1).state == SectorState::Obstacle || w.state == SectorState::Obstacle ||
                                    at(want, i + 1).state == SectorState::Obstacle;
-            falseRed += at(got, i).danger == DangerClass::Red && !truthNear ? 1 : 0;
+            out.falseRed += at(got, i).danger == DangerClass::Red && !truthNear ? 1 : 0;
         }
     }
     std::printf("[ MEASURED ] HIL %zu frames: %d of %d ground-truth obstacle sectors (<= 8 m) detected, %d false "
-                "red; end-to-end p50 %.1f ms p99 %.1f ms\n",
-                kFrames, detected, truthObstacles, falseRed,
-                static_cast<double>(report.stages[static_cast<std::size_t>(Stage::EndToEnd)].p50().count()) * 1e-6,
-                static_cast<double>(report.stages[static_cast<std::size_t>(Stage::EndToEnd)].p99().count()) * 1e-6);
-    ASSERT_GT(truthObstacles, 50);
-    EXPECT_GE(detected, truthObstacles * 9 / 10);
-    EXPECT_EQ(falseRed, 0);
+                "red, %d degraded frames; end-to-end p50 %.1f ms p99 %.1f ms\n",
+                out.received.size(), out.detected, out.truthObstacles, out.falseRed, out.degradedFrames,
+                static_cast<double>(out.report.stages[static_cast<std::size_t>(Stage::EndToEnd)].p50().count()) * 1e-6,
+                static_cast<double>(out.report.stages[static_cast<std::size_t>(Stage::EndToEnd)].p99().count()) * 1e-6);
+    return out;
+}
+
+TEST_F(ServiceTest, HardwareInTheLoopCourseSectorsMatchTheGroundTruth)
+{
+    constexpr std::size_t kFrames = 40;
+    const Course course = writeCourse(dir_, kFrames);
+
+    const HilRun run = runHil(course);
+
+    EXPECT_EQ(run.report.framesCaptured, kFrames);
+    EXPECT_EQ(run.report.framesPublished, kFrames);
+    EXPECT_EQ(run.report.framesDropped, 0U);
+    EXPECT_EQ(run.report.badFrames, 0U);
+    EXPECT_EQ(run.malformed, 0U);
+    ASSERT_EQ(run.received.size(), kFrames);
+    for (const auto& [k, got] : run.received) {
+        EXPECT_GT(got.captureStampNs, 0) << "frame " << k;
+    }
+    // Every ground-truth obstacle within 8 m is reported in its sector or a neighbour; no red where the truth
+    // has no obstacle nearby.
+    ASSERT_GT(run.truthObstacles, 50);
+    EXPECT_GE(run.detected, run.truthObstacles * 9 / 10);
+    EXPECT_EQ(run.falseRed, 0);
+}
+
+TEST_F(ServiceTest, TheOneCameraModeRunsInTheServiceOnTheLeftCamerasGreyLevels)
+{
+    // obstacles.detector: colour. Every frame is published by the one-camera detector (its band ground-like: sectors
+    // Clear or Obstacle, not all Unknown), degraded, with no bad frame and no false red. The course's cameras are
+    // grey and its obstacles share the asphalt's grey levels, so it finds almost none of them (measured: 1 of 484
+    // obstacle sectors; course frame 20 in colour gives `detect --mono` 19): the figure is printed, not asserted.
+    constexpr std::size_t kFrames = 40;
+    const Course course = writeCourse(dir_, kFrames);
+    bringup::ServiceConfig config;
+    config.obstacles.detector = bringup::DetectorMode::Colour;
+
+    const HilRun run = runHil(course, config);
+
+    EXPECT_EQ(run.report.framesPublished, kFrames);
+    EXPECT_EQ(run.report.badFrames, 0U);
+    ASSERT_EQ(run.received.size(), kFrames);
+    EXPECT_EQ(run.degradedFrames, static_cast<int>(kFrames));
+    EXPECT_EQ(run.falseRed, 0);
+    for (const auto& [k, got] : run.received) {
+        const bool anyKnown = std::any_of(got.sectors.begin(), got.sectors.begin() + got.count,
+                                          [](const Sector& s) { return s.state != SectorState::Unknown; });
+        EXPECT_TRUE(anyKnown) << "frame " << k << ": every sector Unknown";
+    }
+}
+
+TEST_F(ServiceTest, BothDetectorsKeepStereosSectorsAndAddOnlyObstaclesWhereItIsUnknown)
+{
+    constexpr std::size_t kFrames = 20;
+    const Course course = writeCourse(dir_, kFrames);
+    bringup::ServiceConfig both;
+    both.obstacles.detector = bringup::DetectorMode::Both;
+
+    const HilRun stereoRun = runHil(course);
+    const HilRun bothRun = runHil(course, both);
+
+    ASSERT_EQ(stereoRun.received.size(), kFrames);
+    ASSERT_EQ(bothRun.received.size(), kFrames);
+    int filled = 0;
+    for (const auto& [k, stereo] : stereoRun.received) {
+        const ObstacleSectors& fused = bothRun.received.at(k);
+        ASSERT_EQ(fused.count, stereo.count);
+        for (int i = 0; i < stereo.count; ++i) {
+            const Sector& s = stereo.sectors[static_cast<std::size_t>(i)];
+            const Sector& f = fused.sectors[static_cast<std::size_t>(i)];
+            if (s.state != SectorState::Unknown) {
+                EXPECT_EQ(f.state, s.state) << "frame " << k << " sector " << i;
+                EXPECT_EQ(f.rangeM, s.rangeM) << "frame " << k << " sector " << i;
+            } else {
+                EXPECT_NE(f.state, SectorState::Clear) << "frame " << k << " sector " << i;
+                filled += f.state == SectorState::Obstacle ? 1 : 0;
+            }
+        }
+    }
+    std::printf("[ MEASURED ] both: %d of the stereo detector's Unknown sectors given the one-camera detector's "
+                "obstacle\n",
+                filled);
+    EXPECT_GE(bothRun.detected, stereoRun.detected);
+    EXPECT_EQ(bothRun.falseRed, 0);
 }
 
 /// Per task: allocations of that thread from its steady state to its end.
@@ -347,11 +430,13 @@ TEST_F(ServiceTest, ABusTaskThatThrowsIsLoggedAndDisabledWhileEveryFrameIsStillP
     EXPECT_NE(text.find("task 'bus' disabled after 3 failures"), std::string::npos) << text;
 }
 
-TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
+/// 310 frames (6 distinct, looped at 60 fps) through the service with `config` and a bus attached: each task's
+/// allocations from its steady state to its end must be 0.
+void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, const bringup::ServiceConfig& config)
 {
     // Under a sanitizer only operator new/delete are counted (the sanitizer owns malloc); the test still runs.
     constexpr std::size_t kDistinct = 6;
-    const Course course = writeCourse(dir_, kDistinct, 20);
+    const Course course = writeCourse(dir, kDistinct, 20);
     hal::ReplayOptions replay;
     replay.loop = true;
     replay.pace = hal::ReplayPace::Forced;
@@ -365,7 +450,7 @@ TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
     options.probeContext = &probe;
     CountingBus bus; // with a bus attached: the hand-over to the bus task is part of the publish thread's path
     options.bus = &bus;
-    auto service = makeService(course, replay, options);
+    auto service = makeService(course, replay, options, config);
     ASSERT_NE(service, nullptr);
     runToTheEnd(*service);
     const ServiceReport report = service->report();
@@ -386,6 +471,19 @@ TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
     EXPECT_EQ(probe.counts["capture"], 0U);
     EXPECT_EQ(probe.counts["vision"], 0U);
     EXPECT_EQ(probe.counts["publish"], 0U);
+}
+
+TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
+{
+    expectThreeHundredFramesAllocateNothing(dir_, bringup::ServiceConfig{});
+}
+
+TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingWithBothDetectors)
+{
+    // obstacles.detector: both runs the stereo detector, the one-camera detector and their fusion on every frame.
+    bringup::ServiceConfig config;
+    config.obstacles.detector = bringup::DetectorMode::Both;
+    expectThreeHundredFramesAllocateNothing(dir_, config);
 }
 
 TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEveryDeadline)

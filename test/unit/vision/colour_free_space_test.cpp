@@ -182,6 +182,39 @@ TEST(ColourFreeSpace, GreyGroundHasColoursToo)
     EXPECT_EQ(out.sectors[sectorAt(out, 20.0)].state, SectorState::Clear);
 }
 
+TEST(ColourFreeSpace, AGreyImageGivesWhatItsColourCopyGives)
+{
+    // A monochrome camera: the grey path bins by brightness exactly as the colour path bins a pixel with B = G = R.
+    const auto scene = catalogue("box", 3.0, -10.0);
+    const auto frame = renderScene(scene);
+    cv::Mat bgr;
+    cv::cvtColor(frame.left, bgr, cv::COLOR_GRAY2BGR);
+    auto fromColour = makeSut(scene.rig);
+    auto fromGrey = makeSut(scene.rig);
+    ObstacleSectors colourOut;
+    ObstacleSectors greyOut;
+    const ugv::ConstImageViewU8 grey(frame.left.ptr<std::uint8_t>(), frame.left.cols, frame.left.rows,
+                                     static_cast<std::ptrdiff_t>(frame.left.step));
+
+    ASSERT_EQ(fromColour.process(bgrView(bgr), colourOut), ColourFreeSpaceStatus::Ok);
+    ASSERT_EQ(fromGrey.process(grey, greyOut), ColourFreeSpaceStatus::Ok);
+
+    EXPECT_TRUE(fromGrey.reference().groundLike);
+    EXPECT_EQ(fromGrey.groundColours(), fromColour.groundColours());
+    int differing = 0;
+    for (int y = 0; y < fromGrey.scores().height(); ++y) {
+        for (int x = 0; x < fromGrey.scores().width(); ++x) {
+            differing += fromGrey.scores().at(x, y) == fromColour.scores().at(x, y) ? 0 : 1;
+        }
+    }
+    EXPECT_EQ(differing, 0);
+    for (int i = 0; i < greyOut.count; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        EXPECT_EQ(greyOut.sectors[k].state, colourOut.sectors[k].state) << "sector " << i;
+        EXPECT_EQ(greyOut.sectors[k].rangeM, colourOut.sectors[k].rangeM) << "sector " << i;
+    }
+}
+
 TEST(ColourFreeSpace, AnObstacleStandingInPartOfTheBandIsNotGround)
 {
     // A brown post at 1.4 m stands in the reference band (its base is in the band's rows): its colour holds one slice

@@ -39,6 +39,7 @@
 #include "ugv/platform/result.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/sector_builder.hpp"
 
 namespace ugv::vision {
 
@@ -77,6 +78,10 @@ struct ColourFreeSpaceConfig {
     float cautionDistanceM = 5.0F;  ///< [m] classify(): Blue below; a free run must reach this to be Clear
 };
 
+/// The default config with a stereo detector's sector count and danger distances, so that the two modes' sectors
+/// line up (same bins over the same field of view) and are classified alike.
+ColourFreeSpaceConfig colourConfigFor(const SectorBuilderConfig& sectors) noexcept;
+
 /// Outcome of ColourFreeSpace::process; no strings on the frame path.
 enum class ColourFreeSpaceStatus : std::uint8_t {
     Ok,             ///< sectors written (possibly all Unknown: see reference())
@@ -111,6 +116,9 @@ public:
     /// @param[out] out   sectors
     /// @return Ok, or WrongInputSize (then all sectors Unknown).
     ColourFreeSpaceStatus process(ConstBgrView image, ObstacleSectors& out) noexcept;
+    /// The same on a grey image (a monochrome camera): every pixel is binned by its brightness, so the ground is
+    /// told from obstacles by grey level alone. Bit-identical to process() on the image with B = G = R.
+    ColourFreeSpaceStatus process(ConstImageViewU8 grey, ObstacleSectors& out) noexcept;
 
     /// Last frame's reference band statistics.
     [[nodiscard]] const ColourReference& reference() const noexcept { return reference_; }
@@ -130,7 +138,10 @@ public:
 
 private:
     ColourFreeSpace() = default;
-    void computeBins(ConstBgrView image) noexcept;
+    template <class Pixel>
+    ColourFreeSpaceStatus processImage(ImageView<const Pixel> image, ObstacleSectors& out) noexcept;
+    template <class Pixel>
+    void computeBins(ImageView<const Pixel> image) noexcept;
     void computeReference() noexcept;
     void computeScores() noexcept;
     void scanColumns() noexcept;
@@ -156,7 +167,7 @@ private:
     std::vector<float> columnBearing_;                     ///< [deg]
     std::vector<std::uint8_t> columnHit_;                  ///< 1: run ended at an obstacle; 0: reached the top
     std::vector<int> topRow_;           ///< per column: first ROI row whose ground point is within maxRangeM
-    std::vector<std::uint16_t> rowSum_; ///< 3 x width vertical 3-row sums of B, G, R (blur)
+    std::vector<std::uint16_t> rowSum_; ///< 3 x width vertical 3-row sums of B, G, R (or 1 x width: grey) (blur)
     std::int64_t bandValueSum_ = 0;
     ColourReference reference_;
 };
