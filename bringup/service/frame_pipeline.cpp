@@ -133,7 +133,10 @@ PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 ri
         rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::WrongInputSize;
     }
-    if (rectifier_.rectify(left, right) != vision::RectifyStatus::Ok) {
+    // The one-camera mode needs the left image only.
+    const vision::RectifyStatus rectified =
+        mode_ == bringup::DetectorMode::Colour ? rectifier_.rectifyLeft(left) : rectifier_.rectify(left, right);
+    if (rectified != vision::RectifyStatus::Ok) {
         rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::RectifyFailed;
     }

@@ -161,4 +161,20 @@ RectifyStatus Rectifier::rectify(ConstImageViewU8 left, ConstImageViewU8 right) 
     return rectify(left, right, outLeft_.view(), outRight_.view());
 }
 
+RectifyStatus Rectifier::rectifyLeft(ConstImageViewU8 left) noexcept
+{
+    if (!sameSize(left, imageSize_.width, imageSize_.height)) {
+        return RectifyStatus::WrongInputSize;
+    }
+    const ImageViewU8 out = outLeft_.view();
+    if (identity_) {
+        for (int r = 0; r < roi_.height; ++r) {
+            std::memcpy(out.row(r), left.row(roi_.y + r), static_cast<std::size_t>(roi_.width));
+        }
+        return RectifyStatus::Ok;
+    }
+    remapBilinear(left, mapLeftXY_, mapLeftFrac_, out);
+    return RectifyStatus::Ok;
+}
+
 } // namespace ugv::vision

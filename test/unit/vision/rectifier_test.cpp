@@ -69,6 +69,29 @@ TEST(Rectifier, DefaultRoiIsBottomHalfPlusMargin)
     EXPECT_FALSE(sut->identity());
 }
 
+TEST(Rectifier, TheLeftCameraAloneGivesTheSameRowsAsThePair)
+{
+    auto pair = Rectifier::create(makeCalibration(), RectifierConfig{});
+    auto single = Rectifier::create(makeCalibration(), RectifierConfig{});
+    ASSERT_TRUE(pair.has_value() && single.has_value());
+    const cv::Mat left = makeTexture(1);
+    const cv::Mat right = makeTexture(2);
+
+    ASSERT_EQ(pair->rectify(view(left), view(right)), RectifyStatus::Ok);
+    ASSERT_EQ(single->rectifyLeft(view(left)), RectifyStatus::Ok);
+    EXPECT_EQ(single->rectifyLeft(view(right.rowRange(0, 10))), RectifyStatus::WrongInputSize);
+
+    const ConstImageViewU8 a = pair->rectifiedLeft();
+    const ConstImageViewU8 b = single->rectifiedLeft();
+    int differing = 0;
+    for (int y = 0; y < a.height(); ++y) {
+        for (int x = 0; x < a.width(); ++x) {
+            differing += a.at(x, y) == b.at(x, y) ? 0 : 1;
+        }
+    }
+    EXPECT_EQ(differing, 0);
+}
+
 TEST(Rectifier, MatchesReferenceRemapOnFloatMapsInRoiRows)
 {
     const StereoCalibration calib = makeCalibration();

@@ -59,6 +59,9 @@ public:
                           ImageViewU8 outRight) noexcept;
     /// As above, into the internal buffers returned by rectifiedLeft()/rectifiedRight().
     RectifyStatus rectify(ConstImageViewU8 left, ConstImageViewU8 right) noexcept;
+    /// The left camera alone (the one-camera detector), into the buffer returned by rectifiedLeft(); the same rows
+    /// as rectify() gives it.
+    RectifyStatus rectifyLeft(ConstImageViewU8 left) noexcept;
 
     [[nodiscard]] ConstImageViewU8 rectifiedLeft() const noexcept { return outLeft_.view(); }
     [[nodiscard]] ConstImageViewU8 rectifiedRight() const noexcept { return outRight_.view(); }
