@@ -89,9 +89,7 @@ void DdsBridge::onFrame(const BusFrame& frame) noexcept
         const std::int64_t captureReal = frame.message.sectors.captureStampNs + offset;
         const std::int64_t publishReal = frame.message.publishStampNs + offset;
         idle(); // the newest poses first
-        const ipc::dds::GroundSummary ground{frame.groundReliable, frame.groundPitchDeg, frame.groundRollDeg,
-                                             frame.cameraHeightM};
-        ipc::dds::toDds(frame.message.sectors, ground, vehicle_, captureReal, publishReal, sectors_);
+        ipc::dds::toDds(frame.message.sectors, frame.message.ground, vehicle_, captureReal, publishReal, sectors_);
         bool stale = true;
         const bool havePose = poses_.at(captureReal, poseMaxAgeNs_, pose_, stale);
         sectors_.pose_valid(havePose);

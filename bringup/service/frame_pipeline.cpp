@@ -46,10 +46,10 @@ Result<vision::ColourFreeSpace, Error> makeColour(const vision::Rectifier& recti
 } // namespace
 
 FramePipeline::FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector,
-                             std::optional<vision::ColourFreeSpace> colour, bringup::DetectorMode mode, int width,
-                             int height)
+                             vision::ColourFreeSpace colour, bringup::DetectorMode mode,
+                             vision::GroundPlane mountGround, int width, int height)
     : rectifier_(std::move(rectifier)), detector_(std::move(detector)), colour_(std::move(colour)), mode_(mode),
-      width_(width), height_(height)
+      mountGround_(mountGround), width_(width), height_(height)
 {
     detector_.setStageClock(&MonotonicClock::nowNs); // where the time goes, per stage (the service's report)
 }
@@ -84,20 +84,30 @@ Result<std::unique_ptr<FramePipeline>, Error> FramePipeline::create(const vision
     if (!detector) {
         return Unexpected(detector.error());
     }
-    std::optional<vision::ColourFreeSpace> colour;
-    if (config.obstacles.detector != bringup::DetectorMode::Stereo) {
-        auto made = makeColour(*rectifier, detectorConfig, ground);
-        if (!made) {
-            return Unexpected(made.error());
-        }
-        colour = std::move(made).value();
+    // Made in every mode: a left-only frame (the pair's right camera lost) falls back to it.
+    auto colour = makeColour(*rectifier, detectorConfig, ground);
+    if (!colour) {
+        return Unexpected(colour.error());
     }
-    return std::unique_ptr<FramePipeline>(new FramePipeline(
-        std::move(*rectifier), std::move(*detector), std::move(colour), config.obstacles.detector, width, height));
+    return std::unique_ptr<FramePipeline>(new FramePipeline(std::move(*rectifier), std::move(*detector),
+                                                            std::move(*colour), config.obstacles.detector, ground,
+                                                            width, height));
+}
+
+GroundSummary FramePipeline::ground() const noexcept
+{
+    const bool stereoRan = !leftOnly_ && mode_ != bringup::DetectorMode::Colour;
+    const vision::GroundEstimate& estimate = detector_.groundEstimate();
+    const vision::GroundPlane& plane = stereoRan ? estimate.plane : mountGround_;
+    return GroundSummary{stereoRan && estimate.reliable, static_cast<float>(plane.pitchDeg()),
+                         static_cast<float>(plane.rollDeg()), static_cast<float>(plane.heightM)};
 }
 
 const ObstacleSectors& FramePipeline::sectors() const noexcept
 {
+    if (leftOnly_) {
+        return colourSectors_;
+    }
     switch (mode_) {
     case bringup::DetectorMode::Colour:
         return colourSectors_;
@@ -129,24 +139,27 @@ void FramePipeline::fuse() noexcept
 PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence,
                                       std::int64_t stampNs, std::int64_t& rectifiedNs, bool groundOnly) noexcept
 {
-    if (left.width() != width_ || left.height() != height_ || right.width() != width_ || right.height() != height_) {
+    const auto fits = [this](ConstImageViewU8 image) { return image.width() == width_ && image.height() == height_; };
+    leftOnly_ = right.empty();
+    if (!fits(left) || (!leftOnly_ && !fits(right))) {
         rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::WrongInputSize;
     }
-    // The one-camera mode needs the left image only.
-    const vision::RectifyStatus rectified =
-        mode_ == bringup::DetectorMode::Colour ? rectifier_.rectifyLeft(left) : rectifier_.rectify(left, right);
+    // The one-camera mode needs the left image only; so does every mode on a left-only frame.
+    const bool colourOnly = leftOnly_ || mode_ == bringup::DetectorMode::Colour;
+    const vision::RectifyStatus rectified = colourOnly ? rectifier_.rectifyLeft(left) : rectifier_.rectify(left, right);
     if (rectified != vision::RectifyStatus::Ok) {
         rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::RectifyFailed;
     }
     rectifiedNs = MonotonicClock::nowNs();
-    if (mode_ != bringup::DetectorMode::Stereo) {
+    if (colourOnly || mode_ == bringup::DetectorMode::Both) {
         // The ROI view's size is the one colour_ was made for: always Ok.
-        (void)colour_->process(rectifier_.rectifiedLeft(), colourSectors_);
+        (void)colour_.process(rectifier_.rectifiedLeft(), colourSectors_);
         colourSectors_.sequence = sequence;
         colourSectors_.captureStampNs = stampNs;
-        if (mode_ == bringup::DetectorMode::Colour) {
+        if (colourOnly) {
+            leftOnlyFrames_ += leftOnly_ ? 1U : 0U;
             return PipelineStatus::Ok;
         }
     }

@@ -9,6 +9,8 @@
 ///   the bottom band. Its sectors are `degraded`; the ground is the mount's.
 /// - both: stereo where it sees, and in the sectors stereo leaves Unknown the colour detector's obstacles (never its
 ///   Clear: a colour cue is blind to an obstacle of the ground's colour or grey level).
+/// A left-only frame (an empty right image: a one-camera rig, or the pair's right camera lost) takes the colour path
+/// in every mode: the service keeps publishing sectors, degraded, until the pair is whole again.
 ///
 /// Thread-safety: thread-bound. RT-safe: process() allocates nothing with the default matcher (census SGM); with
 /// stereo.mode an OpenCV mode, StereoSGBM::compute inside the detector allocates (vision/roi_matcher.hpp);
@@ -16,7 +18,6 @@
 
 #include <cstdint>
 #include <memory>
-#include <optional>
 
 #include "ugv/bringup/config.hpp"
 #include "ugv/platform/error.hpp"
@@ -42,14 +43,22 @@ public:
     static Result<std::unique_ptr<FramePipeline>, Error> create(const vision::StereoCalibration& calibration,
                                                                 const bringup::ServiceConfig& config);
 
-    /// Rectifies the pair and detects; `groundOnly` takes the overload path of the stereo detector
-    /// (ObstacleDetector::processGroundOnly: no dense matching, degraded sectors; the colour detector is cheap and
-    /// always runs in full). `rectifiedNs` receives the monotonic time after rectification.
+    /// Rectifies the pair (the left image alone when `right` is empty) and detects; `groundOnly` takes the overload
+    /// path of the stereo detector (ObstacleDetector::processGroundOnly: no dense matching, degraded sectors; the
+    /// colour detector is cheap and always runs in full). `rectifiedNs` receives the monotonic time after
+    /// rectification.
     PipelineStatus process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence, std::int64_t stampNs,
                            std::int64_t& rectifiedNs, bool groundOnly = false) noexcept;
 
-    /// The last frame's sectors, of the configured detector.
+    /// The last frame's sectors, of the configured detector (the colour detector's for a left-only frame).
     [[nodiscard]] const ObstacleSectors& sectors() const noexcept;
+    /// The ground the last frame's sectors were measured against: the stereo detector's estimate when it ran
+    /// (reliable as it says), else the mount's plane (not reliable: the one-camera detector does not estimate it).
+    [[nodiscard]] GroundSummary ground() const noexcept;
+    /// True when the last frame was left-only (the colour path ran whatever the mode).
+    [[nodiscard]] bool lastFrameLeftOnly() const noexcept { return leftOnly_; }
+    /// Left-only frames processed since create().
+    [[nodiscard]] std::uint64_t leftOnlyFrames() const noexcept { return leftOnlyFrames_; }
     [[nodiscard]] bringup::DetectorMode mode() const noexcept { return mode_; }
     [[nodiscard]] int width() const noexcept { return width_; }
     [[nodiscard]] int height() const noexcept { return height_; }
@@ -57,17 +66,20 @@ public:
     [[nodiscard]] const vision::Rectifier& rectifier() const noexcept { return rectifier_; }
 
 private:
-    FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector,
-                  std::optional<vision::ColourFreeSpace> colour, bringup::DetectorMode mode, int width, int height);
+    FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetector detector, vision::ColourFreeSpace colour,
+                  bringup::DetectorMode mode, vision::GroundPlane mountGround, int width, int height);
     /// Both: the stereo sectors, with the colour detector's obstacles where stereo's are Unknown.
     void fuse() noexcept;
 
     vision::Rectifier rectifier_;
-    vision::ObstacleDetector detector_;             ///< made in every mode: its ground estimate is the published one
-    std::optional<vision::ColourFreeSpace> colour_; ///< colour and both
+    vision::ObstacleDetector detector_; ///< made in every mode: its ground estimate is the published one
+    vision::ColourFreeSpace colour_;    ///< colour, both, and every left-only frame
     bringup::DetectorMode mode_;
+    vision::GroundPlane mountGround_; ///< the calibration's mount: the one-camera detector's ground
     ObstacleSectors colourSectors_;
     ObstacleSectors fused_;
+    bool leftOnly_ = false;
+    std::uint64_t leftOnlyFrames_ = 0;
     int width_;
     int height_;
 };

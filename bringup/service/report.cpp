@@ -54,12 +54,14 @@ std::string formatReport(const ServiceReport& r, const ReportExtras& extras)
     char line[512];
     std::snprintf(line, sizeof(line),
                   "frames: %llu published of %llu captured in %.2f s; deadline %.1f ms: %llu missed; dropped %llu "
-                  "(camera gaps %llu); degraded %llu; bad %llu; loan failures %llu; camera reconnects %llu\n",
+                  "(camera gaps %llu); degraded %llu (left camera alone %llu); bad %llu; loan failures %llu; camera "
+                  "reconnects %llu\n",
                   static_cast<unsigned long long>(r.framesPublished), static_cast<unsigned long long>(r.framesCaptured),
                   r.wallSeconds, us(r.deadline) / 1000.0, static_cast<unsigned long long>(r.deadlineMisses),
                   static_cast<unsigned long long>(r.framesDropped), static_cast<unsigned long long>(r.cameraGaps),
-                  static_cast<unsigned long long>(r.degradedFrames), static_cast<unsigned long long>(r.badFrames),
-                  static_cast<unsigned long long>(r.loanFailures), static_cast<unsigned long long>(r.cameraReconnects));
+                  static_cast<unsigned long long>(r.degradedFrames), static_cast<unsigned long long>(r.leftOnlyFrames),
+                  static_cast<unsigned long long>(r.badFrames), static_cast<unsigned long long>(r.loanFailures),
+                  static_cast<unsigned long long>(r.cameraReconnects));
     out << line << "latency (after warm-up):\n";
     for (int s = 0; s < kStageCount; ++s) {
         out << histogramLine(stageName(static_cast<Stage>(s)), r.stages[static_cast<std::size_t>(s)]);
@@ -94,8 +96,8 @@ std::string reportJson(const ServiceReport& r, const ReportExtras& extras)
     out << "{\n  \"frames\": " << r.framesPublished << ",\n  \"frames_captured\": " << r.framesCaptured
         << ",\n  \"deadline_us\": " << us(r.deadline) << ",\n  \"deadline_misses\": " << r.deadlineMisses
         << ",\n  \"drops\": " << r.framesDropped << ",\n  \"camera_gaps\": " << r.cameraGaps
-        << ",\n  \"degraded\": " << r.degradedFrames << ",\n  \"bad_frames\": " << r.badFrames
-        << ",\n  \"allocations_after_warmup\": "
+        << ",\n  \"degraded\": " << r.degradedFrames << ",\n  \"left_only\": " << r.leftOnlyFrames
+        << ",\n  \"bad_frames\": " << r.badFrames << ",\n  \"allocations_after_warmup\": "
         << (extras.allocationsAfterWarmup ? std::to_string(*extras.allocationsAfterWarmup) : std::string("null"))
         << ",\n  \"wall_s\": " << r.wallSeconds << ",\n  \"threads\": " << extras.threadCount
         << ",\n  \"locked_bytes\": " << (extras.lockedBytes ? std::to_string(*extras.lockedBytes) : std::string("null"))

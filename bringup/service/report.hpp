@@ -4,7 +4,7 @@
 /// The latency report of a service run: human-readable (ugvsensed at exit, `ugvsense bench`) and JSON
 /// (`ugvsense bench --json`). Host side, after the threads stopped: allocates freely.
 ///
-/// JSON (top level): frames, deadline_us, deadline_misses, drops, camera_gaps, degraded, bad_frames,
+/// JSON (top level): frames, deadline_us, deadline_misses, drops, camera_gaps, degraded, left_only, bad_frames,
 /// allocations_after_warmup (null when not counted), wall_s, threads, locked_bytes (null when unknown),
 /// end_to_end {p50_us, p90_us, p99_us, p999_us, max_us, count}, stages {capture, handover, rectify, detect, publish:
 /// same keys}, cpu {capture, vision, publish: seconds and percent of the wall time}.

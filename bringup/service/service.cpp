@@ -318,6 +318,39 @@ void Service::onFrame(const hal::CameraFrame& frame, CaptureState& state) noexce
     }
     captured_.fetch_add(1, std::memory_order_release);
     probeSteady("capture", ++state.frames, state.steady);
+    if (frame.right.empty()) {
+        leftOnly_.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (frame.right.empty() || state.rightLost) {
+        watchRightCamera(frame.sequence, state); // after the frame went out: a retry never delays it
+    }
+}
+
+void Service::watchRightCamera(std::uint64_t sequence, CaptureState& state) noexcept
+{
+    const auto seq = static_cast<std::int64_t>(sequence);
+    const bool lost = camera_->rightLost();
+    if (lost && !state.rightLost) {
+        captureLog_.log(LogLevel::Warn, LogCategory::Hal,
+                        "camera: the right camera stopped at frame %lld: the one-camera mode (colour detector on the "
+                        "left camera, degraded sectors) runs until it is back; retrying it (backoff %lld..%lld ms)",
+                        seq, kMinBackoff.count(), kMaxBackoff.count());
+        state.rightBackoff = kMinBackoff;
+        state.nextRightAttemptNs = MonotonicClock::nowNs() + state.rightBackoff.count();
+    } else if (!lost && state.rightLost) {
+        captureLog_.log(LogLevel::Info, LogCategory::Hal,
+                        "camera: the right camera is back at frame %lld: stereo again", seq);
+    }
+    state.rightLost = lost;
+    if (!lost || MonotonicClock::nowNs() < state.nextRightAttemptNs) {
+        return;
+    }
+    if (camera_->reconnect()) {
+        reconnects_.fetch_add(1, std::memory_order_relaxed); // the next frame logs it back (rightLost() false)
+    } else {
+        state.rightBackoff = std::min<std::chrono::nanoseconds>(state.rightBackoff * 2, kMaxBackoff);
+    }
+    state.nextRightAttemptNs = MonotonicClock::nowNs() + state.rightBackoff.count();
 }
 
 void Service::onNoFrame(std::chrono::nanoseconds stall, CaptureState& state) noexcept
@@ -420,13 +453,14 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
             const auto took = static_cast<double>(detectedNs - rectifiedNs);
             state.fullMeanNs = state.fullMeanNs > 0.0 ? 0.8 * state.fullMeanNs + 0.2 * took : took;
             if (done == PipelineStatus::Ok && state.frames >= static_cast<std::uint64_t>(options_.warmupFrames) &&
-                pipeline_->mode() != bringup::DetectorMode::Colour) { // the stereo detector's stages: it ran
+                pipeline_->mode() != bringup::DetectorMode::Colour &&
+                !pipeline_->lastFrameLeftOnly()) { // the stereo detector's stages: it ran
                 recordDetectStages(pipeline_->detector().stageTimes());
             }
         }
         fillHandover(done, h, out);
         state.lastRingNs = ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire);
-        out.stampNs = {h.leftStampNs, state.lastRingNs, takenNs, rectifiedNs, detectedNs};
+        out.stampNs = {h.leftStampNs, state.lastRingNs, takenNs, rectifiedNs, detectedNs}; // in Stamp order
         framesIn_->release(frame);
         if (toPublish_.tryPush(out)) {
             ::sem_post(&published_);
@@ -475,11 +509,7 @@ void Service::logOverload(std::uint64_t sequence, bool late, bool groundOnly, Vi
 
 void Service::fillHandover(PipelineStatus done, const FrameHeader& h, Handover& out) noexcept
 {
-    const vision::GroundEstimate& ground = pipeline_->detector().groundEstimate();
-    out.groundReliable = ground.reliable;
-    out.groundPitchDeg = static_cast<float>(ground.plane.pitchDeg());
-    out.groundRollDeg = static_cast<float>(ground.plane.rollDeg());
-    out.cameraHeightM = static_cast<float>(ground.plane.heightM);
+    out.ground = pipeline_->ground();
     if (done == PipelineStatus::Ok) {
         out.sectors = pipeline_->sectors();
         if (out.sectors.degraded) {
@@ -530,15 +560,21 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
         while (toPublish_.tryPop(in)) {
             ipc::SectorsMessage& m = seen.message;
             m.sectors = in.sectors;
+            m.ground = in.ground;
             m.health = health();
             const std::int64_t publishNs = MonotonicClock::nowNs();
             m.publishStampNs = publishNs;
-            m.health.lastLatencyNs = publishNs - in.stampNs[0];
+            const auto at = [&in](Stamp s) { return in.stampNs[static_cast<std::size_t>(s)]; };
+            m.health.lastLatencyNs = publishNs - at(Stamp::Exposure);
             sectorsOut_->publish(m);
             const std::int64_t doneNs = MonotonicClock::nowNs();
-            const std::int64_t endToEnd = doneNs - in.stampNs[0];
-            seen.stageNs = {in.stampNs[1] - in.stampNs[0], in.stampNs[2] - in.stampNs[1], in.stampNs[3] - in.stampNs[2],
-                            in.stampNs[4] - in.stampNs[3], doneNs - in.stampNs[4],        endToEnd};
+            const std::int64_t endToEnd = doneNs - at(Stamp::Exposure);
+            seen.stageNs = {at(Stamp::RingPublish) - at(Stamp::Exposure),
+                            at(Stamp::Taken) - at(Stamp::RingPublish),
+                            at(Stamp::Rectified) - at(Stamp::Taken),
+                            at(Stamp::Detected) - at(Stamp::Rectified),
+                            doneNs - at(Stamp::Detected),
+                            endToEnd};
             seen.deadlineMissed = endToEnd > deadline_.count();
             if (seen.deadlineMissed) {
                 const std::uint64_t missed = misses_.fetch_add(1, std::memory_order_relaxed) + 1;
@@ -565,10 +601,6 @@ void Service::publishLoop(const std::atomic<bool>& stop) noexcept
             }
             if (options_.bus != nullptr) {
                 bus.message = m;
-                bus.groundReliable = in.groundReliable;
-                bus.groundPitchDeg = in.groundPitchDeg;
-                bus.groundRollDeg = in.groundRollDeg;
-                bus.cameraHeightM = in.cameraHeightM;
                 bus.endToEndNs = endToEnd;
                 bus.deadlineMissed = seen.deadlineMissed;
                 bus.busDrops = busDrops_.load(std::memory_order_relaxed);
@@ -621,6 +653,7 @@ ServiceReport Service::report() const
     r.framesDropped = dropped_.load();
     r.deadlineMisses = misses_.load();
     r.degradedFrames = degraded_.load();
+    r.leftOnlyFrames = leftOnly_.load();
     r.badFrames = badFrames_.load();
     r.loanFailures = loanFailures_.load() + sectorsOut_->loanFailures() + handoverFull_.load();
     r.cameraReconnects = reconnects_.load();

@@ -24,13 +24,18 @@
 ///
 /// Camera trouble: Timeout for `stallPeriods` periods marks the camera Reconnecting in the health record;
 /// Disconnected reconnects with exponential backoff (100 ms .. 2 s) while the service keeps running and publishes
-/// nothing new (consumers see the health record's camera state and the capture stamps age).
+/// nothing new (consumers see the health record's camera state and the capture stamps age). A pair whose right
+/// camera stops (StereoCamera::rightLost()) goes on with left-only frames, which the vision task runs through the
+/// one-camera detector (degraded sectors); capture retries the right camera with the same backoff after a frame has
+/// gone out, so a retry never delays a frame (it does take the capture thread for the device's open and set-up,
+/// which allocates: the one exception to the frame path's rule, as with Disconnected).
 ///
 /// Logging: each RT task owns an RtLogChannel (a preallocated ring of fixed records: no formatting, allocation or
 /// system call on the frame path); a LogDrain thread (SCHED_OTHER, started with the tasks) formats them onto the
 /// log output, the journal under systemd. Logged: camera stalls, disconnects, reconnects, end, bad and refused
-/// frames; pipeline failures; entering and leaving the degraded (ground-only) mode; deadline misses, at most one
-/// line a second with the count since the last. Everything is also counted in the report and health record.
+/// frames; the right camera lost and back; pipeline failures; entering and leaving the degraded (ground-only) mode;
+/// deadline misses, at most one line a second with the count since the last. Everything is also counted in the report
+/// and health record.
 ///
 /// Thread-safety: create/start/stop/report from one owner thread; the monitor ring has one reader. RT-safe: the
 /// three task bodies after their first frame (asserted by the allocation test in test/unit/service/).
@@ -71,11 +76,7 @@ enum class OverloadPolicy : std::uint8_t {
 
 /// What the bus task gets of each published frame (a copy: the frame path never waits for the bus).
 struct BusFrame {
-    ipc::SectorsMessage message; ///< as published on iceoryx (sectors and health)
-    bool groundReliable = false; ///< the ground estimate of this frame (else the configured plane)
-    float groundPitchDeg = 0.0F;
-    float groundRollDeg = 0.0F;
-    float cameraHeightM = 0.0F;
+    ipc::SectorsMessage message; ///< as published on iceoryx (sectors, their ground and health)
     std::int64_t endToEndNs = 0;
     bool deadlineMissed = false;
     std::uint64_t busDrops = 0; ///< frames the bus task was too slow to take, so far
@@ -144,7 +145,8 @@ struct ServiceReport {
     std::uint64_t cameraGaps = 0;
     std::uint64_t deadlineMisses = 0;
     std::uint64_t degradedFrames = 0;
-    std::uint64_t badFrames = 0; ///< malformed chunks, wrong sizes, failed stages
+    std::uint64_t leftOnlyFrames = 0; ///< frames of the left camera alone (one camera, or the right one lost)
+    std::uint64_t badFrames = 0;      ///< malformed chunks, wrong sizes, failed stages
     std::uint64_t loanFailures = 0;
     std::uint64_t cameraReconnects = 0;
     std::uint64_t monitorDrops = 0; ///< published frames the monitor reader was too slow to see
@@ -205,12 +207,17 @@ private:
         bool steady = false;
         bool stalled = false;      ///< logged as stalled, not yet logged as flowing again
         std::int64_t attempts = 0; ///< reconnect attempts since the camera went away
+        bool rightLost = false;    ///< the pair runs on its left camera (logged), the right one retried
+        std::chrono::nanoseconds rightBackoff{};
+        std::int64_t nextRightAttemptNs = 0; ///< [ns] CLOCK_MONOTONIC of the next try to bring it back
     };
     void captureLoop(const std::atomic<bool>& stop) noexcept;
     void onFrame(const hal::CameraFrame& frame, CaptureState& state) noexcept;
     void onNoFrame(std::chrono::nanoseconds stall, CaptureState& state) noexcept;
     void onBadFrame() noexcept;
     void onDisconnected(std::uint64_t lastSequence, CaptureState& state) noexcept;
+    /// The pair's right camera stopped (left-only frames): logs it, and tries to bring it back with backoff.
+    void watchRightCamera(std::uint64_t sequence, CaptureState& state) noexcept;
 
     /// The vision task's own state between frames.
     struct VisionState {
@@ -235,13 +242,13 @@ private:
     void probeSteady(const char* task, std::uint64_t frames, bool& done) const noexcept;
     void probeStopping(const char* task) const noexcept;
 
+    /// The instants of a frame on its way to the publish task [ns, CLOCK_MONOTONIC]: the stages of the report are
+    /// the differences of consecutive ones (Stage::Capture = RingPublish - Exposure, ...).
+    enum class Stamp : std::uint8_t { Exposure, RingPublish, Taken, Rectified, Detected, Count };
     struct Handover {
         ObstacleSectors sectors;
-        bool groundReliable = false;
-        float groundPitchDeg = 0.0F;
-        float groundRollDeg = 0.0F;
-        float cameraHeightM = 0.0F;
-        std::array<std::int64_t, 5> stampNs{}; ///< exposure, ring publish, taken, rectified, detected [ns]
+        GroundSummary ground;
+        std::array<std::int64_t, static_cast<std::size_t>(Stamp::Count)> stampNs{}; ///< by Stamp
     };
     /// The frame's ground estimate and sectors (or Unknown ones when the pipeline refused the pair) into `out`.
     void fillHandover(PipelineStatus done, const FrameHeader& h, Handover& out) noexcept;
@@ -286,6 +293,7 @@ private:
     std::atomic<std::uint64_t> dropped_{0};                      // vision
     std::atomic<std::uint64_t> badFrames_{0};                    // vision
     std::atomic<std::uint64_t> degraded_{0};                     // vision
+    std::atomic<std::uint64_t> leftOnly_{0};                     // capture
     std::atomic<std::uint64_t> handoverFull_{0};                 // vision
     std::atomic<std::uint64_t> publishedCount_{0};               // publish
     std::atomic<std::uint64_t> misses_{0};                       // publish

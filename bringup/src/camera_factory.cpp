@@ -43,6 +43,7 @@ Result<std::unique_ptr<hal::StereoCamera>, Error> openCamera(const ServiceConfig
         hal::V4l2Options options;
         options.leftDevice = config.camera.leftDevice;
         options.rightDevice = config.camera.rightDevice;
+        options.oneCamera = config.camera.rightDevice == kNoRightCamera;
         options.width = config.camera.width;
         options.height = config.camera.height;
         options.fps = config.camera.fps;
@@ -58,6 +59,7 @@ Result<std::unique_ptr<hal::StereoCamera>, Error> openCamera(const ServiceConfig
         };
         hal::LibcameraOptions options;
         options.sideBySide = config.camera.rightDevice.empty();
+        options.oneCamera = config.camera.rightDevice == kNoRightCamera;
         options.leftId = id(config.camera.leftDevice);
         options.rightId = id(config.camera.rightDevice);
         options.width = config.camera.width;

@@ -104,7 +104,9 @@ std::vector<KeySpec> cameraKeys()
             UGV_REF(camera.backend)),
         textKey("camera.left_device", Kind::Text, "V4L2 device of the left camera (or the side-by-side stereo device)",
                 UGV_REF(camera.leftDevice)),
-        textKey("camera.right_device", Kind::Text, "V4L2 device of the right camera; empty for a side-by-side device",
+        textKey("camera.right_device", Kind::Text,
+                "V4L2 device of the right camera; empty for a side-by-side device; none for one camera (the one-camera "
+                "mode, obstacles.detector: colour)",
                 UGV_REF(camera.rightDevice)),
         numberKey("camera.width", Kind::Int, 64, 4096, "image width per camera [px]", UGV_REF(camera.width)),
         numberKey("camera.height", Kind::Int, 48, 4096, "image height per camera [px]", UGV_REF(camera.height)),
@@ -467,6 +469,11 @@ public:
             config_.camera.replayPath.empty()) {
             error(at("camera"), "camera.replay_path", "is empty but camera.backend is replay",
                   "set replay_path to a recording");
+        }
+        if (config_.camera.rightDevice == kNoRightCamera && config_.obstacles.detector != DetectorMode::Colour) {
+            error(at("camera"), "camera.right_device",
+                  "is none (one camera) but obstacles.detector needs a stereo pair",
+                  "set obstacles.detector: colour for a one-camera rig, or name the right camera's device");
         }
         if (config_.camera.backend == CameraBackend::V4l2 && config_.camera.leftDevice.empty()) {
             error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2",

@@ -192,8 +192,8 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
             return Unexpected(Error{(*camera)->description(), "the camera went away during the capture",
                                     "plug it back in and capture again"});
         }
-        if (status != hal::GrabStatus::Frame) {
-            continue;
+        if (status != hal::GrabStatus::Frame || frame.right.empty()) {
+            continue; // a left-only frame (the right camera lost, or a one-camera rig) calibrates no pair
         }
         ++grabbed;
         const cv::Mat left = matOver(frame.left);

@@ -265,6 +265,9 @@ int runExport(const Args& args)
         char stem[32];
         std::snprintf(stem, sizeof(stem), "frame_%06zu", k);
         for (const auto& [side, image] : {std::pair{"left", v.left}, std::pair{"right", v.right}}) {
+            if (image.empty()) {
+                continue; // a left-only frame: its right camera was lost when it was recorded
+            }
             const cv::Mat m(image.height(), image.width(), CV_8UC1, const_cast<std::uint8_t*>(image.row(0)),
                             static_cast<std::size_t>(image.strideBytes()));
             const auto file = out / (std::string(stem) + "_" + side + ".png");

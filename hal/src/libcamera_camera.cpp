@@ -168,11 +168,13 @@ Result<void, Error> startSide(Side& side, const std::string& name, double fps)
 
 LibcameraStereoCamera::LibcameraStereoCamera(const LibcameraOptions& options) : options_(options)
 {
+    options_.sideBySide = options.sideBySide && !options.oneCamera;
     period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
-    description_ = options.sideBySide
-                       ? "libcamera " + (options.leftId.empty() ? "first camera" : options.leftId) + " (side by side)"
-                       : "libcamera " + (options.leftId.empty() ? "camera 0" : options.leftId) + " + " +
-                             (options.rightId.empty() ? "camera 1" : options.rightId);
+    const std::string first = "libcamera " + (options.leftId.empty() ? "first camera" : options.leftId);
+    description_ = options.oneCamera    ? first + " (one camera)"
+                   : options.sideBySide ? first + " (side by side)"
+                                        : "libcamera " + (options.leftId.empty() ? "camera 0" : options.leftId) +
+                                              " + " + (options.rightId.empty() ? "camera 1" : options.rightId);
 }
 
 LibcameraStereoCamera::~LibcameraStereoCamera()
@@ -207,7 +209,8 @@ Result<void, Error> LibcameraStereoCamera::start()
                                 "check that libcamera can access /dev/media* and /dev/video*"});
     }
     const auto cameras = impl_->manager->cameras();
-    const std::size_t needed = options_.sideBySide ? 1 : 2;
+    const bool pair = !options_.sideBySide && !options_.oneCamera;
+    const std::size_t needed = pair ? 2 : 1;
     if (cameras.size() < needed) {
         return Unexpected(Error{"libcamera",
                                 cameras.empty()
@@ -239,7 +242,7 @@ Result<void, Error> LibcameraStereoCamera::start()
         stop();
         return left;
     }
-    if (!options_.sideBySide) {
+    if (pair) {
         if (auto right = setUp(impl_->right, pick(options_.rightId, 1), options_.rightId, &Impl::onRight); !right) {
             stop();
             return right;
@@ -326,7 +329,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     requeue(im.left, im.left.delivered);
     requeue(im.right, im.right.delivered);
     const std::int64_t deadline = MonotonicClock::nowNs() + timeout.count();
-    const bool stereo = !options_.sideBySide;
+    const bool stereo = !options_.sideBySide && !options_.oneCamera;
     const auto skewNs = static_cast<std::int64_t>(options_.maxPairSkewMs * 1e6);
     for (;;) {
         if (im.left.failed.load() || (stereo && im.right.failed.load())) {
@@ -370,14 +373,17 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     if (stereo) {
         copyY(im.right, im.right.pending, 0, im.rightGrey.view());
         out.rightStampNs = sensorStamp(im.right, im.right.pending);
-    } else {
+    } else if (options_.sideBySide) {
         copyY(im.left, im.left.pending, options_.width, im.rightGrey.view());
         out.rightStampNs = sensorStamp(im.left, im.left.pending);
+    } else {
+        out.rightStampNs = 0; // one camera: a left-only frame
+        ++stats_.leftOnlyFrames;
     }
     out.leftStampNs = sensorStamp(im.left, im.left.pending);
     out.sequence = sequence;
     out.left = im.leftGrey.view();
-    out.right = im.rightGrey.view();
+    out.right = options_.oneCamera ? ConstImageViewU8() : im.rightGrey.view();
     im.left.delivered = im.left.pending;
     im.left.pending = nullptr;
     im.right.delivered = im.right.pending;

@@ -152,20 +152,9 @@ Result<void, SysError> RecordingWriter::append(std::uint64_t sequence, std::int6
     if (fd_ < 0) {
         return Unexpected(SysError{EBADF});
     }
-    const auto w = static_cast<int>(width_);
-    const auto h = static_cast<int>(height_);
-    if (left.width() != w || left.height() != h || right.width() != w || right.height() != h) {
-        return Unexpected(SysError{EINVAL});
-    }
-    const FrameHeader frame = makeGreyHeader(width_, height_, sequence, leftStampNs, rightStampNs);
     std::byte* out = record_.data() + sizeof(RecordPrefix);
-    std::memcpy(out, &frame, sizeof(frame));
-    std::byte* pixels = out + sizeof(frame);
-    for (const ConstImageViewU8& image : {left, right}) {
-        for (int y = 0; y < h; ++y) {
-            std::memcpy(pixels, image.row(y), width_);
-            pixels += width_;
-        }
+    if (!packGreyFrame(out, width_, height_, sequence, leftStampNs, rightStampNs, left, right)) {
+        return Unexpected(SysError{EINVAL});
     }
     RecordPrefix prefix;
     prefix.frameBytes = static_cast<std::uint32_t>(record_.size() - sizeof(RecordPrefix));

@@ -79,9 +79,11 @@ V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops)
     : options_(options), ops_(ops), leftGrey_(options.width, options.height), rightGrey_(options.width, options.height)
 {
     period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
-    sideBySide_ = options.rightDevice.empty();
-    description_ = sideBySide_ ? "v4l2 " + options.leftDevice + " (side by side)"
-                               : "v4l2 " + options.leftDevice + " + " + options.rightDevice;
+    oneCamera_ = options.oneCamera;
+    sideBySide_ = !oneCamera_ && options.rightDevice.empty();
+    description_ = oneCamera_    ? "v4l2 " + options.leftDevice + " (one camera)"
+                   : sideBySide_ ? "v4l2 " + options.leftDevice + " (side by side)"
+                                 : "v4l2 " + options.leftDevice + " + " + options.rightDevice;
 }
 
 V4l2StereoCamera::~V4l2StereoCamera()
@@ -109,7 +111,7 @@ Result<std::unique_ptr<V4l2StereoCamera>, Error> V4l2StereoCamera::open(const V4
         !started) {
         return Unexpected(started.error());
     }
-    if (!camera->sideBySide_) {
+    if (!camera->sideBySide_ && !camera->oneCamera_) {
         if (auto started = camera->start(camera->right_, options.width); !started) {
             camera->stop(camera->left_);
             return Unexpected(started.error());
@@ -354,73 +356,117 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
     requeue(left_);
     requeue(right_);
     const int timeoutMs = static_cast<int>(std::max<std::int64_t>(1, timeout.count() / 1'000'000));
-    const auto lost = [this](GrabStatus s) {
+    // The left camera is the one the one-camera mode runs on: without it there is no frame at all.
+    if (const GrabStatus s = dequeue(left_, timeoutMs); s != GrabStatus::Frame) {
         if (s == GrabStatus::Disconnected) {
             connected_ = false;
             ++stats_.disconnects;
         }
         return s;
-    };
-    GrabStatus s = dequeue(left_, timeoutMs);
-    if (s != GrabStatus::Frame) {
-        return lost(s);
     }
+    bool leftOnly = oneCamera_ || rightLost_;
     if (sideBySide_) {
-        copyGrey(left_, 0, leftGrey_.view());
         copyGrey(left_, options_.width, rightGrey_.view());
         out.rightStampNs = stampNs(left_.last);
-    } else {
-        s = dequeue(right_, timeoutMs);
-        if (s != GrabStatus::Frame) {
-            requeue(left_);
-            return lost(s);
-        }
-        // Pair by timestamp: drop the older frame and take that camera's next one, a few times at most.
-        const auto skewNs = static_cast<std::int64_t>(options_.maxPairSkewMs * 1e6);
-        for (int attempt = 0; attempt < 4; ++attempt) {
-            const std::int64_t dt = stampNs(left_.last) - stampNs(right_.last);
-            if (std::llabs(dt) <= skewNs) {
-                break;
-            }
-            Device& older = dt < 0 ? left_ : right_;
-            requeue(older);
-            ++unpaired_;
-            s = dequeue(older, timeoutMs);
-            if (s != GrabStatus::Frame) {
-                requeue(left_);
-                requeue(right_);
-                return lost(s);
-            }
-        }
-        if (std::llabs(stampNs(left_.last) - stampNs(right_.last)) > skewNs) {
+    } else if (!leftOnly) {
+        // The right frame is due within a period (and the skew) of the left one.
+        const auto periodMs = static_cast<int>(period_.count() / 1'000'000);
+        const int pairWaitMs = std::min(timeoutMs, periodMs + static_cast<int>(std::ceil(options_.maxPairSkewMs)));
+        const GrabStatus s = pairRight(pairWaitMs);
+        if (s == GrabStatus::BadFrame || left_.held < 0) {
             requeue(left_);
             requeue(right_);
-            ++stats_.badFrames;
-            return GrabStatus::BadFrame;
+            return s == GrabStatus::Frame ? GrabStatus::BadFrame : s; // left lost while pairing: as above
         }
-        copyGrey(left_, 0, leftGrey_.view());
-        copyGrey(right_, 0, rightGrey_.view());
-        out.rightStampNs = stampNs(right_.last);
+        leftOnly = s != GrabStatus::Frame && rightMissing(s);
+        if (!leftOnly) {
+            rightMisses_ = 0;
+            copyGrey(right_, 0, rightGrey_.view());
+            out.rightStampNs = stampNs(right_.last);
+        }
     }
+    copyGrey(left_, 0, leftGrey_.view());
     out.sequence = left_.last.sequence;
     out.leftStampNs = stampNs(left_.last);
     out.left = leftGrey_.view();
-    out.right = rightGrey_.view();
+    out.right = leftOnly ? ConstImageViewU8() : rightGrey_.view();
+    if (leftOnly) {
+        out.rightStampNs = 0;
+        ++stats_.leftOnlyFrames;
+    }
     ++stats_.frames;
     return GrabStatus::Frame;
 }
 
+GrabStatus V4l2StereoCamera::pairRight(int timeoutMs) noexcept
+{
+    GrabStatus s = dequeue(right_, timeoutMs);
+    if (s != GrabStatus::Frame) {
+        return s;
+    }
+    // Pair by timestamp: drop the older frame and take that camera's next one, a few times at most.
+    const auto skewNs = static_cast<std::int64_t>(options_.maxPairSkewMs * 1e6);
+    for (int attempt = 0; attempt < 4; ++attempt) {
+        const std::int64_t dt = stampNs(left_.last) - stampNs(right_.last);
+        if (std::llabs(dt) <= skewNs) {
+            return GrabStatus::Frame;
+        }
+        Device& older = dt < 0 ? left_ : right_;
+        requeue(older);
+        ++unpaired_;
+        s = dequeue(older, timeoutMs);
+        if (s != GrabStatus::Frame) {
+            if (&older == &left_) {
+                requeue(right_);
+                if (s == GrabStatus::Disconnected) {
+                    connected_ = false;
+                    ++stats_.disconnects;
+                }
+            }
+            return s; // the left camera's failure leaves left_.held < 0
+        }
+    }
+    if (std::llabs(stampNs(left_.last) - stampNs(right_.last)) > skewNs) {
+        ++stats_.badFrames;
+        return GrabStatus::BadFrame;
+    }
+    return GrabStatus::Frame;
+}
+
+bool V4l2StereoCamera::rightMissing(GrabStatus s) noexcept
+{
+    if (s == GrabStatus::Disconnected) {
+        stop(right_);
+        rightLost_ = true;
+    } else if (s == GrabStatus::Timeout && ++rightMisses_ >= kRightMissesToLose) {
+        rightLost_ = true; // stalled: stop waiting for it; reconnect() restarts its stream
+    }
+    return s == GrabStatus::Disconnected || s == GrabStatus::Timeout;
+}
+
 bool V4l2StereoCamera::reconnect() noexcept
 {
+    if (connected_ && rightLost_) {
+        // The left camera streams on: bring back only the right one.
+        stop(right_);
+        if (!start(right_, options_.width)) {
+            return false;
+        }
+        rightLost_ = false;
+        rightMisses_ = 0;
+        return true;
+    }
     stop(left_);
     stop(right_);
     if (!start(left_, sideBySide_ ? 2 * options_.width : options_.width)) {
         return false;
     }
-    if (!sideBySide_ && !start(right_, options_.width)) {
+    if (!sideBySide_ && !oneCamera_ && !start(right_, options_.width)) {
         stop(left_);
         return false;
     }
+    rightLost_ = false;
+    rightMisses_ = 0;
     connected_ = true;
     return true;
 }

@@ -257,7 +257,8 @@ bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, s
                              ConstImageViewU8 left, ConstImageViewU8 right,
                              std::atomic<std::int64_t>* publishStampNs) noexcept
 {
-    if (left.width() != width_ || left.height() != height_ || right.width() != width_ || right.height() != height_) {
+    const auto fits = [this](ConstImageViewU8 image) { return image.width() == width_ && image.height() == height_; };
+    if (!fits(left) || (!right.empty() && !fits(right))) {
         ++loanFailures_;
         return false;
     }
@@ -269,16 +270,8 @@ bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, s
     }
     auto* chunk = static_cast<std::byte*>(loaned.value());
     takeOver(chunk);
-    const FrameHeader header = makeGreyHeader(static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_),
-                                              sequence, leftStampNs, rightStampNs);
-    std::memcpy(chunk, &header, sizeof(header));
-    std::byte* pixels = chunk + sizeof(header);
-    for (const ConstImageViewU8& image : {left, right}) {
-        for (int y = 0; y < height_; ++y) {
-            std::memcpy(pixels, image.row(y), static_cast<std::size_t>(width_));
-            pixels += width_;
-        }
-    }
+    (void)packGreyFrame(chunk, static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_), sequence,
+                        leftStampNs, rightStampNs, left, right); // the sizes were checked above
     if (publishStampNs != nullptr) {
         publishStampNs->store(MonotonicClock::nowNs(), std::memory_order_release);
     }

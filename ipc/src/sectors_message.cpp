@@ -17,6 +17,8 @@ const char* toString(MessageError error) noexcept
         return "sector count out of range";
     case MessageError::BadSector:
         return "a sector has invalid fields (enum, bearing, range or confidence)";
+    case MessageError::BadGround:
+        return "the ground estimate has a non-finite or impossible angle or height";
     case MessageError::BadHealth:
         return "the health record has an unknown camera state";
     }
@@ -74,6 +76,11 @@ Result<void, MessageError> validate(const SectorsMessage& message, std::size_t a
         if (!validSector(sectors.sectors[static_cast<std::size_t>(i)])) {
             return Unexpected(MessageError::BadSector);
         }
+    }
+    const GroundSummary& g = message.ground;
+    const auto angle = [](float deg) { return std::isfinite(deg) && std::abs(deg) <= 90.0F; };
+    if (!angle(g.pitchDeg) || !angle(g.rollDeg) || !std::isfinite(g.cameraHeightM) || g.cameraHeightM < 0.0F) {
+        return Unexpected(MessageError::BadGround);
     }
     if (static_cast<std::uint8_t>(message.health.camera) > static_cast<std::uint8_t>(CameraState::Stopped)) {
         return Unexpected(MessageError::BadHealth);

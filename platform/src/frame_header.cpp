@@ -12,7 +12,7 @@ const char* toString(FrameError error) noexcept
     case FrameError::BadVersion:
         return "unsupported frame version";
     case FrameError::BadFormat:
-        return "unsupported pixel format";
+        return "unsupported pixel format or flags";
     case FrameError::BadGeometry:
         return "impossible width, height or stride";
     case FrameError::PayloadMismatch:
@@ -37,6 +37,34 @@ FrameHeader makeGreyHeader(std::uint32_t width, std::uint32_t height, std::uint6
     return header;
 }
 
+bool packGreyFrame(std::byte* out, std::uint32_t width, std::uint32_t height, std::uint64_t sequence,
+                   std::int64_t leftStampNs, std::int64_t rightStampNs, ConstImageViewU8 left,
+                   ConstImageViewU8 right) noexcept
+{
+    const auto fits = [&](ConstImageViewU8 image) {
+        return image.width() == static_cast<int>(width) && image.height() == static_cast<int>(height);
+    };
+    const bool leftOnly = right.empty();
+    if (!fits(left) || (!leftOnly && !fits(right))) {
+        return false;
+    }
+    FrameHeader header = makeGreyHeader(width, height, sequence, leftStampNs, rightStampNs);
+    header.flags = leftOnly ? kFrameLeftOnly : 0U;
+    std::memcpy(out, &header, sizeof(header));
+    std::byte* pixels = out + sizeof(header);
+    for (int y = 0; y < left.height(); ++y, pixels += width) {
+        std::memcpy(pixels, left.row(y), width);
+    }
+    for (int y = 0; y < static_cast<int>(height); ++y, pixels += width) {
+        if (leftOnly) {
+            std::memset(pixels, 0, width);
+        } else {
+            std::memcpy(pixels, right.row(y), width);
+        }
+    }
+    return true;
+}
+
 Result<void, FrameError> validate(const FrameHeader& header, std::size_t availableBytes) noexcept
 {
     if (header.magic != kFrameMagic) {
@@ -45,7 +73,7 @@ Result<void, FrameError> validate(const FrameHeader& header, std::size_t availab
     if (header.version != kFrameVersion) {
         return Unexpected(FrameError::BadVersion);
     }
-    if (header.format != PixelFormat::Grey8) {
+    if (header.format != PixelFormat::Grey8 || (header.flags & ~kFrameKnownFlags) != 0) {
         return Unexpected(FrameError::BadFormat);
     }
     if (header.width == 0 || header.height == 0 || header.width > kMaxFrameSide || header.height > kMaxFrameSide ||
@@ -75,8 +103,11 @@ Result<StereoViews, FrameError> viewFrame(const std::byte* frame, std::size_t av
     const auto width = static_cast<int>(header.width);
     const auto height = static_cast<int>(header.height);
     const auto stride = static_cast<std::ptrdiff_t>(header.strideBytes);
-    return StereoViews{ConstImageViewU8(pixels, width, height, stride),
-                       ConstImageViewU8(pixels + stride * height, width, height, stride)};
+    const ConstImageViewU8 left(pixels, width, height, stride);
+    if ((header.flags & kFrameLeftOnly) != 0) {
+        return StereoViews{left, ConstImageViewU8()};
+    }
+    return StereoViews{left, ConstImageViewU8(pixels + stride * height, width, height, stride)};
 }
 
 } // namespace ugv

@@ -189,6 +189,21 @@ TEST(Config, GroundRangeNeedsTheCensusMatcherAndAPositiveDrop)
     EXPECT_NE(text.find("is true but stereo.mode is sgbm"), std::string::npos) << text;
 }
 
+TEST(Config, OneCameraNeedsTheOneCameraDetector)
+{
+    const std::string oneCamera = "calibration: c\ncamera:\n  backend: v4l2\n  right_device: none\n";
+    const auto colour = parseConfig(oneCamera + "obstacles:\n  detector: colour\n", "test.yaml", "/");
+    const auto errors = parseErrors(oneCamera + "obstacles:\n  detector: both\n");
+    const std::string text = joined(errors);
+
+    ASSERT_TRUE(colour.has_value()) << joined(colour.error());
+    EXPECT_EQ(colour->camera.rightDevice, kNoRightCamera);
+    ASSERT_EQ(errors.size(), 1u) << text;
+    EXPECT_NE(text.find("camera.right_device"), std::string::npos) << text;
+    EXPECT_NE(text.find("is none (one camera) but obstacles.detector needs a stereo pair"), std::string::npos) << text;
+    EXPECT_NE(text.find("set obstacles.detector: colour"), std::string::npos) << text;
+}
+
 TEST(Config, DisparityRangeMustFitTheImage)
 {
     const auto errors = parseErrors(std::string(kValidMinimal) + "  width: 128\nstereo:\n  num_disparities: 128\n");

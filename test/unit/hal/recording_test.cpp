@@ -118,6 +118,24 @@ TEST_F(RecordingTest, FramesComeBackWithStampsSequencesPixelsAndCalibration)
     EXPECT_EQ(reader->corruptFrames(), 0U);
 }
 
+TEST_F(RecordingTest, ALeftOnlyFrameIsRecordedAndComesBackWithoutARightImage)
+{
+    fill(3);
+    {
+        auto writer = RecordingWriter::create(path_, kWidth, kHeight, kCalibration, {});
+        ASSERT_TRUE(writer.has_value()) << writer.error().message();
+        ASSERT_TRUE(writer->append(1, 10, 0, left_.view(), ConstImageViewU8()).has_value());
+        ASSERT_TRUE(writer->append(2, 20, 21, left_.view(), right_.view()).has_value());
+    }
+    auto reader = RecordingReader::open(path_);
+    ASSERT_TRUE(reader.has_value()) << reader.error().message();
+    ASSERT_EQ(reader->next(), ReadStatus::Frame);
+    EXPECT_EQ(reader->views().left.at(3, 2), left_.view().at(3, 2));
+    EXPECT_TRUE(reader->views().right.empty());
+    ASSERT_EQ(reader->next(), ReadStatus::Frame); // the pair after it is whole again
+    EXPECT_EQ(reader->views().right.at(7, 4), right_.view().at(7, 4));
+}
+
 TEST_F(RecordingTest, CutOffLastFrameIsTruncatedAndEveryEarlierFrameIsRecovered)
 {
     writeFrames(4);

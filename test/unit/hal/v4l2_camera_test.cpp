@@ -227,6 +227,32 @@ V4l2Options stereo(V4l2Format format = V4l2Format::Yuyv)
     return o;
 }
 
+/// A pair of fake devices, opened, its first pair grabbed.
+Result<std::unique_ptr<V4l2StereoCamera>, Error> streamingPair(FakeV4l2& fake)
+{
+    fake.add("/dev/video0").pending = {{1, 0, 0}};
+    fake.add("/dev/video1").pending = {{1, 0, 0}};
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    CameraFrame f;
+    if (camera && (*camera)->grab(f, milliseconds(50)) != GrabStatus::Frame) {
+        return Unexpected(Error{"fake pair", "no first frame", "a bug in the fake"});
+    }
+    return camera;
+}
+
+/// After a reconnect: one more frame on each device (sequence 9) comes out as a whole pair.
+void expectAPairAgain(FakeV4l2& fake, StereoCamera& camera)
+{
+    fake.device("/dev/video0").pending = {{5, 9, 300'000}};
+    fake.device("/dev/video1").pending = {{6, 9, 300'000}};
+    CameraFrame f;
+    ASSERT_EQ(camera.grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.left.at(0, 0), 5);
+    ASSERT_FALSE(f.right.empty());
+    EXPECT_EQ(f.right.at(0, 0), 6);
+    EXPECT_EQ(f.sequence, 9U);
+}
+
 TEST(V4l2Camera, TwoDevicesDeliverGreyPairsWithDriverStampsAndSequences)
 {
     FakeV4l2 fake;
@@ -320,30 +346,91 @@ TEST(V4l2Camera, SequenceGapsAreCountedAndEagainIsATimeout)
     EXPECT_EQ((*camera)->stats().sequenceGaps, 4U); // 2 per device
 }
 
-TEST(V4l2Camera, UnplugIsDisconnectedAndReconnectWorksOnceTheCameraIsBack)
+TEST(V4l2Camera, LeftUnplugIsDisconnectedAndReconnectWorksOnceTheCameraIsBack)
 {
     FakeV4l2 fake;
-    fake.add("/dev/video0").pending = {{1, 0, 0}};
-    fake.add("/dev/video1").pending = {{1, 0, 0}};
-    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
-    ASSERT_TRUE(camera.has_value());
+    const auto camera = streamingPair(fake);
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
     CameraFrame f;
-    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
 
-    fake.device("/dev/video0").pending = {{2, 1, 33'000}}; // the left camera still streams
-    fake.device("/dev/video1").unplugged = true;
+    fake.device("/dev/video1").pending = {{2, 1, 33'000}}; // the right camera still streams
+    fake.device("/dev/video0").unplugged = true;
     EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Disconnected);
     EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Disconnected);
     EXPECT_EQ((*camera)->stats().disconnects, 1U);
     EXPECT_FALSE((*camera)->reconnect()); // still gone: ENODEV at open
 
+    fake.device("/dev/video0").unplugged = false;
+    ASSERT_TRUE((*camera)->reconnect());
+    expectAPairAgain(fake, **camera);
+}
+
+TEST(V4l2Camera, ARightCameraThatVanishesLeavesLeftOnlyFramesUntilReconnectBringsItBack)
+{
+    FakeV4l2 fake;
+    const auto camera = streamingPair(fake);
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
+    CameraFrame f;
+    EXPECT_FALSE((*camera)->rightLost());
+
+    fake.device("/dev/video0").pending = {{2, 1, 33'000}, {3, 2, 66'000}};
+    fake.device("/dev/video1").unplugged = true;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    EXPECT_EQ(f.left.at(0, 0), 2);
+    EXPECT_TRUE(f.right.empty());
+    EXPECT_EQ(f.sequence, 1U);
+    EXPECT_TRUE((*camera)->rightLost());
+    EXPECT_FALSE((*camera)->reconnect());                               // still gone
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame); // the left camera streams on
+    EXPECT_EQ(f.left.at(0, 0), 3);
+    EXPECT_TRUE(f.right.empty());
+    EXPECT_EQ((*camera)->stats().leftOnlyFrames, 2U);
+    EXPECT_EQ((*camera)->stats().disconnects, 0U); // the camera as a whole never went away
+
     fake.device("/dev/video1").unplugged = false;
     ASSERT_TRUE((*camera)->reconnect());
-    fake.device("/dev/video0").pending = {{5, 9, 300'000}};
-    fake.device("/dev/video1").pending = {{6, 9, 300'000}};
+    EXPECT_FALSE((*camera)->rightLost());
+    expectAPairAgain(fake, **camera);
+}
+
+TEST(V4l2Camera, ARightCameraThatStallsIsLostAfterThreeMissedFramesAndEveryLeftFrameGoesOut)
+{
+    FakeV4l2 fake;
+    FakeDevice& left = fake.add("/dev/video0");
+    fake.add("/dev/video1");
+    for (std::uint32_t k = 0; k < 5; ++k) {
+        left.pending.push_back({static_cast<std::uint8_t>(k), k, 33'333 * static_cast<std::int64_t>(k)});
+    }
+    auto camera = V4l2StereoCamera::open(stereo(), fake.ops());
+    ASSERT_TRUE(camera.has_value());
+    CameraFrame f;
+    const ugv::test::ThreadAllocationScope scope;
+    for (int k = 0; k < 5; ++k) {
+        ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame) << k;
+        EXPECT_EQ(f.left.at(0, 0), k);
+        EXPECT_TRUE(f.right.empty());
+        EXPECT_EQ((*camera)->rightLost(), k >= V4l2StereoCamera::kRightMissesToLose - 1) << k;
+    }
+    EXPECT_EQ(scope.count(), 0U);        // the fallback allocates nothing either
+    ASSERT_TRUE((*camera)->reconnect()); // restarts the right stream
+    expectAPairAgain(fake, **camera);
+}
+
+TEST(V4l2Camera, OneCameraDeliversLeftOnlyFramesAndNeverOpensASecondDevice)
+{
+    FakeV4l2 fake;
+    fake.add("/dev/video0").pending = {{9, 4, 1'000}};
+    V4l2Options o = stereo(V4l2Format::Grey);
+    o.oneCamera = true;
+    auto camera = V4l2StereoCamera::open(o, fake.ops()); // no /dev/video1 exists
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
+    EXPECT_STREQ((*camera)->description(), "v4l2 /dev/video0 (one camera)");
+    CameraFrame f;
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
-    EXPECT_EQ(f.left.at(0, 0), 5);
-    EXPECT_EQ(f.sequence, 9U);
+    EXPECT_EQ(f.left.at(3, 3), 9);
+    EXPECT_TRUE(f.right.empty());
+    EXPECT_FALSE((*camera)->rightLost()); // one camera is what the rig is, not a loss
+    EXPECT_EQ(fake.device("/dev/video0").width, 32U);
 }
 
 TEST(V4l2Camera, OpenErrorsNameTheDeviceWhatAndTheFix)

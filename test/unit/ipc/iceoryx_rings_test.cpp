@@ -131,6 +131,20 @@ TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)
     EXPECT_EQ(deep->take(frame, milliseconds(10)), TakeStatus::Timeout);
 }
 
+TEST_F(IceoryxRings, ALeftOnlyFrameReachesTheSubscriberFlaggedAndWithoutARightView)
+{
+    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto vision = FrameSubscriber::create(1).value();
+    fill(4);
+    ASSERT_TRUE(publisher->publish(7, 1000, 0, left_.view(), ConstImageViewU8()));
+    TakenFrame frame;
+    ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
+    EXPECT_EQ(frame.header.flags, kFrameLeftOnly);
+    EXPECT_EQ(frame.views.left.at(5, 0), left_.view().at(5, 0));
+    EXPECT_TRUE(frame.views.right.empty());
+    vision->release(frame);
+}
+
 TEST_F(IceoryxRings, WrongSizeImagesAreRefusedAndCounted)
 {
     auto publisher = FramePublisher::create(kWidth, kHeight).value();

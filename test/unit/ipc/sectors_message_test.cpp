@@ -21,6 +21,7 @@ SectorsMessage validMessage()
     Sector& clear = m.sectors.sectors[1];
     clear.state = SectorState::Clear;
     clear.danger = DangerClass::Green;
+    m.ground = GroundSummary{true, 12.0F, -1.0F, 0.6F};
     return m;
 }
 
@@ -67,6 +68,13 @@ TEST(SectorsMessage, EachMalformedFieldHasItsError)
          MessageError::BadSector},
         {"unknown sector marked red", [](SectorsMessage& m) { m.sectors.sectors[2].danger = DangerClass::Red; },
          MessageError::BadSector},
+        {"NaN ground pitch", [](SectorsMessage& m) { m.ground.pitchDeg = std::numeric_limits<float>::quiet_NaN(); },
+         MessageError::BadGround},
+        {"ground roll beyond 90 deg", [](SectorsMessage& m) { m.ground.rollDeg = 120.0F; }, MessageError::BadGround},
+        {"camera below the ground", [](SectorsMessage& m) { m.ground.cameraHeightM = -0.5F; }, MessageError::BadGround},
+        {"infinite camera height",
+         [](SectorsMessage& m) { m.ground.cameraHeightM = std::numeric_limits<float>::infinity(); },
+         MessageError::BadGround},
         {"camera state", [](SectorsMessage& m) { m.health.camera = static_cast<CameraState>(9); },
          MessageError::BadHealth},
     };

@@ -36,6 +36,32 @@ TEST(FrameHeader, ViewsPointAtLeftThenRightRows)
     EXPECT_EQ(sut->right.at(4, 2), 29);
 }
 
+TEST(FrameHeader, PackingALeftOnlyFrameFlagsItZeroesTheRightRowsAndGivesNoRightView)
+{
+    std::vector<std::uint8_t> leftPixels(kWidth * kHeight, 77);
+    const ConstImageViewU8 left(leftPixels.data(), kWidth, kHeight, kWidth);
+    std::vector<std::byte> frame(sizeof(FrameHeader) + 2 * kWidth * kHeight, std::byte{0xEE});
+
+    ASSERT_TRUE(packGreyFrame(frame.data(), kWidth, kHeight, 3, 100, 0, left, ConstImageViewU8()));
+    const auto sut = viewFrame(frame.data(), frame.size());
+
+    ASSERT_TRUE(sut.has_value());
+    EXPECT_EQ(sut->left.at(4, 2), 77);
+    EXPECT_TRUE(sut->right.empty());
+    FrameHeader header;
+    std::memcpy(&header, frame.data(), sizeof(header));
+    EXPECT_EQ(header.flags, kFrameLeftOnly);
+    EXPECT_EQ(frame.back(), std::byte{0}); // the right rows are zero, not stale bytes
+
+    ASSERT_TRUE(packGreyFrame(frame.data(), kWidth, kHeight, 4, 100, 101, left, left));
+    std::memcpy(&header, frame.data(), sizeof(header));
+    EXPECT_EQ(header.flags, 0U);
+    EXPECT_EQ(viewFrame(frame.data(), frame.size())->right.at(4, 2), 77);
+    const ConstImageViewU8 small(leftPixels.data(), kWidth - 1, kHeight, kWidth);
+    EXPECT_FALSE(packGreyFrame(frame.data(), kWidth, kHeight, 5, 0, 0, left, small));
+    EXPECT_FALSE(packGreyFrame(frame.data(), kWidth, kHeight, 5, 0, 0, ConstImageViewU8(), left));
+}
+
 TEST(FrameHeader, PaddedStrideIsHonoured)
 {
     auto header = makeGreyHeader(kWidth, kHeight, 0, 0, 0);
@@ -68,6 +94,9 @@ TEST(FrameHeader, EveryMalformedFieldIsRejected)
     expectError(h, FrameError::BadVersion);
     h = good;
     h.format = static_cast<PixelFormat>(9);
+    expectError(h, FrameError::BadFormat);
+    h = good;
+    h.flags = 2; // a flag this reader does not know
     expectError(h, FrameError::BadFormat);
     h = good;
     h.width = 0;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -54,8 +55,9 @@ ConstImageViewU8 viewOf(const cv::Mat& m)
 /// The first `frames` frames of the default course at 10 fps, as a recording in `dir`.
 /// A recording of `frames` pairs of the default course from `firstFrame`. With `distinct` > 0 only that many are
 /// rendered and repeated (for tests about the service's tasks, not the images: rendering is most of their time).
+/// Frames in [leftOnlyFrom, leftOnlyTo) are recorded left-only (the right camera lost).
 Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::size_t firstFrame = 0,
-                   std::size_t distinct = 0)
+                   std::size_t distinct = 0, std::size_t leftOnlyFrom = 0, std::size_t leftOnlyTo = 0)
 {
     Course out;
     auto course = sim::makeCourse("default", 1.5, 10.0);
@@ -78,7 +80,11 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
     for (std::size_t k = 0; k < frames; ++k) {
         const sim::RenderResult& frame = pairs[k % rendered];
         const auto stamp = static_cast<std::int64_t>(k) * 100'000'000;
-        EXPECT_TRUE(writer->append(k, stamp, stamp, viewOf(frame.left), viewOf(frame.right)).has_value());
+        const bool leftOnly = k >= leftOnlyFrom && k < leftOnlyTo;
+        EXPECT_TRUE(writer
+                        ->append(k, stamp, leftOnly ? 0 : stamp, viewOf(frame.left),
+                                 leftOnly ? ConstImageViewU8() : viewOf(frame.right))
+                        .has_value());
         out.truth.push_back(frame.sectors);
     }
     return out;
@@ -109,15 +115,26 @@ protected:
 };
 ipc::EmbeddedRouDi* ServiceTest::roudi_ = nullptr;
 
+/// Wraps the replay camera of a test (a camera that fails in some way), or returns it as it is.
+using CameraWrap = std::function<std::unique_ptr<hal::StereoCamera>(std::unique_ptr<hal::StereoCamera>)>;
+
 std::unique_ptr<Service> makeService(const Course& course, const hal::ReplayOptions& replay,
                                      const ServiceOptions& options = {},
-                                     const bringup::ServiceConfig& config = bringup::ServiceConfig{})
+                                     const bringup::ServiceConfig& config = bringup::ServiceConfig{},
+                                     const CameraWrap& wrap = {})
 {
     auto camera = hal::ReplayCamera::open(course.path, replay);
     EXPECT_TRUE(camera.has_value()) << (camera ? "" : camera.error().message());
+    if (!camera) {
+        return nullptr;
+    }
+    std::unique_ptr<hal::StereoCamera> source = std::move(*camera);
+    if (wrap) {
+        source = wrap(std::move(source));
+    }
     auto calibration = bringup::parseCalibration(course.calibration, "course");
     EXPECT_TRUE(calibration.has_value());
-    auto service = Service::create(config, *calibration, std::move(*camera), options);
+    auto service = Service::create(config, *calibration, std::move(source), options);
     EXPECT_TRUE(service.has_value()) << (service ? "" : service.error().message());
     return service ? std::move(*service) : nullptr;
 }
@@ -128,6 +145,7 @@ std::unique_ptr<Service> makeService(const Course& course, const hal::ReplayOpti
 struct HilRun {
     ServiceReport report;
     std::map<std::uint64_t, ObstacleSectors> received;
+    std::map<std::uint64_t, GroundSummary> grounds; ///< the ground each frame's message carried
     std::uint64_t malformed = 0;
     int truthObstacles = 0;
     int detected = 0;
@@ -135,7 +153,8 @@ struct HilRun {
     int degradedFrames = 0;
 };
 
-HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bringup::ServiceConfig{})
+HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bringup::ServiceConfig{},
+              const CameraWrap& wrap = {})
 {
     HilRun out;
     auto planner = ipc::SectorsSubscriber::create(256).value(); // a local consumer on the sectors topic
@@ -144,7 +163,7 @@ HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bring
     // Slow enough that no frame is dropped on a loaded 2-core machine; a sanitizer build runs the matcher several
     // times slower (measured: a 5 fps replay dropped one frame in 40 there).
     replay.forcedFps = test::mallocFamilyCounted() ? 5.0 : 2.0;
-    auto service = makeService(course, replay, {}, config);
+    auto service = makeService(course, replay, {}, config, wrap);
     if (service == nullptr) {
         return out;
     }
@@ -153,10 +172,12 @@ HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bring
     while (!service->finished() || planner->take(message, milliseconds(0)) == ipc::TakeStatus::Frame) {
         if (planner->take(message, milliseconds(50)) == ipc::TakeStatus::Frame) {
             out.received[message.sectors.sequence] = message.sectors;
+            out.grounds[message.sectors.sequence] = message.ground;
         }
     }
     while (planner->take(message, milliseconds(100)) == ipc::TakeStatus::Frame) {
         out.received[message.sectors.sequence] = message.sectors;
+        out.grounds[message.sectors.sequence] = message.ground;
     }
     service->stop();
     out.report = service->report();
@@ -238,6 +259,180 @@ TEST_F(ServiceTest, TheOneCameraModeRunsInTheServiceOnTheLeftCamerasGreyLevels)
                                           [](const Sector& s) { return s.state != SectorState::Unknown; });
         EXPECT_TRUE(anyKnown) << "frame " << k << ": every sector Unknown";
     }
+}
+
+/// Frames k with `lost(k)` true carried no right image: each must be degraded with a sector that is not Unknown (all
+/// Unknown would mean nothing ran). Returns how many there were.
+int expectLeftOnlyFramesGaveColourSectors(const HilRun& run, const std::function<bool(std::uint64_t)>& lost)
+{
+    int seen = 0;
+    for (const auto& [k, got] : run.received) {
+        if (!lost(k)) {
+            continue; // stereo's (degraded only when the overload policy took the ground-only path)
+        }
+        ++seen;
+        EXPECT_TRUE(got.degraded) << "frame " << k;
+        const bool anyKnown = std::any_of(got.sectors.begin(), got.sectors.begin() + got.count,
+                                          [](const Sector& s) { return s.state != SectorState::Unknown; });
+        EXPECT_TRUE(anyKnown) << "frame " << k << ": every sector Unknown";
+    }
+    return seen;
+}
+
+TEST_F(ServiceTest, LeftOnlyFramesOfARecordingFallBackToTheOneCameraModeAndStereoResumesAfter)
+{
+    // A recording made while the right camera was lost (frames 8-15 left-only) replayed with obstacles.detector:
+    // stereo: those frames are published by the one-camera detector, degraded; the rest by stereo.
+    constexpr std::size_t kFrames = 24;
+    const Course course = writeCourse(dir_, kFrames, 0, 0, 8, 16);
+
+    const HilRun run = runHil(course);
+
+    EXPECT_EQ(run.report.framesPublished, kFrames);
+    EXPECT_EQ(run.report.badFrames, 0U);
+    EXPECT_EQ(run.report.leftOnlyFrames, 8U);
+    ASSERT_EQ(run.received.size(), kFrames);
+    EXPECT_EQ(expectLeftOnlyFramesGaveColourSectors(run, [](std::uint64_t k) { return k >= 8 && k < 16; }), 8);
+    EXPECT_EQ(run.falseRed, 0);
+    // The message carries the ground the sectors were measured against: stereo's estimate (reliable on this flat
+    // course) on a pair, the mount's plane (not reliable) on a left-only frame.
+    const auto calibration = bringup::parseCalibration(course.calibration, "course");
+    ASSERT_TRUE(calibration.has_value() && calibration->mount.has_value());
+    ASSERT_EQ(run.grounds.size(), kFrames);
+    int reliablePairs = 0;
+    for (const auto& [k, g] : run.grounds) {
+        EXPECT_NEAR(g.cameraHeightM, calibration->mount->heightM, 0.1) << "frame " << k;
+        EXPECT_NEAR(g.pitchDeg, calibration->mount->pitchDeg, 1.0) << "frame " << k;
+        if (k >= 8 && k < 16) {
+            EXPECT_FALSE(g.reliable) << "frame " << k;
+            EXPECT_FLOAT_EQ(g.cameraHeightM, static_cast<float>(calibration->mount->heightM)) << "frame " << k;
+        } else {
+            reliablePairs += g.reliable ? 1 : 0;
+        }
+    }
+    EXPECT_GE(reliablePairs, 12); // of the 16 pairs
+}
+
+TEST(FramePipeline, ALeftOnlyFrameTakesTheOneCameraPathInStereoModeAndTheNextPairIsStereoAgain)
+{
+    auto course = sim::makeCourse("default", 1.5, 10.0);
+    ASSERT_TRUE(course.has_value());
+    auto frame = sim::renderCourseFrame(*course, 20);
+    ASSERT_TRUE(frame.has_value());
+    auto calibration = bringup::parseCalibration(sim::calibrationText(course->scene.rig), "course");
+    ASSERT_TRUE(calibration.has_value());
+    auto pipeline = FramePipeline::create(*calibration, bringup::ServiceConfig{});
+    ASSERT_TRUE(pipeline.has_value()) << pipeline.error().message();
+    FramePipeline& sut = **pipeline;
+    std::int64_t rectifiedNs = 0;
+
+    ASSERT_EQ(sut.process(viewOf(frame->left), viewOf(frame->right), 1, 100, rectifiedNs), PipelineStatus::Ok);
+    EXPECT_FALSE(sut.sectors().degraded);
+    EXPECT_FALSE(sut.lastFrameLeftOnly());
+
+    ASSERT_EQ(sut.process(viewOf(frame->left), ConstImageViewU8(), 2, 200, rectifiedNs), PipelineStatus::Ok);
+    EXPECT_TRUE(sut.lastFrameLeftOnly());
+    EXPECT_TRUE(sut.sectors().degraded); // the one-camera detector's
+    EXPECT_EQ(sut.sectors().sequence, 2U);
+    EXPECT_EQ(sut.leftOnlyFrames(), 1U);
+    EXPECT_EQ(sut.detector().sectors().sequence, 1U) << "the stereo detector ran on a frame without a right image";
+    const GroundSummary mount = sut.ground(); // the one-camera detector's ground: the mount's, not an estimate
+    EXPECT_FALSE(mount.reliable);
+    EXPECT_FLOAT_EQ(mount.cameraHeightM, static_cast<float>(calibration->mount->heightM));
+    EXPECT_FLOAT_EQ(mount.pitchDeg, static_cast<float>(calibration->mount->pitchDeg));
+
+    ASSERT_EQ(sut.process(viewOf(frame->left), viewOf(frame->right), 3, 300, rectifiedNs), PipelineStatus::Ok);
+    EXPECT_FALSE(sut.lastFrameLeftOnly());
+    EXPECT_FALSE(sut.sectors().degraded);
+    EXPECT_EQ(sut.sectors().sequence, 3U);
+    const cv::Mat small(8, 8, CV_8UC1, cv::Scalar(0));
+    EXPECT_EQ(sut.process(viewOf(small), ConstImageViewU8(), 4, 400, rectifiedNs), PipelineStatus::WrongInputSize);
+}
+
+/// What a RightCameraDropout did, kept by the test (the service owns and destroys the camera).
+struct DropoutLog {
+    std::vector<std::uint64_t> lostSequences; ///< reserved by the test: the camera's grab() must not allocate
+    int attempts = 0;                         ///< reconnect() calls
+};
+
+/// A stereo pair whose right camera stops at frame `lostAt` and comes back on the `failures + 1`-th reconnect().
+class RightCameraDropout final : public hal::StereoCamera {
+public:
+    RightCameraDropout(std::unique_ptr<hal::StereoCamera> inner, std::uint64_t lostAt, int failures, DropoutLog& log)
+        : inner_(std::move(inner)), lostAt_(lostAt), failures_(failures), log_(log)
+    {
+    }
+    hal::GrabStatus grab(hal::CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override
+    {
+        const hal::GrabStatus s = inner_->grab(out, timeout);
+        if (s == hal::GrabStatus::Frame && !happened_ && out.sequence >= lostAt_) {
+            happened_ = true;
+            lost_ = true;
+        }
+        if (s == hal::GrabStatus::Frame && lost_) {
+            out.right = ConstImageViewU8();
+            out.rightStampNs = 0;
+            log_.lostSequences.push_back(out.sequence);
+        }
+        return s;
+    }
+    bool reconnect() noexcept override
+    {
+        ++log_.attempts;
+        if (!lost_ || log_.attempts <= failures_) {
+            return false;
+        }
+        lost_ = false;
+        return true;
+    }
+    [[nodiscard]] bool rightLost() const noexcept override { return lost_; }
+    [[nodiscard]] int width() const noexcept override { return inner_->width(); }
+    [[nodiscard]] int height() const noexcept override { return inner_->height(); }
+    [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return inner_->period(); }
+    [[nodiscard]] hal::CameraStats stats() const noexcept override { return inner_->stats(); }
+    [[nodiscard]] const char* description() const noexcept override { return "right camera dropout"; }
+
+private:
+    std::unique_ptr<hal::StereoCamera> inner_;
+    std::uint64_t lostAt_;
+    int failures_;
+    DropoutLog& log_;
+    bool happened_ = false;
+    bool lost_ = false;
+};
+
+TEST_F(ServiceTest, WhenTheRightCameraStopsTheServiceRunsOnTheLeftOneAndBringsTheRightOneBack)
+{
+    constexpr std::size_t kFrames = 24;
+    const Course course = writeCourse(dir_, kFrames);
+    DropoutLog dropout;
+    dropout.lostSequences.reserve(kFrames);
+    const CameraWrap wrap = [&dropout](std::unique_ptr<hal::StereoCamera> inner) {
+        return std::make_unique<RightCameraDropout>(std::move(inner), 6, 2, dropout);
+    };
+    const test::CapturedLog log;
+
+    const HilRun run = runHil(course, bringup::ServiceConfig{}, wrap);
+
+    const std::vector<std::uint64_t>& lost = dropout.lostSequences;
+    std::printf("[ MEASURED ] right camera lost at frame 6: %zu left-only frame(s), back after %d reconnect "
+                "attempt(s)\n",
+                lost.size(), dropout.attempts);
+    EXPECT_EQ(run.report.framesPublished, kFrames); // no frame lost to the dropout
+    EXPECT_EQ(run.report.badFrames, 0U);
+    EXPECT_EQ(dropout.attempts, 3); // two failed, the third brought it back
+    EXPECT_EQ(run.report.cameraReconnects, 1U);
+    ASSERT_FALSE(lost.empty());
+    EXPECT_EQ(lost.front(), 6U);
+    EXPECT_LT(lost.back(), kFrames - 1); // stereo again before the end
+    EXPECT_EQ(run.report.leftOnlyFrames, lost.size());
+    ASSERT_EQ(run.received.size(), kFrames);
+    const auto wasLost = [&lost](std::uint64_t k) { return std::find(lost.begin(), lost.end(), k) != lost.end(); };
+    EXPECT_EQ(expectLeftOnlyFramesGaveColourSectors(run, wasLost), static_cast<int>(lost.size()));
+    EXPECT_EQ(run.falseRed, 0);
+    const std::string text = log.text();
+    EXPECT_NE(text.find("the right camera stopped at frame 6: the one-camera mode"), std::string::npos) << text;
+    EXPECT_NE(text.find("the right camera is back"), std::string::npos) << text;
 }
 
 TEST_F(ServiceTest, BothDetectorsKeepStereosSectorsAndAddOnlyObstaclesWhereItIsUnknown)
@@ -432,11 +627,14 @@ TEST_F(ServiceTest, ABusTaskThatThrowsIsLoggedAndDisabledWhileEveryFrameIsStillP
 
 /// 310 frames (6 distinct, looped at 60 fps) through the service with `config` and a bus attached: each task's
 /// allocations from its steady state to its end must be 0.
-void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, const bringup::ServiceConfig& config)
+/// With `leftOnlyEvery` the first three of the six looped frames are left-only: the frame path switches between
+/// stereo and the one-camera fallback every three frames.
+void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, const bringup::ServiceConfig& config,
+                                             bool halfLeftOnly = false)
 {
     // Under a sanitizer only operator new/delete are counted (the sanitizer owns malloc); the test still runs.
     constexpr std::size_t kDistinct = 6;
-    const Course course = writeCourse(dir, kDistinct, 20);
+    const Course course = writeCourse(dir, kDistinct, 20, 0, 0, halfLeftOnly ? 3 : 0);
     hal::ReplayOptions replay;
     replay.loop = true;
     replay.pace = hal::ReplayPace::Forced;
@@ -455,6 +653,9 @@ void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, c
     runToTheEnd(*service);
     const ServiceReport report = service->report();
     ASSERT_GE(report.framesPublished, 310U);
+    if (halfLeftOnly) {
+        EXPECT_GE(report.leftOnlyFrames, 150U);
+    }
     // Every published frame went to the bus or was counted as dropped; the threads stop together, so the last one
     // may have been pushed after the bus task's final drain.
     EXPECT_LE(bus.frames.load() + report.busDrops, report.framesPublished);
@@ -476,6 +677,11 @@ void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, c
 TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
 {
     expectThreeHundredFramesAllocateNothing(dir_, bringup::ServiceConfig{});
+}
+
+TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingWhenFramesSwitchBetweenPairsAndLeftOnly)
+{
+    expectThreeHundredFramesAllocateNothing(dir_, bringup::ServiceConfig{}, true);
 }
 
 TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingWithBothDetectors)

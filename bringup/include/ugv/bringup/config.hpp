@@ -34,14 +34,18 @@ enum class OverloadChoice { Degrade, Drop };
 enum class DetectorMode { Stereo, Colour, Both };
 using MatcherMode = vision::MatcherMode; ///< names and parsing in ugv/vision/matcher_mode.hpp
 
+/// camera.right_device of a one-camera rig (the one-camera mode: obstacles.detector colour).
+inline constexpr const char* kNoRightCamera = "none";
+
 struct CameraConfig {
     CameraBackend backend = CameraBackend::Replay;
-    std::string leftDevice = "/dev/video0";             ///< V4L2 left device (or the side-by-side device)
-    std::string rightDevice = "/dev/video1";            ///< V4L2 right device; empty = side-by-side on leftDevice
-    int width = 640;                                    ///< [px] per camera
-    int height = 480;                                   ///< [px]
-    double fps = 30.0;                                  ///< [Hz] frame rate; the frame deadline is 1/fps
-    double maxPairSkewMs = 5.0;                         ///< [ms] left/right timestamps further apart are not paired
+    std::string leftDevice = "/dev/video0"; ///< V4L2 left device (or the side-by-side device)
+    std::string rightDevice =
+        "/dev/video1";          ///< right device; empty = side-by-side on leftDevice; kNoRightCamera = one camera
+    int width = 640;            ///< [px] per camera
+    int height = 480;           ///< [px]
+    double fps = 30.0;          ///< [Hz] frame rate; the frame deadline is 1/fps
+    double maxPairSkewMs = 5.0; ///< [ms] left/right timestamps further apart are not paired
     PixelFormatChoice format = PixelFormatChoice::Yuyv; ///< V4L2 pixel format (the Y plane is used)
     std::string replayPath;                             ///< recording for the replay backend
     ReplayPace replayPace = ReplayPace::Recorded;

@@ -1,7 +1,8 @@
 #pragma once
 
 /// @file
-/// The libcamera backend (libcamera 0.0.3): two cameras (left, right), or one side-by-side stereo camera, streaming
+/// The libcamera backend (libcamera 0.0.3): two cameras (left, right), one side-by-side stereo camera, or one camera
+/// alone (left-only frames, for the one-camera mode), streaming
 /// YUV420 at the configured size and rate (FrameDurationLimits); the Y plane is the grey image. Each camera's
 /// requests complete on libcamera's thread, which hands the Request pointer to the capture thread through a
 /// wait-free ring and a semaphore; grab() pairs the two cameras' frames by their sensor timestamps within a skew,
@@ -10,7 +11,8 @@
 /// With no camera present, open() fails with a clear error (tested here; no camera exists on our machines, so the
 /// streaming path is untested here and is checked on the vehicle: `ugvsensed --config` with camera.backend libcamera).
 /// A camera that disappears (cameraRemoved, or failed requests) makes grab() return Disconnected; reconnect() opens
-/// the cameras again.
+/// the cameras again. Unlike the V4L2 backend, a pair whose right camera stops does not go on with the left one
+/// here (the whole camera is Disconnected until both are back): that path needs a camera to test it on.
 ///
 /// Thread-safety: thread-bound (the capture thread); the completion callback runs on libcamera's thread and only
 /// touches the rings. RT-safe: grab() does not allocate in our code; libcamera's queueRequest() is not audited for
@@ -31,6 +33,7 @@ struct LibcameraOptions {
     std::string leftId;      ///< libcamera camera id; empty: the first camera
     std::string rightId;     ///< empty with sideBySide false: the second camera
     bool sideBySide = false; ///< one camera delivering 2 w x h, left half then right half
+    bool oneCamera = false;  ///< leftId alone: every frame left-only (rightId and sideBySide unused)
     int width = 640;
     int height = 480;
     double fps = 30.0;

@@ -88,7 +88,8 @@ public:
     ~RecordingWriter();
 
     /// Appends one frame (the images must be width x height; the header's geometry is rewritten to the packed
-    /// layout). No allocation: the record is assembled in a buffer sized at create().
+    /// layout). An empty `right` is recorded as a left-only frame (kFrameLeftOnly; the reader gives it back so). No
+    /// allocation: the record is assembled in a buffer sized at create().
     /// @return nothing, or the errno of the failed write (ENOSPC: the disk is full). The file keeps every earlier
     /// frame and ends after the last one: a record that was written in part is cut off again, so appends may go on
     /// once there is room (a reader never sees a torn record from a full disk).

@@ -25,7 +25,7 @@ struct CameraFrame {
     std::int64_t leftStampNs = 0;  ///< [ns] CLOCK_MONOTONIC
     std::int64_t rightStampNs = 0; ///< [ns]
     ConstImageViewU8 left;
-    ConstImageViewU8 right;
+    ConstImageViewU8 right; ///< empty: a left-only frame (a one-camera rig, or the pair's right camera lost)
 };
 
 enum class GrabStatus : std::uint8_t {
@@ -38,10 +38,11 @@ enum class GrabStatus : std::uint8_t {
 
 /// Counters since open().
 struct CameraStats {
-    std::uint64_t frames = 0;       ///< pairs delivered
-    std::uint64_t sequenceGaps = 0; ///< pairs the device's sequence numbers say were lost
-    std::uint64_t badFrames = 0;    ///< pairs skipped as unusable
-    std::uint64_t disconnects = 0;  ///< times the source went away
+    std::uint64_t frames = 0;         ///< pairs delivered
+    std::uint64_t sequenceGaps = 0;   ///< pairs the device's sequence numbers say were lost
+    std::uint64_t badFrames = 0;      ///< pairs skipped as unusable
+    std::uint64_t disconnects = 0;    ///< times the source went away
+    std::uint64_t leftOnlyFrames = 0; ///< frames delivered without a right image
 };
 
 class StereoCamera {
@@ -57,6 +58,10 @@ public:
     virtual GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept = 0;
     /// Tries to bring a Disconnected source back (reopen the device). Not RT-safe; called with backoff.
     virtual bool reconnect() noexcept = 0;
+    /// True while a pair runs on its left camera alone because the right one stopped: grab() delivers left-only
+    /// frames and the caller tries reconnect() with backoff to bring the right camera back. A one-camera rig is
+    /// never "lost".
+    [[nodiscard]] virtual bool rightLost() const noexcept { return false; }
 
     [[nodiscard]] virtual int width() const noexcept = 0;
     [[nodiscard]] virtual int height() const noexcept = 0;

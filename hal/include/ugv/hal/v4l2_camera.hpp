@@ -1,11 +1,17 @@
 #pragma once
 
 /// @file
-/// The V4L2 backend: two capture devices (left, right) or one side-by-side stereo device, MMAP streaming with a
+/// The V4L2 backend: two capture devices (left, right), one side-by-side stereo device or one camera alone (every
+/// frame left-only, for the one-camera mode), MMAP streaming with a
 /// small buffer ring, driver timestamps (CLOCK_MONOTONIC), GREY or YUYV (the Y bytes are the grey image),
 /// left/right pairing by timestamp within a skew, dropped frames from the drivers' sequence numbers, and a vanished
 /// device (ENODEV, EIO, POLLERR) reported as Disconnected; reconnect() reopens the devices (the capture task calls
 /// it with backoff while the service stays up).
+///
+/// A pair whose right camera stops goes on with the left one: when the right device vanishes, or its frame misses
+/// the left's by a period kRightMissesToLose times in a row, grab() delivers left-only frames (CameraFrame::right
+/// empty) and rightLost() is true until reconnect() brings the right device back. The left camera lost is the whole
+/// camera Disconnected (the one-camera mode runs on the left camera's calibration).
 ///
 /// The OS calls go through V4l2Ops (open/close/ioctl/mmap/munmap/poll), so the backend is tested against a fake
 /// device speaking the V4L2 protocol (FakeV4l2 in test/unit/hal/v4l2_camera_test.cpp): no camera or kernel module
@@ -49,6 +55,7 @@ enum class V4l2Format : std::uint8_t { Grey, Yuyv };
 struct V4l2Options {
     std::string leftDevice = "/dev/video0";  ///< or the side-by-side device
     std::string rightDevice = "/dev/video1"; ///< empty: side-by-side on leftDevice (left half, right half)
+    bool oneCamera = false;                  ///< leftDevice alone: every frame left-only (rightDevice unused)
     int width = 640;                         ///< [px] per camera
     int height = 480;                        ///< [px]
     double fps = 30.0;                       ///< requested rate (VIDIOC_S_PARM; drivers may refuse)
@@ -66,6 +73,7 @@ public:
 
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;
+    [[nodiscard]] bool rightLost() const noexcept override { return rightLost_; }
     [[nodiscard]] int width() const noexcept override { return options_.width; }
     [[nodiscard]] int height() const noexcept override { return options_.height; }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
@@ -75,6 +83,7 @@ public:
     [[nodiscard]] std::uint64_t unpaired() const noexcept { return unpaired_; }
 
     static constexpr int kMaxBuffers = 8;
+    static constexpr int kRightMissesToLose = 3; ///< right frames missed in a row before the right camera is lost
 
     /// One streaming device (internal, public for the tests' reach only through the camera).
     struct Device {
@@ -100,6 +109,11 @@ private:
     void stop(Device& device) noexcept;
     /// Dequeues the next buffer of `device` within `timeoutMs`; Frame, Timeout or Disconnected.
     GrabStatus dequeue(Device& device, int timeoutMs) noexcept;
+    /// Dequeues the right frame that pairs with the held left one: Frame, BadFrame (no pair within the skew), or
+    /// the failing camera's status (left_.held < 0 when it was the left camera).
+    GrabStatus pairRight(int timeoutMs) noexcept;
+    /// The right frame missed (`s`): true when the left frame goes out alone; marks the right camera lost.
+    bool rightMissing(GrabStatus s) noexcept;
     void requeue(Device& device) noexcept;
     /// Copies the grey (or Y) bytes of columns [x0, x0 + width) of the held buffer into `out`.
     bool copyGrey(const Device& device, int x0, ImageViewU8 out) noexcept;
@@ -111,6 +125,9 @@ private:
     Device left_;
     Device right_;
     bool sideBySide_ = false;
+    bool oneCamera_ = false;
+    bool rightLost_ = false;
+    int rightMisses_ = 0; ///< right frames missed in a row
     Image<std::uint8_t> leftGrey_;
     Image<std::uint8_t> rightGrey_;
     CameraStats stats_{};

@@ -24,13 +24,8 @@ std::int64_t realtimeOffsetNs() noexcept;
 /// Nanoseconds since the UNIX epoch now.
 std::int64_t realtimeNowNs() noexcept;
 
-/// The ground estimate as the service knows it.
-struct GroundSummary {
-    bool reliable = false;
-    float pitchDeg = 0.0F;
-    float rollDeg = 0.0F;
-    float cameraHeightM = 0.0F;
-};
+/// The ground the sectors were measured against (platform vocabulary, also in the iceoryx SectorsMessage).
+using GroundSummary = ugv::GroundSummary;
 
 /// The sectors as ugvsense/sectors (pose fields untouched: the caller attaches the pose).
 void toDds(const ObstacleSectors& sectors, const GroundSummary& ground, const std::string& vehicle,

@@ -88,7 +88,8 @@ public:
     FramePublisher(FramePublisher&&) = delete;
     FramePublisher& operator=(FramePublisher&&) = delete;
 
-    /// Loans a chunk, writes the header and copies both images in (packed), publishes it. False (counted in
+    /// Loans a chunk, writes the header and copies both images in (packed), publishes it. An empty `right` is a
+    /// left-only frame (kFrameLeftOnly: one camera, or the pair's right camera lost). False (counted in
     /// loanFailures) when no chunk is free, or when an image is not width x height. `publishStampNs`, when given,
     /// receives CLOCK_MONOTONIC right before the chunk is handed to iceoryx (the start of the hand-over).
     bool publish(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs, ConstImageViewU8 left,

@@ -2,10 +2,10 @@
 
 /// @file
 /// The message the service publishes per frame to local consumers (a path planner on the same PC): the
-/// obstacle sectors and the service's health record, a fixed-size POD so that it travels in a shared-memory
-/// chunk without serialisation. A receiver checks it with validate() before it trusts a field: a malformed
-/// message (wrong magic or version, a sector count out of range, NaN ranges, an obstacle without a finite
-/// range, unknown enum values) is an error code, never undefined behaviour downstream.
+/// obstacle sectors, the ground they were measured against and the service's health record, a fixed-size POD so that it
+/// travels in a shared-memory chunk without serialisation. A receiver checks it with validate() before it trusts a
+/// field: a malformed message (wrong magic or version, a sector count out of range, NaN ranges, an obstacle without a
+/// finite range, unknown enum values) is an error code, never undefined behaviour downstream.
 ///
 /// Thread-safety: plain data and pure functions. RT-safe: yes.
 
@@ -18,7 +18,7 @@
 namespace ugv::ipc {
 
 inline constexpr std::uint32_t kSectorsMagic = 0x53564755; ///< "UGVS" little-endian
-inline constexpr std::uint16_t kSectorsVersion = 1;
+inline constexpr std::uint16_t kSectorsVersion = 2;        ///< 2: the ground estimate after the sectors
 
 /// State of the camera as the capture task sees it.
 enum class CameraState : std::uint8_t { Streaming = 0, Reconnecting = 1, Stopped = 2 };
@@ -43,17 +43,19 @@ struct SectorsMessage {
     std::uint16_t reserved = 0;
     std::int64_t publishStampNs = 0; ///< [ns] CLOCK_MONOTONIC when published
     ObstacleSectors sectors;
+    GroundSummary ground; ///< the plane the sectors were measured against
     HealthRecord health;
 };
 
-enum class MessageError : std::uint8_t { TooShort, BadMagic, BadVersion, BadCount, BadSector, BadHealth };
+enum class MessageError : std::uint8_t { TooShort, BadMagic, BadVersion, BadCount, BadSector, BadGround, BadHealth };
 
 /// Human-readable text of the error (static string).
 const char* toString(MessageError error) noexcept;
 
 /// Checks `message` spanning `availableBytes`: magic, version, 0 < count <= kMaxSectors, every sector in use
 /// with known enum values, finite bearings (min < max), confidence in [0, 1], Obstacle with a finite positive
-/// range and a kind, Clear with range +inf, and a known camera state.
+/// range and a kind, Clear with range +inf, a ground with finite angles within +-90 deg and a finite height >= 0,
+/// and a known camera state.
 Result<void, MessageError> validate(const SectorsMessage& message, std::size_t availableBytes) noexcept;
 
 } // namespace ugv::ipc

@@ -47,6 +47,15 @@ struct ObstacleSectors {
     std::array<Sector, kMaxSectors> sectors{};
 };
 
+/// The ground plane a frame's sectors were measured against, as the service publishes it with them (the iceoryx
+/// SectorsMessage, the DDS sectors): the frame's own estimate when `reliable`, else the configured (mount) plane.
+struct GroundSummary {
+    bool reliable = false;      ///< estimated from this frame's pair (else the configured plane)
+    float pitchDeg = 0.0F;      ///< [deg] camera pitch to the ground, positive looking down
+    float rollDeg = 0.0F;       ///< [deg] camera roll to the ground, positive right side down
+    float cameraHeightM = 0.0F; ///< [m] camera above the ground
+};
+
 /// The danger class of an obstacle at `rangeM` given the configured distances (clear => Green).
 constexpr DangerClass classify(SectorState state, float rangeM, float dangerDistanceM, float cautionDistanceM) noexcept
 {
