@@ -422,7 +422,6 @@ void Service::spinUntilFrame(std::int64_t lastRingNs, const std::atomic<bool>& s
 void Service::visionLoop(const std::atomic<bool>& stop) noexcept
 {
     ipc::TakenFrame frame;
-    Handover out;
     VisionState state;
     while (!stop.load(std::memory_order_relaxed)) {
         spinUntilFrame(state.lastRingNs, stop);
@@ -458,11 +457,14 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
                 recordDetectStages(pipeline_->detector().stageTimes());
             }
         }
-        fillHandover(done, h, out);
+        countOutcome(done, h);
         state.lastRingNs = ringStampNs_[h.sequence % kPublishSlots].load(std::memory_order_acquire);
-        out.stampNs = {h.leftStampNs, state.lastRingNs, takenNs, rectifiedNs, detectedNs}; // in Stamp order
         framesIn_->release(frame);
-        if (toPublish_.tryPush(out)) {
+        // The result is written once, into the slot the publish task reads it from.
+        if (Handover* out = toPublish_.claim(); out != nullptr) {
+            writeResult(done, h, out->message);
+            out->stampNs = {h.leftStampNs, state.lastRingNs, takenNs, rectifiedNs, detectedNs}; // in Stamp order
+            toPublish_.commit();
             ::sem_post(&published_);
         } else {
             handoverFull_.fetch_add(1, std::memory_order_relaxed);
@@ -507,12 +509,10 @@ void Service::logOverload(std::uint64_t sequence, bool late, bool groundOnly, Vi
     }
 }
 
-void Service::fillHandover(PipelineStatus done, const FrameHeader& h, Handover& out) noexcept
+void Service::countOutcome(PipelineStatus done, const FrameHeader& h) noexcept
 {
-    out.ground = pipeline_->ground();
     if (done == PipelineStatus::Ok) {
-        out.sectors = pipeline_->sectors();
-        if (out.sectors.degraded) {
+        if (pipeline_->sectors().degraded) {
             degraded_.fetch_add(1, std::memory_order_relaxed);
         }
         return;
@@ -525,10 +525,19 @@ void Service::fillHandover(PipelineStatus done, const FrameHeader& h, Handover& 
                        static_cast<std::int64_t>(h.sequence), static_cast<std::int64_t>(done),
                        static_cast<std::int64_t>(bad));
     }
+    degraded_.fetch_add(1, std::memory_order_relaxed);
+}
+
+void Service::writeResult(PipelineStatus done, const FrameHeader& h, ipc::SectorsMessage& out) noexcept
+{
+    out.ground = pipeline_->ground();
+    if (done == PipelineStatus::Ok) {
+        out.sectors = pipeline_->sectors();
+        return;
+    }
     out.sectors = unknownSectors_;
     out.sectors.sequence = h.sequence;
     out.sectors.captureStampNs = h.leftStampNs;
-    degraded_.fetch_add(1, std::memory_order_relaxed);
 }
 
 ipc::HealthRecord Service::health() const noexcept
@@ -548,77 +557,88 @@ ipc::HealthRecord Service::health() const noexcept
 
 void Service::publishLoop(const std::atomic<bool>& stop) noexcept
 {
-    Handover in;
-    PublishedFrame seen;
-    BusFrame bus;
-    std::uint64_t count = 0;
-    bool steady = false;
-    std::int64_t lastMissLogNs = std::numeric_limits<std::int64_t>::min() / 2; // the first miss is logged
-    std::uint64_t missesLogged = 0;                                            // misses_ at the last miss line
+    PublishState state;
     while (!stop.load(std::memory_order_relaxed)) {
         semWait(&published_, kWaitSlice);
-        while (toPublish_.tryPop(in)) {
-            ipc::SectorsMessage& m = seen.message;
-            m.sectors = in.sectors;
-            m.ground = in.ground;
-            m.health = health();
-            const std::int64_t publishNs = MonotonicClock::nowNs();
-            m.publishStampNs = publishNs;
-            const auto at = [&in](Stamp s) { return in.stampNs[static_cast<std::size_t>(s)]; };
-            m.health.lastLatencyNs = publishNs - at(Stamp::Exposure);
-            sectorsOut_->publish(m);
-            const std::int64_t doneNs = MonotonicClock::nowNs();
-            const std::int64_t endToEnd = doneNs - at(Stamp::Exposure);
-            seen.stageNs = {at(Stamp::RingPublish) - at(Stamp::Exposure),
-                            at(Stamp::Taken) - at(Stamp::RingPublish),
-                            at(Stamp::Rectified) - at(Stamp::Taken),
-                            at(Stamp::Detected) - at(Stamp::Rectified),
-                            doneNs - at(Stamp::Detected),
-                            endToEnd};
-            seen.deadlineMissed = endToEnd > deadline_.count();
-            if (seen.deadlineMissed) {
-                const std::uint64_t missed = misses_.fetch_add(1, std::memory_order_relaxed) + 1;
-                if (doneNs - lastMissLogNs >= kMissLogIntervalNs) {
-                    publishLog_.log(LogLevel::Warn, LogCategory::Rt,
-                                    "frame %lld missed its deadline: %lld us from exposure to sectors (deadline %lld "
-                                    "us); %lld miss(es) since the last report",
-                                    static_cast<std::int64_t>(m.sectors.sequence), toUs(endToEnd),
-                                    toUs(deadline_.count()), static_cast<std::int64_t>(missed - missesLogged));
-                    lastMissLogNs = doneNs;
-                    missesLogged = missed;
-                }
-            }
-            lastLatencyNs_.store(endToEnd, std::memory_order_relaxed);
-            if (count >= static_cast<std::uint64_t>(options_.warmupFrames)) {
-                for (int s = 0; s < kStageCount; ++s) {
-                    histograms_[static_cast<std::size_t>(s)].record(
-                        std::chrono::nanoseconds(seen.stageNs[static_cast<std::size_t>(s)]));
-                }
-            }
-            ++count;
-            if (!monitor_.tryPush(seen)) {
-                monitorDrops_.fetch_add(1, std::memory_order_relaxed);
-            }
-            if (options_.bus != nullptr) {
-                bus.message = m;
-                bus.endToEndNs = endToEnd;
-                bus.deadlineMissed = seen.deadlineMissed;
-                bus.busDrops = busDrops_.load(std::memory_order_relaxed);
-                if (toBus_.tryPush(bus)) {
-                    ::sem_post(&busReady_);
-                } else {
-                    busDrops_.fetch_add(1, std::memory_order_relaxed);
-                }
-            }
-            publishedCount_.fetch_add(1, std::memory_order_release);
-            probeSteady("publish", count, steady);
-            if (options_.maxFrames > 0 && count >= options_.maxFrames) {
-                endNs_.store(doneNs, std::memory_order_relaxed);
-            }
+        // Each result is read where the vision task wrote it, and its slot given back once it has gone out.
+        for (Handover* in = toPublish_.front(); in != nullptr; in = toPublish_.front()) {
+            publishOne(*in, state);
+            toPublish_.release();
         }
     }
     probeStopping("publish");
     cpuSeconds_[2].store(threadCpuSeconds(), std::memory_order_relaxed);
+}
+
+void Service::publishOne(Handover& in, PublishState& state) noexcept
+{
+    ipc::SectorsMessage& m = in.message; // sectors and ground from the vision task; health and stamp here
+    const auto at = [&in](Stamp s) { return in.stampNs[static_cast<std::size_t>(s)]; };
+    m.health = health();
+    const std::int64_t publishNs = MonotonicClock::nowNs();
+    m.publishStampNs = publishNs;
+    m.health.lastLatencyNs = publishNs - at(Stamp::Exposure);
+    sectorsOut_->publish(m);
+    const std::int64_t doneNs = MonotonicClock::nowNs();
+    const std::int64_t endToEnd = doneNs - at(Stamp::Exposure);
+    const std::array<std::int64_t, kStageCount> stageNs{at(Stamp::RingPublish) - at(Stamp::Exposure),
+                                                        at(Stamp::Taken) - at(Stamp::RingPublish),
+                                                        at(Stamp::Rectified) - at(Stamp::Taken),
+                                                        at(Stamp::Detected) - at(Stamp::Rectified),
+                                                        doneNs - at(Stamp::Detected),
+                                                        endToEnd};
+    const bool missed = endToEnd > deadline_.count();
+    if (missed) {
+        logMiss(m.sectors.sequence, endToEnd, doneNs, state);
+    }
+    lastLatencyNs_.store(endToEnd, std::memory_order_relaxed);
+    if (state.count >= static_cast<std::uint64_t>(options_.warmupFrames)) {
+        for (int s = 0; s < kStageCount; ++s) {
+            histograms_[static_cast<std::size_t>(s)].record(
+                std::chrono::nanoseconds(stageNs[static_cast<std::size_t>(s)]));
+        }
+    }
+    ++state.count;
+    if (PublishedFrame* seen = monitor_.claim(); seen != nullptr) {
+        seen->message = m;
+        seen->stageNs = stageNs;
+        seen->deadlineMissed = missed;
+        monitor_.commit();
+    } else {
+        monitorDrops_.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (options_.bus != nullptr) {
+        if (BusFrame* bus = toBus_.claim(); bus != nullptr) {
+            bus->message = m;
+            bus->endToEndNs = endToEnd;
+            bus->deadlineMissed = missed;
+            bus->busDrops = busDrops_.load(std::memory_order_relaxed);
+            toBus_.commit();
+            ::sem_post(&busReady_);
+        } else {
+            busDrops_.fetch_add(1, std::memory_order_relaxed);
+        }
+    }
+    publishedCount_.fetch_add(1, std::memory_order_release);
+    probeSteady("publish", state.count, state.steady);
+    if (options_.maxFrames > 0 && state.count >= options_.maxFrames) {
+        endNs_.store(doneNs, std::memory_order_relaxed);
+    }
+}
+
+void Service::logMiss(std::uint64_t sequence, std::int64_t endToEndNs, std::int64_t nowNs, PublishState& state) noexcept
+{
+    const std::uint64_t missed = misses_.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (nowNs - state.lastMissLogNs < kMissLogIntervalNs) {
+        return;
+    }
+    publishLog_.log(LogLevel::Warn, LogCategory::Rt,
+                    "frame %lld missed its deadline: %lld us from exposure to sectors (deadline %lld us); %lld "
+                    "miss(es) since the last report",
+                    static_cast<std::int64_t>(sequence), toUs(endToEndNs), toUs(deadline_.count()),
+                    static_cast<std::int64_t>(missed - state.missesLogged));
+    state.lastMissLogNs = nowNs;
+    state.missesLogged = missed;
 }
 
 void Service::busLoop(const std::atomic<bool>& stop)

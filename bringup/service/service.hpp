@@ -46,6 +46,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -245,13 +246,27 @@ private:
     /// The instants of a frame on its way to the publish task [ns, CLOCK_MONOTONIC]: the stages of the report are
     /// the differences of consecutive ones (Stage::Capture = RingPublish - Exposure, ...).
     enum class Stamp : std::uint8_t { Exposure, RingPublish, Taken, Rectified, Detected, Count };
+    /// A frame's result on its way from the vision task to the publish task, written once in its ring slot: the
+    /// message as it will go out (vision writes sectors and ground, publish the health record and its stamp).
     struct Handover {
-        ObstacleSectors sectors;
-        GroundSummary ground;
+        ipc::SectorsMessage message;
         std::array<std::int64_t, static_cast<std::size_t>(Stamp::Count)> stampNs{}; ///< by Stamp
     };
-    /// The frame's ground estimate and sectors (or Unknown ones when the pipeline refused the pair) into `out`.
-    void fillHandover(PipelineStatus done, const FrameHeader& h, Handover& out) noexcept;
+    /// Vision task: counts the frame's outcome (degraded, or refused by the pipeline: logged).
+    void countOutcome(PipelineStatus done, const FrameHeader& h) noexcept;
+    /// Vision task: the frame's sectors (or Unknown ones when the pipeline refused the pair) and ground into `out`.
+    void writeResult(PipelineStatus done, const FrameHeader& h, ipc::SectorsMessage& out) noexcept;
+    /// The publish task's state between frames.
+    struct PublishState {
+        std::uint64_t count = 0;
+        bool steady = false;
+        std::int64_t lastMissLogNs = std::numeric_limits<std::int64_t>::min() / 2; ///< the first miss is logged
+        std::uint64_t missesLogged = 0;                                            ///< misses_ at the last miss line
+    };
+    /// Publish task: one result out (iceoryx, the monitor, the bus task), timed into the report.
+    void publishOne(Handover& in, PublishState& state) noexcept;
+    /// Publish task: counts a deadline miss, logs at most one line per kMissLogIntervalNs.
+    void logMiss(std::uint64_t sequence, std::int64_t endToEndNs, std::int64_t nowNs, PublishState& state) noexcept;
     static constexpr std::size_t kPublishSlots = 64; ///< capture's ring-publish time per sequence % slots
 
     ServiceOptions options_;

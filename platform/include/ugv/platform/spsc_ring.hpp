@@ -3,11 +3,12 @@
 /// @file
 /// `ugv::SpscRing<T, N>`: a bounded, wait-free, single-producer single-consumer ring buffer.
 ///
-/// Exactly one producer thread calls tryPush() and exactly one consumer thread calls tryPop(); any thread may
-/// call size() (approximate while the other side runs). When the ring is full, tryPush() returns false and the
-/// entry is NOT stored: the producer decides what to do (the RT logger counts the drop). This differs from
-/// iceoryx's SpscSofi (overwrite oldest), which needs a CAS on the consumer side; a failed push is cheaper and
-/// keeps the consumer's data in order.
+/// Exactly one producer thread calls tryPush() (or claim() + commit()) and exactly one consumer thread calls tryPop()
+/// (or front() + release()); any thread may call size() (approximate while the other side runs). The in-place pair
+/// lets a large entry be written where it is stored and read where it lies, with no copy through a local. When the ring
+/// is full, tryPush() returns false and the entry is NOT stored: the producer decides what to do (the RT logger counts
+/// the drop). This differs from iceoryx's SpscSofi (overwrite oldest), which needs a CAS on the consumer side; a failed
+/// push is cheaper and keeps the consumer's data in order.
 ///
 /// Indices run freely (64-bit, never wrap in practice) and are masked with N-1, so all N slots are usable.
 /// The producer publishes a slot with a release store of tail_ after writing it; the consumer reads tail_ with
@@ -63,6 +64,29 @@ public:
         head_.store(head + 1, std::memory_order_release);
         return true;
     }
+
+    /// @brief Producer: the free slot the next entry goes in, to fill in place and then commit(); nullptr when the
+    /// ring is full. The slot holds whatever an earlier entry left there: write every field that matters.
+    /// Thread-safety: producer thread only. RT-safe: yes (wait-free).
+    [[nodiscard]] T* claim() noexcept
+    {
+        const std::uint64_t tail = tail_.load(std::memory_order_relaxed);
+        const std::uint64_t head = head_.load(std::memory_order_acquire);
+        return tail - head == N ? nullptr : &buffer_[tail & kMask];
+    }
+    /// @brief Producer: makes the slot claim() gave visible to the consumer (only after a non-null claim()).
+    void commit() noexcept { tail_.store(tail_.load(std::memory_order_relaxed) + 1, std::memory_order_release); }
+
+    /// @brief Consumer: the oldest entry, to read (or change) in place until release(); nullptr when empty.
+    /// Thread-safety: consumer thread only. RT-safe: yes (wait-free).
+    [[nodiscard]] T* front() noexcept
+    {
+        const std::uint64_t head = head_.load(std::memory_order_relaxed);
+        const std::uint64_t tail = tail_.load(std::memory_order_acquire);
+        return tail == head ? nullptr : &buffer_[head & kMask];
+    }
+    /// @brief Consumer: gives the slot front() gave back to the producer (only after a non-null front()).
+    void release() noexcept { head_.store(head_.load(std::memory_order_relaxed) + 1, std::memory_order_release); }
 
     /// @brief Number of stored entries; exact when neither side is running, a snapshot otherwise.
     /// Thread-safety: any thread. RT-safe: yes.
