@@ -292,7 +292,9 @@ void Service::onFrame(const hal::CameraFrame& frame, CaptureState& state) noexce
 {
     state.sinceFrame = {};
     state.backoff = kMinBackoff;
-    cameraState_.store(static_cast<std::uint8_t>(ipc::CameraState::Streaming), std::memory_order_relaxed);
+    cameraState_.store(
+        static_cast<std::uint8_t>(frame.right.empty() ? ipc::CameraState::LeftOnly : ipc::CameraState::Streaming),
+        std::memory_order_relaxed);
     cameraGaps_.store(camera_->stats().sequenceGaps, std::memory_order_relaxed);
     if (state.stalled) {
         captureLog_.log(LogLevel::Info, LogCategory::Hal, "camera: frames again (sequence %lld)",

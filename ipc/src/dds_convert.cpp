@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 
+#include "ugv/ipc/sectors_message.hpp"
 #include "ugv/platform/angles.hpp"
 #include "ugv/platform/clock.hpp"
 
@@ -221,7 +222,7 @@ const char* check(const msg::ServiceHealth& s) noexcept
         !finite(s.latency_max_ms())) {
         return "a latency is not finite";
     }
-    return s.camera_state() > 2 ? "unknown camera state" : nullptr;
+    return s.camera_state() > static_cast<std::uint8_t>(CameraState::LeftOnly) ? "unknown camera state" : nullptr;
 }
 
 const char* check(const msg::VehiclePose& s) noexcept

@@ -82,7 +82,7 @@ Result<void, MessageError> validate(const SectorsMessage& message, std::size_t a
     if (!angle(g.pitchDeg) || !angle(g.rollDeg) || !std::isfinite(g.cameraHeightM) || g.cameraHeightM < 0.0F) {
         return Unexpected(MessageError::BadGround);
     }
-    if (static_cast<std::uint8_t>(message.health.camera) > static_cast<std::uint8_t>(CameraState::Stopped)) {
+    if (static_cast<std::uint8_t>(message.health.camera) > static_cast<std::uint8_t>(CameraState::LeftOnly)) {
         return Unexpected(MessageError::BadHealth);
     }
     return {};

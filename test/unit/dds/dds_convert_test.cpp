@@ -389,7 +389,7 @@ TEST(DdsCheck, PoseHealthListScanAndCloudRefuseBrokenFields)
     msg::ServiceHealth health;
     health.vehicle("ugv-1");
     using H = msg::ServiceHealth;
-    expectRefused<H>(health, "unknown camera state", [](H& h) { h.camera_state(3); });
+    expectRefused<H>(health, "unknown camera state", [](H& h) { h.camera_state(4); });
     expectRefused<H>(health, "NaN p99", [](H& h) { h.latency_p99_ms(std::numeric_limits<double>::quiet_NaN()); });
 
     msg::CorrelatedOoiList list;

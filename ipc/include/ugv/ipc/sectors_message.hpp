@@ -20,8 +20,9 @@ namespace ugv::ipc {
 inline constexpr std::uint32_t kSectorsMagic = 0x53564755; ///< "UGVS" little-endian
 inline constexpr std::uint16_t kSectorsVersion = 2;        ///< 2: the ground estimate after the sectors
 
-/// State of the camera as the capture task sees it.
-enum class CameraState : std::uint8_t { Streaming = 0, Reconnecting = 1, Stopped = 2 };
+/// State of the camera as the capture task sees it. LeftOnly: the left camera streams alone (a one-camera rig, or
+/// the pair's right camera lost and being retried): the sectors come from the one-camera detector, degraded.
+enum class CameraState : std::uint8_t { Streaming = 0, Reconnecting = 1, Stopped = 2, LeftOnly = 3 };
 
 /// Counters since the service started and the state of the last frame.
 struct HealthRecord {
