@@ -118,15 +118,18 @@ unit_exec ugvsense-default-recording.service >/recording.log 2>&1 || { cat /reco
 echo "default recording made in $(($(date +%s) - start)) s: $(ugvsense recording info /var/lib/ugvsense/default.ugvrec | head -1)"
 ugvsense check-config /etc/ugvsense/config.yaml >/check.log 2>&1 || { cat /check.log; fail "shipped config refused"; }
 unit_exec ugvsense-roudi.service >/roudi.log 2>&1 &
+roudi=$!
 for _ in $(seq 100); do [ -S /tmp/roudi ] && break; sleep 0.1; done
 [ -S /tmp/roudi ] || { cat /roudi.log; fail "RouDi did not start"; }
 UGV_DDS_DOMAIN=$domain unit_exec ugvsensed.service >/service.log 2>&1 &
 svc=$!
 sleep 12
-pkill -TERM -x ugvsensed || true
+# Only the children of this test's unit_exec: the PID namespace is the host's, and a bare `pkill -x ugvsensed`
+# stopped another test's service running beside this one (system.cyclone-interop, 2026-12-05).
+pkill -TERM -x -P "$svc" ugvsensed || true
 rc=0
 wait "$svc" || rc=$?
-pkill -TERM -x iox-roudi || true
+pkill -TERM -x -P "$roudi" iox-roudi || true
 wait || true
 grep -q "^frames: " /service.log || { cat /service.log; fail "ugvsensed printed no report"; }
 published=$(sed -n 's/^frames: \([0-9][0-9]*\) published.*/\1/p' /service.log | head -1)
