@@ -79,11 +79,10 @@ V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops)
     : options_(options), ops_(ops), leftGrey_(options.width, options.height), rightGrey_(options.width, options.height)
 {
     period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
-    oneCamera_ = options.oneCamera;
-    sideBySide_ = !oneCamera_ && options.rightDevice.empty();
-    description_ = oneCamera_    ? "v4l2 " + options.leftDevice + " (one camera)"
-                   : sideBySide_ ? "v4l2 " + options.leftDevice + " (side by side)"
-                                 : "v4l2 " + options.leftDevice + " + " + options.rightDevice;
+    sideBySide_ = !options.oneCamera && options.rightDevice.empty();
+    description_ = options.oneCamera ? "v4l2 " + options.leftDevice + " (one camera)"
+                   : sideBySide_     ? "v4l2 " + options.leftDevice + " (side by side)"
+                                     : "v4l2 " + options.leftDevice + " + " + options.rightDevice;
 }
 
 V4l2StereoCamera::~V4l2StereoCamera()
@@ -111,7 +110,7 @@ Result<std::unique_ptr<V4l2StereoCamera>, Error> V4l2StereoCamera::open(const V4
         !started) {
         return Unexpected(started.error());
     }
-    if (!camera->sideBySide_ && !camera->oneCamera_) {
+    if (camera->hasRightDevice()) {
         if (auto started = camera->start(camera->right_, options.width); !started) {
             camera->stop(camera->left_);
             return Unexpected(started.error());
@@ -364,7 +363,7 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
         }
         return s;
     }
-    bool leftOnly = oneCamera_ || rightLost_;
+    bool leftOnly = options_.oneCamera || rightLost_;
     if (sideBySide_) {
         copyGrey(left_, options_.width, rightGrey_.view());
         out.rightStampNs = stampNs(left_.last);
@@ -461,7 +460,7 @@ bool V4l2StereoCamera::reconnect() noexcept
     if (!start(left_, sideBySide_ ? 2 * options_.width : options_.width)) {
         return false;
     }
-    if (!sideBySide_ && !oneCamera_ && !start(right_, options_.width)) {
+    if (hasRightDevice() && !start(right_, options_.width)) {
         stop(left_);
         return false;
     }

@@ -107,6 +107,8 @@ private:
     Result<void, Error> setFormat(Device& device, int frameWidth); ///< size, pixel format and rate
     Result<void, Error> mapBuffers(Device& device);                ///< MMAP buffers, mapped and queued
     void stop(Device& device) noexcept;
+    /// A second device streams the right images (not side by side, not one camera).
+    [[nodiscard]] bool hasRightDevice() const noexcept { return !sideBySide_ && !options_.oneCamera; }
     /// Dequeues the next buffer of `device` within `timeoutMs`; Frame, Timeout or Disconnected.
     GrabStatus dequeue(Device& device, int timeoutMs) noexcept;
     /// Dequeues the right frame that pairs with the held left one: Frame, BadFrame (no pair within the skew), or
@@ -125,7 +127,6 @@ private:
     Device left_;
     Device right_;
     bool sideBySide_ = false;
-    bool oneCamera_ = false;
     bool rightLost_ = false;
     int rightMisses_ = 0; ///< right frames missed in a row
     Image<std::uint8_t> leftGrey_;
