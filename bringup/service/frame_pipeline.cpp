@@ -3,7 +3,11 @@
 #include "ugv/platform/clock.hpp"
 
 #include <ctime>
+#include <type_traits>
 #include <utility>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "ugv/vision/ground_plane.hpp"
 
@@ -49,7 +53,8 @@ FramePipeline::FramePipeline(vision::Rectifier rectifier, vision::ObstacleDetect
                              vision::ColourFreeSpace colour, bringup::DetectorMode mode,
                              vision::GroundPlane mountGround, int width, int height)
     : rectifier_(std::move(rectifier)), detector_(std::move(detector)), colour_(std::move(colour)), mode_(mode),
-      mountGround_(mountGround), width_(width), height_(height)
+      mountGround_(mountGround), greyLeft_(width, height), greyRight_(width, height),
+      colourRoi_(rectifier_.roi().width, rectifier_.roi().height), width_(width), height_(height)
 {
     detector_.setStageClock(&MonotonicClock::nowNs); // where the time goes, per stage (the service's report)
 }
@@ -136,28 +141,60 @@ void FramePipeline::fuse() noexcept
     }
 }
 
-PipelineStatus FramePipeline::process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence,
-                                      std::int64_t stampNs, std::int64_t& rectifiedNs, bool groundOnly) noexcept
+vision::RectifyStatus FramePipeline::rectify(const StereoViews& images, bool colourOnly) noexcept
 {
-    const auto fits = [this](ConstImageViewU8 image) { return image.width() == width_ && image.height() == height_; };
-    leftOnly_ = right.empty();
-    if (!fits(left) || (!leftOnly_ && !fits(right))) {
+    if (!images.colour()) {
+        return colourOnly ? rectifier_.rectifyLeft(images.left) : rectifier_.rectify(images.left, images.right);
+    }
+    const auto matOf = [](auto view, int type) {
+        using Pixel = std::remove_const_t<std::remove_pointer_t<decltype(view.data())>>;
+        return cv::Mat(view.height(), view.width(), type, const_cast<Pixel*>(view.data()), // NOLINT: read only
+                       static_cast<std::size_t>(view.strideBytes()));
+    };
+    if (colourOnly) {
+        return rectifier_.rectifyLeft(images.leftBgr, colourRoi_.view());
+    }
+    // The sizes were checked by process(): cvtColor writes into the buffers of create() without allocating.
+    cv::Mat greyLeft = matOf(greyLeft_.view(), CV_8UC1);
+    cv::Mat greyRight = matOf(greyRight_.view(), CV_8UC1);
+    cv::cvtColor(matOf(images.leftBgr, CV_8UC3), greyLeft, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(matOf(images.rightBgr, CV_8UC3), greyRight, cv::COLOR_BGR2GRAY);
+    const vision::RectifyStatus pair = rectifier_.rectify(greyLeft_.view(), greyRight_.view());
+    if (pair != vision::RectifyStatus::Ok || mode_ != bringup::DetectorMode::Both) {
+        return pair;
+    }
+    return rectifier_.rectifyLeft(images.leftBgr, colourRoi_.view());
+}
+
+void FramePipeline::detectColour(bool bgrFrame, std::uint64_t sequence, std::int64_t stampNs) noexcept
+{
+    // The ROI's size is the one colour_ was made for: always Ok.
+    if (bgrFrame) {
+        (void)colour_.process(ConstBgrView(colourRoi_.view()), colourSectors_);
+    } else {
+        (void)colour_.process(rectifier_.rectifiedLeft(), colourSectors_);
+    }
+    colourSectors_.sequence = sequence;
+    colourSectors_.captureStampNs = stampNs;
+}
+
+PipelineStatus FramePipeline::process(const StereoViews& images, std::uint64_t sequence, std::int64_t stampNs,
+                                      std::int64_t& rectifiedNs, bool groundOnly) noexcept
+{
+    leftOnly_ = images.leftOnly();
+    if (!images.fits(width_, height_)) {
         rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::WrongInputSize;
     }
     // The one-camera mode needs the left image only; so does every mode on a left-only frame.
     const bool colourOnly = leftOnly_ || mode_ == bringup::DetectorMode::Colour;
-    const vision::RectifyStatus rectified = colourOnly ? rectifier_.rectifyLeft(left) : rectifier_.rectify(left, right);
+    const vision::RectifyStatus rectified = rectify(images, colourOnly);
+    rectifiedNs = MonotonicClock::nowNs();
     if (rectified != vision::RectifyStatus::Ok) {
-        rectifiedNs = MonotonicClock::nowNs();
         return PipelineStatus::RectifyFailed;
     }
-    rectifiedNs = MonotonicClock::nowNs();
     if (colourOnly || mode_ == bringup::DetectorMode::Both) {
-        // The ROI view's size is the one colour_ was made for: always Ok.
-        (void)colour_.process(rectifier_.rectifiedLeft(), colourSectors_);
-        colourSectors_.sequence = sequence;
-        colourSectors_.captureStampNs = stampNs;
+        detectColour(images.colour(), sequence, stampNs);
         if (colourOnly) {
             leftOnlyFrames_ += leftOnly_ ? 1U : 0U;
             return PipelineStatus::Ok;

@@ -4,13 +4,14 @@
 /// The vision task's work on one stereo pair: ROI rectification, then the detector `obstacles.detector` names, built
 /// once from the calibration and the service config. Shared by ugvsensed and `ugvsense bench`.
 /// - stereo: vision::ObstacleDetector on the rectified pair.
-/// - colour: the one-camera mode, vision::ColourFreeSpace on the rectified left ROI. The capture path is grey today
-///   (V4L2's Y plane, grey recordings), so it tells the ground by grey level: the ground's grey levels learnt along
-///   the bottom band. Its sectors are `degraded`; the ground is the mount's.
+/// - colour: the one-camera mode, vision::ColourFreeSpace on the rectified left ROI: by colour when the camera
+///   delivers BGR frames (V4L2 with camera.colour, a colour recording), else by grey level (the ground's grey levels
+///   learnt along the bottom band: much weaker). Its sectors are `degraded`; the ground is the mount's.
 /// - both: stereo where it sees, and in the sectors stereo leaves Unknown the colour detector's obstacles (never its
 ///   Clear: a colour cue is blind to an obstacle of the ground's colour or grey level).
 /// A left-only frame (an empty right image: a one-camera rig, or the pair's right camera lost) takes the colour path
-/// in every mode: the service keeps publishing sectors, degraded, until the pair is whole again.
+/// in every mode: the service keeps publishing sectors, degraded, until the pair is whole again. A BGR pair is made
+/// grey (OpenCV's BT.601 luma) for the stereo detector, in buffers allocated by create().
 ///
 /// Thread-safety: thread-bound. RT-safe: process() allocates nothing with the default matcher (census SGM); with
 /// stereo.mode an OpenCV mode, StereoSGBM::compute inside the detector allocates (vision/roi_matcher.hpp);
@@ -21,6 +22,7 @@
 
 #include "ugv/bringup/config.hpp"
 #include "ugv/platform/error.hpp"
+#include "ugv/platform/frame_header.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
@@ -43,11 +45,11 @@ public:
     static Result<std::unique_ptr<FramePipeline>, Error> create(const vision::StereoCalibration& calibration,
                                                                 const bringup::ServiceConfig& config);
 
-    /// Rectifies the pair (the left image alone when `right` is empty) and detects; `groundOnly` takes the overload
-    /// path of the stereo detector (ObstacleDetector::processGroundOnly: no dense matching, degraded sectors; the
-    /// colour detector is cheap and always runs in full). `rectifiedNs` receives the monotonic time after
-    /// rectification.
-    PipelineStatus process(ConstImageViewU8 left, ConstImageViewU8 right, std::uint64_t sequence, std::int64_t stampNs,
+    /// Rectifies the pair, grey or BGR (the left image alone when the frame is left-only) and detects; `groundOnly`
+    /// takes the overload path of the stereo detector (ObstacleDetector::processGroundOnly: no dense matching,
+    /// degraded sectors; the colour detector is cheap and always runs in full). `rectifiedNs` receives the monotonic
+    /// time after rectification.
+    PipelineStatus process(const StereoViews& images, std::uint64_t sequence, std::int64_t stampNs,
                            std::int64_t& rectifiedNs, bool groundOnly = false) noexcept;
 
     /// The last frame's sectors, of the configured detector (the colour detector's for a left-only frame).
@@ -70,12 +72,20 @@ private:
                   bringup::DetectorMode mode, vision::GroundPlane mountGround, int width, int height);
     /// Both: the stereo sectors, with the colour detector's obstacles where stereo's are Unknown.
     void fuse() noexcept;
+    /// Rectifies what the frame's detectors need: the left image alone (`colourOnly`), else the pair (a BGR pair
+    /// made grey first); a BGR left image also in colour, for the colour detector.
+    vision::RectifyStatus rectify(const StereoViews& images, bool colourOnly) noexcept;
+    /// The colour detector on the rectified left ROI: in colour after a BGR frame, else grey.
+    void detectColour(bool bgrFrame, std::uint64_t sequence, std::int64_t stampNs) noexcept;
 
     vision::Rectifier rectifier_;
     vision::ObstacleDetector detector_; ///< made in every mode: its ground estimate is the published one
     vision::ColourFreeSpace colour_;    ///< colour, both, and every left-only frame
     bringup::DetectorMode mode_;
     vision::GroundPlane mountGround_; ///< the calibration's mount: the one-camera detector's ground
+    Image<std::uint8_t> greyLeft_;    ///< a BGR pair made grey for the stereo detector (full frame)
+    Image<std::uint8_t> greyRight_;
+    Image<BgrPixel> colourRoi_; ///< the rectified left ROI of a BGR frame
     ObstacleSectors colourSectors_;
     ObstacleSectors fused_;
     bool leftOnly_ = false;

@@ -234,7 +234,8 @@ Result<std::unique_ptr<ipc::EmbeddedRouDi>, Error> connectIceoryx(const RunOptio
                                                                   const hal::StereoCamera& camera, bool embedded)
 {
     if (embedded) {
-        return ipc::EmbeddedRouDi::start(options.appName, ipc::frameBytes(camera.width(), camera.height()));
+        return ipc::EmbeddedRouDi::start(options.appName,
+                                         ipc::frameBytes(camera.format(), camera.width(), camera.height()));
     }
     const std::int64_t waitUntilNs = MonotonicClock::nowNs() + std::chrono::nanoseconds(options.roudiWait).count();
     while (!ipc::roudiReachable() && MonotonicClock::nowNs() < waitUntilNs &&

@@ -113,7 +113,7 @@ Result<std::unique_ptr<Service>, Error> Service::create(const bringup::ServiceCo
     if (!pipeline) {
         return Unexpected(pipeline.error());
     }
-    auto framesOut = ipc::FramePublisher::create(camera->width(), camera->height());
+    auto framesOut = ipc::FramePublisher::create(camera->format(), camera->width(), camera->height());
     auto framesIn = ipc::FrameSubscriber::create(1);
     auto sectorsOut = ipc::SectorsPublisher::create();
     if (!framesOut || !framesIn || !sectorsOut) {
@@ -293,7 +293,7 @@ void Service::onFrame(const hal::CameraFrame& frame, CaptureState& state) noexce
     state.sinceFrame = {};
     state.backoff = kMinBackoff;
     cameraState_.store(
-        static_cast<std::uint8_t>(frame.right.empty() ? ipc::CameraState::LeftOnly : ipc::CameraState::Streaming),
+        static_cast<std::uint8_t>(frame.images.leftOnly() ? ipc::CameraState::LeftOnly : ipc::CameraState::Streaming),
         std::memory_order_relaxed);
     cameraGaps_.store(camera_->stats().sequenceGaps, std::memory_order_relaxed);
     if (state.stalled) {
@@ -303,7 +303,7 @@ void Service::onFrame(const hal::CameraFrame& frame, CaptureState& state) noexce
     }
     // The hand-over start (right before iceoryx gets the chunk) goes in a slot per sequence, written before the
     // frame becomes visible to the vision task.
-    if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.left, frame.right,
+    if (framesOut_->publish(frame.sequence, frame.leftStampNs, frame.rightStampNs, frame.images,
                             &ringStampNs_[frame.sequence % kPublishSlots])) {
         lastCapturedSeq_.store(frame.sequence, std::memory_order_relaxed);
         inRing_.fetch_add(1, std::memory_order_relaxed);
@@ -312,18 +312,18 @@ void Service::onFrame(const hal::CameraFrame& frame, CaptureState& state) noexce
         loanFailures_.store(refused, std::memory_order_relaxed); // e.g. a wrong size
         if (isPowerOfTwo(refused)) {
             captureLog_.log(LogLevel::Warn, LogCategory::Hal,
-                            "frame %lld: the frame ring refused the pair (%lldx%lld: wrong size, or no free chunk); "
-                            "%lld refused so far",
-                            static_cast<std::int64_t>(frame.sequence), frame.left.width(), frame.left.height(),
+                            "frame %lld: the frame ring refused the pair (%lldx%lld: wrong size or format, or no free "
+                            "chunk); %lld refused so far",
+                            static_cast<std::int64_t>(frame.sequence), frame.images.width(), frame.images.height(),
                             static_cast<std::int64_t>(refused));
         }
     }
     captured_.fetch_add(1, std::memory_order_release);
     probeSteady("capture", ++state.frames, state.steady);
-    if (frame.right.empty()) {
+    if (frame.images.leftOnly()) {
         leftOnly_.fetch_add(1, std::memory_order_relaxed);
     }
-    if (frame.right.empty() || state.rightLost) {
+    if (frame.images.leftOnly() || state.rightLost) {
         watchRightCamera(frame.sequence, state); // after the frame went out: a retry never delays it
     }
 }
@@ -443,8 +443,7 @@ void Service::visionLoop(const std::atomic<bool>& stop) noexcept
         const bool groundOnly =
             options_.overload == OverloadPolicy::Degrade && late && state.degradedInARow < options_.fullFrameEvery;
         std::int64_t rectifiedNs = 0;
-        const PipelineStatus done =
-            pipeline_->process(frame.views.left, frame.views.right, h.sequence, h.leftStampNs, rectifiedNs, groundOnly);
+        const PipelineStatus done = pipeline_->process(frame.views, h.sequence, h.leftStampNs, rectifiedNs, groundOnly);
         const std::int64_t detectedNs = MonotonicClock::nowNs();
         logOverload(h.sequence, late, groundOnly, state);
         if (groundOnly) {

@@ -1024,6 +1024,9 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
     std::mt19937_64 chromaRng(scene.seed ^ kChromaNoiseSeed);
     std::normal_distribution<double> chromaNoiseDist(0.0, 1.0);
     out.leftColour.create(rig.height, rig.width, CV_8UC3);
+    if (options.rightColour) {
+        out.rightColour.create(rig.height, rig.width, CV_8UC3);
+    }
     for (int view = 0; view < 2; ++view) {
         cv::Mat& img = view == 0 ? out.left : out.right;
         img.create(rig.height, rig.width, CV_8U);
@@ -1032,10 +1035,12 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
         const double offset = light.offsetGrey + (view == 0 ? 0.0 : light.rightOffsetGrey); // [grey levels]
         const double vignette = view == 0 ? light.vignetteLeft : light.vignetteRight;
         const auto jitterSeed = static_cast<std::uint32_t>(scene.seed * 7919U + static_cast<std::uint64_t>(view));
-        const bool colour = view == 0;
+        // The right camera's colour draws its chroma noise after the left's: the left and grey images do not change.
+        const bool colour = view == 0 || options.rightColour;
+        cv::Mat& colourImg = view == 0 ? out.leftColour : out.rightColour;
         for (int y = 0; y < rig.height; ++y) {
             auto* row = img.ptr<std::uint8_t>(y);
-            auto* colourRow = out.leftColour.ptr<cv::Vec3b>(y);
+            auto* colourRow = colour ? colourImg.ptr<cv::Vec3b>(y) : nullptr;
             for (int x = 0; x < rig.width; ++x) {
                 double sum = 0.0;
                 Vector3d sumColour = Vector3d::Zero();
@@ -1075,7 +1080,7 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
         if (light.jpegQuality > 0) {
             compressJpeg(img, light.jpegQuality);
             if (colour) {
-                compressJpeg(out.leftColour, light.jpegQuality);
+                compressJpeg(colourImg, light.jpegQuality);
             }
         }
     }

@@ -38,6 +38,7 @@ struct RenderOptions {
     int sectorCount = 64;          ///< sectors across the horizontal field of view
     float dangerDistanceM = 1.5F;  ///< [m] classify(): Red below this range
     float cautionDistanceM = 5.0F; ///< [m] classify(): Blue below this range
+    bool rightColour = false;      ///< also the right camera in colour (RenderResult::rightColour: colour recordings)
 };
 
 /// One rendered stereo pair with its ground truth (all images rig.width x rig.height).
@@ -47,6 +48,7 @@ struct RenderResult {
     /// (OpenCV BGR2GRAY) is `left` within rounding, where no channel clips at 0 or 255 (bringup/sim/README.md).
     cv::Mat leftColour;
     cv::Mat right;           ///< CV_8UC1 grey
+    cv::Mat rightColour;     ///< CV_8UC3 BGR of the right camera, as leftColour; with RenderOptions::rightColour only
     cv::Mat disparity;       ///< CV_32F [px] of the left image, fx * baseline / Z; exactly 0 for sky (Z = infinity)
     cv::Mat depth;           ///< CV_32F [m] Z along the left optical axis; +inf for sky
     cv::Mat labels;          ///< CV_8U, values of Label

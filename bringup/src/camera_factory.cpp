@@ -50,6 +50,7 @@ Result<std::unique_ptr<hal::StereoCamera>, Error> openCamera(const ServiceConfig
         options.maxPairSkewMs = config.camera.maxPairSkewMs;
         options.format =
             config.camera.format == PixelFormatChoice::Grey ? hal::V4l2Format::Grey : hal::V4l2Format::Yuyv;
+        options.colour = captureInColour(config);
         return upcast(hal::V4l2StereoCamera::open(options));
     }
     case CameraBackend::Libcamera: {

@@ -114,9 +114,15 @@ std::vector<KeySpec> cameraKeys()
                   UGV_REF(camera.fps)),
         numberKey("camera.max_pair_skew_ms", Kind::Double, 0, 100,
                   "left/right timestamps further apart are not paired [ms]", UGV_REF(camera.maxPairSkewMs)),
-        choiceKey<PixelFormatChoice>("camera.format", "V4L2 pixel format: yuyv or grey (the Y plane is used)",
+        choiceKey<PixelFormatChoice>("camera.format", "V4L2 pixel format: yuyv or grey",
                                      {{"yuyv", PixelFormatChoice::Yuyv}, {"grey", PixelFormatChoice::Grey}},
                                      UGV_REF(camera.format)),
+        choiceKey<ColourChoice>(
+            "camera.colour",
+            "BGR frames for the one-camera detector and stereo's fallback to the left camera: auto = from a V4L2 "
+            "yuyv camera; false = grey (the Y plane: saves a conversion)",
+            {{"auto", ColourChoice::Auto}, {"true", ColourChoice::On}, {"false", ColourChoice::Off}},
+            UGV_REF(camera.colour)),
         textKey("camera.replay_path", Kind::Path, "recording to replay (backend: replay)", UGV_REF(camera.replayPath)),
         choiceKey<ReplayPace>(
             "camera.replay_pace", "replay pace: as recorded, at replay_fps, or as fast as possible",
@@ -475,6 +481,14 @@ public:
                   "is none (one camera) but obstacles.detector needs a stereo pair",
                   "set obstacles.detector: colour for a one-camera rig, or name the right camera's device");
         }
+        if (config_.camera.colour == ColourChoice::On &&
+            (config_.camera.backend == CameraBackend::Libcamera || config_.camera.format == PixelFormatChoice::Grey)) {
+            error(at("camera"), "camera.colour",
+                  config_.camera.backend == CameraBackend::Libcamera
+                      ? "is true but the libcamera backend delivers grey frames (the Y plane) in this version"
+                      : "is true but camera.format is grey (a grey camera has no colour)",
+                  "use backend v4l2 with format yuyv for colour, or set camera.colour: auto");
+        }
         if (config_.camera.backend == CameraBackend::V4l2 && config_.camera.leftDevice.empty()) {
             error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2",
                   "set it, e.g. /dev/video0");
@@ -639,6 +653,19 @@ void applyRosDomainId(const YAML::Node& root, ServiceConfig& config, ConfigError
 }
 
 } // namespace
+
+bool captureInColour(const ServiceConfig& config)
+{
+    switch (config.camera.colour) {
+    case ColourChoice::On:
+        return true;
+    case ColourChoice::Off:
+        return false;
+    case ColourChoice::Auto:
+        break;
+    }
+    return config.camera.backend == CameraBackend::V4l2 && config.camera.format == PixelFormatChoice::Yuyv;
+}
 
 ipc::dds::SecurityConfig securityOf(const ServiceConfig& config)
 {

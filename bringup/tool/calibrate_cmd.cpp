@@ -18,6 +18,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "detection.hpp"
 #include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/bringup/camera_factory.hpp"
@@ -112,13 +113,6 @@ struct BoardView {
     float span; ///< [px] the larger side of the corners' bounding box
 };
 
-/// A cv::Mat over an image, without a copy.
-cv::Mat matOver(ConstImageViewU8 view)
-{
-    return cv::Mat(view.height(), view.width(), CV_8UC1, const_cast<std::uint8_t*>(view.row(0)), // NOLINT
-                   static_cast<std::size_t>(view.strideBytes()));
-}
-
 /// The board's place in the left image, when the whole board is found in both images.
 std::optional<BoardView> findBoard(const cv::Mat& left, const cv::Mat& right, cv::Size board)
 {
@@ -192,12 +186,12 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
             return Unexpected(Error{(*camera)->description(), "the camera went away during the capture",
                                     "plug it back in and capture again"});
         }
-        if (status != hal::GrabStatus::Frame || frame.right.empty()) {
+        if (status != hal::GrabStatus::Frame || frame.images.leftOnly()) {
             continue; // a left-only frame (the right camera lost, or a one-camera rig) calibrates no pair
         }
         ++grabbed;
-        const cv::Mat left = matOver(frame.left);
-        const cv::Mat right = matOver(frame.right);
+        const cv::Mat left = matOver(frame.images, false);
+        const cv::Mat right = matOver(frame.images, true);
         const std::optional<BoardView> seen = findBoard(left, right, board);
         const auto similar = [&](const BoardView& s) {
             return cv::norm(s.centre - seen->centre) < 0.05 * left.cols &&

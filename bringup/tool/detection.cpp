@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -69,10 +70,24 @@ ConstImageViewU8 viewOf(const cv::Mat& grey)
     return ConstImageViewU8(grey.ptr<std::uint8_t>(0), grey.cols, grey.rows, static_cast<std::ptrdiff_t>(grey.step));
 }
 
-vision::ConstBgrView bgrViewOf(const cv::Mat& bgr)
+ConstBgrView bgrViewOf(const cv::Mat& bgr)
 {
     CV_Assert(bgr.type() == CV_8UC3);
-    return {bgr.ptr<vision::BgrPixel>(0), bgr.cols, bgr.rows, static_cast<std::ptrdiff_t>(bgr.step)};
+    return {bgr.ptr<BgrPixel>(0), bgr.cols, bgr.rows, static_cast<std::ptrdiff_t>(bgr.step)};
+}
+
+cv::Mat matOver(const StereoViews& images, bool right)
+{
+    const auto over = [](auto view, int type) {
+        using Pixel = std::remove_const_t<std::remove_pointer_t<decltype(view.data())>>;
+        return view.empty() ? cv::Mat()
+                            : cv::Mat(view.height(), view.width(), type, const_cast<Pixel*>(view.data()), // NOLINT
+                                      static_cast<std::size_t>(view.strideBytes()));
+    };
+    if (images.colour()) {
+        return over(right ? images.rightBgr : images.leftBgr, CV_8UC3);
+    }
+    return over(right ? images.right : images.left, CV_8UC1);
 }
 
 Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const vision::RectifiedProjection& projection)

@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 
 #include "ugv/platform/error.hpp"
+#include "ugv/platform/frame_header.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
@@ -37,7 +38,11 @@ vision::DetectorConfig detectorConfig(const DetectionOptions& options);
 ConstImageViewU8 viewOf(const cv::Mat& grey);
 
 /// Read-only view of a CV_8UC3 BGR matrix, for vision::ColourFreeSpace (the matrix must outlive the view).
-vision::ConstBgrView bgrViewOf(const cv::Mat& bgr);
+ConstBgrView bgrViewOf(const cv::Mat& bgr);
+
+/// A cv::Mat over one image of a frame, without a copy: CV_8UC1 (grey) or CV_8UC3 (BGR), empty for a missing right
+/// image. Treat it as read only; it lives as long as the frame's buffer.
+cv::Mat matOver(const StereoViews& images, bool right);
 
 /// A ground plane fitted to a disparity map without a prior (calibration without a mount).
 struct GroundFit {

@@ -60,6 +60,7 @@ Result<hal::RecordingWriter, Error> openWriter(const Args& args, const bringup::
     hal::RecordingWriterOptions options;
     options.syncEveryFrame = !args.has("no-sync");
     options.overwrite = args.has("force");
+    options.format = h.format; // the first frame's: a colour camera records colour
     auto opened = hal::RecordingWriter::create(args.get("out"), h.width, h.height, calibration.text, options);
     if (!opened) {
         return Unexpected(opened.error());
@@ -94,8 +95,7 @@ std::optional<int> recordFrame(ipc::FrameSubscriber& subscriber, ipc::TakenFrame
         tally.missed += h.sequence - tally.lastSequence - 1;
     }
     tally.lastSequence = h.sequence;
-    const auto appended =
-        writer->append(h.sequence, h.leftStampNs, h.rightStampNs, frame.views.left, frame.views.right);
+    const auto appended = writer->append(h.sequence, h.leftStampNs, h.rightStampNs, frame.views);
     subscriber.release(frame);
     if (!appended) {
         std::fprintf(stderr,

@@ -1,7 +1,8 @@
 // ugvsense recording: look into, import and export recordings (hal/recording.hpp).
 // - info REC: geometry, frame count, sequence gaps, duration and rate, corrupt frames, a cut-off tail and whether the
 //   stored calibration is usable (exit 1 when not).
-// - import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F]: PNG pairs (left*/right*) to a recording.
+// - import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F] [--colour]: PNG pairs (left*/right*) to a
+//   recording, grey or (--colour) BGR.
 // - export REC --out DIR: frame_NNNNNN_left.png / _right.png, frames.csv (frame, sequence, stamps) and
 //   calibration.yaml.
 
@@ -20,6 +21,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "detection.hpp"
 #include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
@@ -33,11 +35,6 @@ int fail(const Error& error)
 {
     std::cerr << "ugvsense recording: error: " << error.message() << '\n';
     return 1;
-}
-
-ConstImageViewU8 viewOf(const cv::Mat& m)
-{
-    return ConstImageViewU8(m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<int>(m.step));
 }
 
 int runInfo(const Args& args)
@@ -56,8 +53,9 @@ int runInfo(const Args& args)
         return fail(scan.error());
     }
     const double seconds = static_cast<double>(scan->lastStampNs - scan->firstStampNs) * 1e-9;
-    std::printf("recording %s: %ux%u grey stereo, calibration %zu bytes\n", path.c_str(), reader->info().width,
-                reader->info().height, reader->info().calibrationText.size());
+    std::printf("recording %s: %ux%u %s stereo, calibration %zu bytes\n", path.c_str(), reader->info().width,
+                reader->info().height, reader->info().format == PixelFormat::Bgr8 ? "colour (BGR)" : "grey",
+                reader->info().calibrationText.size());
     std::printf("frames: %llu complete (sequence %llu..%llu, %llu missing in gaps), %.3f s",
                 static_cast<unsigned long long>(scan->frames), static_cast<unsigned long long>(scan->firstSequence),
                 static_cast<unsigned long long>(scan->lastSequence),
@@ -123,16 +121,23 @@ Result<std::map<std::size_t, std::int64_t>, Error> readTimestamps(const std::str
     return stamps;
 }
 
+/// An image of a pair as the recording stores it: BGR with --colour, else grey.
+cv::Mat readForRecording(const std::filesystem::path& path, bool colour)
+{
+    return colour ? readImage(path, cv::IMREAD_COLOR) : readGrey(path);
+}
+
 /// Appends the pairs to the recording, stamped from `stamps` (by index) or else at `fps`; a pair that is
 /// unreadable or not of `size` is skipped with a warning. The number skipped.
 Result<std::size_t, Error> appendPairs(hal::RecordingWriter& writer, const std::vector<PairFiles>& pairs, cv::Size size,
                                        const std::map<std::size_t, std::int64_t>& stamps, const Args& args, double fps)
 {
+    const bool colour = args.has("colour");
     std::size_t skipped = 0;
     for (std::size_t k = 0; k < pairs.size(); ++k) {
         const PairFiles& pair = pairs[k];
-        const cv::Mat left = readGrey(pair.left);
-        const cv::Mat right = readGrey(pair.right);
+        const cv::Mat left = readForRecording(pair.left, colour);
+        const cv::Mat right = readForRecording(pair.right, colour);
         if (left.empty() || right.empty() || left.size() != size || right.size() != size) {
             std::cerr << "ugvsense recording: warning: skipped " << pair.name
                       << ": unreadable, or not the size of the first pair (" << size.width << "x" << size.height
@@ -149,7 +154,9 @@ Result<std::size_t, Error> appendPairs(hal::RecordingWriter& writer, const std::
         const std::int64_t stamp = it != stamps.end()
                                        ? it->second
                                        : static_cast<std::int64_t>(std::llround(static_cast<double>(k) / fps * 1e9));
-        if (auto appended = writer.append(k, stamp, stamp, viewOf(left), viewOf(right)); !appended) {
+        const StereoViews images =
+            colour ? bgrViews(bgrViewOf(left), bgrViewOf(right)) : greyViews(viewOf(left), viewOf(right));
+        if (auto appended = writer.append(k, stamp, stamp, images); !appended) {
             return Unexpected(Error{args.get("out"), std::string("cannot append: ") + appended.error().text(),
                                     "check the free space"});
         }
@@ -210,6 +217,7 @@ int runImport(const Args& args)
     hal::RecordingWriterOptions options;
     options.overwrite = args.has("force");
     options.syncEveryFrame = false; // an import can be redone: one sync at close
+    options.format = args.has("colour") ? PixelFormat::Bgr8 : PixelFormat::Grey8;
     auto writer = hal::RecordingWriter::create(args.get("out"), static_cast<std::uint32_t>(first.cols),
                                                static_cast<std::uint32_t>(first.rows), loaded->text, options);
     if (!writer) {
@@ -264,12 +272,12 @@ int runExport(const Args& args)
         const StereoViews v = reader->views();
         char stem[32];
         std::snprintf(stem, sizeof(stem), "frame_%06zu", k);
-        for (const auto& [side, image] : {std::pair{"left", v.left}, std::pair{"right", v.right}}) {
-            if (image.empty()) {
+        for (const bool right : {false, true}) {
+            const cv::Mat m = matOver(v, right); // grey or colour, as recorded
+            if (m.empty()) {
                 continue; // a left-only frame: its right camera was lost when it was recorded
             }
-            const cv::Mat m(image.height(), image.width(), CV_8UC1, const_cast<std::uint8_t*>(image.row(0)),
-                            static_cast<std::size_t>(image.strideBytes()));
+            const char* side = right ? "right" : "left";
             const auto file = out / (std::string(stem) + "_" + side + ".png");
             if (!cv::imwrite(file.string(), m)) {
                 return fail(Error{file.string(), "cannot write PNG", "check the free space"});
@@ -298,20 +306,22 @@ int runExport(const Args& args)
 
 int runRecording(int argc, char** argv)
 {
-    Args args(kCommand,
-              "info REC | import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F] [--force] | "
-              "export REC --out DIR [--frame N]\n"
-              "  info: frame count, sequence gaps, duration, corrupt frames and a cut-off tail (what a crash left)\n"
-              "  import: left*/right* image pairs (name order) into a recording; stamps from --timestamps\n"
-              "    (frame,stamp_ns lines, frame = index in name order) or every 1/fps s\n"
-              "  export: frame_NNNNNN_{left,right}.png, frames.csv and calibration.yaml",
-              {{"pairs", "DIR", "import: folder of left*/right* image pairs", false},
-               {"calib", "FILE", "import: calibration file stored in the recording", false},
-               {"out", "REC|DIR", "import: the recording to write; export: the folder", false},
-               {"timestamps", "CSV", "import: frame,stamp_ns per pair", false},
-               {"fps", "F", "import: frame rate when there are no timestamps, default 10", false},
-               {"force", "", "import: overwrite an existing recording", false},
-               {"frame", "N", "export: only frame N (0-based, in file order)", false}});
+    Args args(
+        kCommand,
+        "info REC | import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F] [--colour] [--force] | "
+        "export REC --out DIR [--frame N]\n"
+        "  info: frame count, sequence gaps, duration, corrupt frames and a cut-off tail (what a crash left)\n"
+        "  import: left*/right* image pairs (name order) into a recording; stamps from --timestamps\n"
+        "    (frame,stamp_ns lines, frame = index in name order) or every 1/fps s\n"
+        "  export: frame_NNNNNN_{left,right}.png, frames.csv and calibration.yaml",
+        {{"pairs", "DIR", "import: folder of left*/right* image pairs", false},
+         {"calib", "FILE", "import: calibration file stored in the recording", false},
+         {"out", "REC|DIR", "import: the recording to write; export: the folder", false},
+         {"timestamps", "CSV", "import: frame,stamp_ns per pair", false},
+         {"fps", "F", "import: frame rate when there are no timestamps, default 10", false},
+         {"colour", "", "import: record the pairs in colour (BGR: for the one-camera detector)", false},
+         {"force", "", "import: overwrite an existing recording", false},
+         {"frame", "N", "export: only frame N (0-based, in file order)", false}});
     if (const auto exit = parseOrExit(args, argc, argv, kCommand, Positionals::Allowed)) {
         return *exit;
     }

@@ -335,10 +335,12 @@ int runCatalogueScene(const Args& args)
 /// one row per frame and sector (sequence, time, vehicle pose, sector bounds, state, kind, range, class).
 /// The recording is written as `<out>.part` and renamed at the end, so `out` exists only when complete (the
 /// default-recording unit makes it only when it is missing).
-int writeCourseRecording(const sim::Course& course, std::size_t count, double fps, const std::filesystem::path& out)
+int writeCourseRecording(const sim::Course& course, std::size_t count, double fps, bool colour,
+                         const std::filesystem::path& out)
 {
     const sim::Rig& rig = course.scene.rig;
     hal::RecordingWriterOptions options;
+    options.format = colour ? PixelFormat::Bgr8 : PixelFormat::Grey8;
     options.overwrite = true;
     options.syncEveryFrame = false; // generated data: one sync at close is enough
     const std::filesystem::path partPath = out.string() + ".part";
@@ -353,17 +355,17 @@ int writeCourseRecording(const sim::Course& course, std::size_t count, double fp
     truth << "sequence,t_s,x_m,y_m,yaw_deg,sector,bearing_min_deg,bearing_max_deg,state,kind,range_m,class\n";
     truth.precision(6);
     for (std::size_t k = 0; k < count; ++k) {
-        auto frame = sim::renderCourseFrame(course, k);
+        sim::RenderOptions render;
+        render.rightColour = colour;
+        auto frame = sim::renderCourseFrame(course, k, render);
         if (!frame) {
             return reportFailure(frame.error());
         }
         // Stamps as a camera's monotonic clock would give them: 1 s after boot, then one frame period each.
         const auto stampNs = static_cast<std::int64_t>(std::llround((1.0 + static_cast<double>(k) / fps) * 1e9));
-        const cv::Mat& left = frame->left;
-        const cv::Mat& right = frame->right;
-        const ConstImageViewU8 l(left.ptr<std::uint8_t>(), left.cols, left.rows, static_cast<int>(left.step));
-        const ConstImageViewU8 r(right.ptr<std::uint8_t>(), right.cols, right.rows, static_cast<int>(right.step));
-        if (auto appended = writer->append(k, stampNs, stampNs, l, r); !appended) {
+        const StereoViews images = colour ? bgrViews(bgrViewOf(frame->leftColour), bgrViewOf(frame->rightColour))
+                                          : greyViews(viewOf(frame->left), viewOf(frame->right));
+        if (auto appended = writer->append(k, stampNs, stampNs, images); !appended) {
             return reportFailure(Error{partPath.string(),
                                        std::string("cannot append frame: ") + appended.error().text(),
                                        "check the free space"});
@@ -421,7 +423,7 @@ int runCourse(const Args& args)
         args.has("frames") && *frames >= 1.0 ? std::min(total, static_cast<std::size_t>(*frames)) : total;
     const std::filesystem::path out = args.get("out");
     if (out.extension() == ".ugvrec") {
-        return writeCourseRecording(*course, count, *fps, out);
+        return writeCourseRecording(*course, count, *fps, args.has("colour"), out);
     }
     if (auto prepared = prepareOutput(out); !prepared) {
         return reportFailure(prepared.error());
@@ -464,8 +466,8 @@ int runSim(int argc, char** argv)
         "(--scene NAME | --course NAME) --out DIR [options] | --list\n"
         "  --scene chessboard: calibration pairs and truth.yaml ([--pairs N] [--seed S] [--noise SIGMA])\n"
         "  --scene NAME (ugvsense sim --list): one simulator sample with ground truth and calibration.yaml\n"
-        "  --course NAME --out REC.ugvrec: a recording of the drive and REC.ugvrec.truth.csv (truth per frame "
-        "and sector);\n"
+        "  --course NAME --out REC.ugvrec [--colour]: a recording of the drive (grey, or BGR with --colour) and "
+        "REC.ugvrec.truth.csv (truth per frame and sector);\n"
         "  --course NAME --out DIR: numbered samples frame_NNNN_*, calibration.yaml and poses.csv (frame, t, x, "
         "y, yaw)",
         {{"scene", "NAME", "scene to render: chessboard, or a simulator scene (see --list)", false},
@@ -479,6 +481,7 @@ int runSim(int argc, char** argv)
          {"roll", "DEG", "simulator scene: camera roll, positive right side down, default 0", false},
          {"height", "M", "simulator scene: camera height above the ground, default 0.59", false},
          {"frames", "N", "course: number of frames to write, default all", false},
+         {"colour", "", "course recording: both cameras in colour (BGR), for the one-camera detector", false},
          {"fps", "F", "course: frame rate (poses 1.5 m/s apart in time), default 10", false},
          {"pairs", "N", "chessboard: number of pairs, default 12", false},
          {"seed", "S", "random seed (chessboard poses and noise; simulator noise), default 1", false},

@@ -382,8 +382,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     }
     out.leftStampNs = sensorStamp(im.left, im.left.pending);
     out.sequence = sequence;
-    out.left = im.leftGrey.view();
-    out.right = options_.oneCamera ? ConstImageViewU8() : im.rightGrey.view();
+    out.images = greyViews(im.leftGrey.view(), options_.oneCamera ? ConstImageViewU8() : im.rightGrey.view());
     im.left.delivered = im.left.pending;
     im.left.pending = nullptr;
     im.right.delivered = im.right.pending;

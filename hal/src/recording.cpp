@@ -38,11 +38,6 @@ std::uint32_t headerCrc(const RecordingFileHeader& header, const std::string& ca
     return crc32(c, calibration.data(), calibration.size());
 }
 
-std::size_t packedPayload(std::uint32_t width, std::uint32_t height) noexcept
-{
-    return 2U * static_cast<std::size_t>(width) * height;
-}
-
 Error fileError(const std::string& path, const char* what, SysError e, const char* fix)
 {
     return Error{path, std::string(what) + ": " + e.text() + " (" + e.name() + ")", fix};
@@ -66,15 +61,17 @@ Result<void, SysError> writeAll(int fd, const std::byte* data, std::size_t size)
 
 // ---------------------------------------------------------------------------------------------------- writer
 
-RecordingWriter::RecordingWriter(int fd, std::string path, std::uint32_t width, std::uint32_t height, bool sync)
-    : fd_(fd), path_(std::move(path)), width_(width), height_(height), sync_(sync),
-      record_(sizeof(RecordPrefix) + sizeof(FrameHeader) + packedPayload(width, height))
+RecordingWriter::RecordingWriter(int fd, std::string path, PixelFormat format, std::uint32_t width,
+                                 std::uint32_t height, bool sync)
+    : fd_(fd), path_(std::move(path)), format_(format), width_(width), height_(height), sync_(sync),
+      record_(sizeof(RecordPrefix) + packedFrameBytes(format, width, height))
 {
 }
 
 RecordingWriter::RecordingWriter(RecordingWriter&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), path_(std::move(other.path_)), width_(other.width_), height_(other.height_),
-      sync_(other.sync_), frames_(other.frames_), endBytes_(other.endBytes_), record_(std::move(other.record_))
+    : fd_(std::exchange(other.fd_, -1)), path_(std::move(other.path_)), format_(other.format_), width_(other.width_),
+      height_(other.height_), sync_(other.sync_), frames_(other.frames_), endBytes_(other.endBytes_),
+      record_(std::move(other.record_))
 {
 }
 
@@ -84,6 +81,7 @@ RecordingWriter& RecordingWriter::operator=(RecordingWriter&& other) noexcept
         (void)close();
         fd_ = std::exchange(other.fd_, -1);
         path_ = std::move(other.path_);
+        format_ = other.format_;
         width_ = other.width_;
         height_ = other.height_;
         sync_ = other.sync_;
@@ -112,6 +110,10 @@ Result<RecordingWriter, Error> RecordingWriter::create(const std::string& path, 
     if (calibrationText.size() > kMaxCalibrationBytes) {
         return Unexpected(Error{path, "the calibration text is larger than 1 MiB", "give the calibration file"});
     }
+    if (bytesPerPixel(options.format) == 0) {
+        return Unexpected(Error{path, "unknown pixel format " + std::to_string(static_cast<int>(options.format)),
+                                "record Grey8 or Bgr8 frames"});
+    }
     const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (options.overwrite ? O_TRUNC : O_EXCL);
     auto fd = sysCall(::open, path.c_str(), flags, 0644);
     if (!fd) {
@@ -119,9 +121,10 @@ Result<RecordingWriter, Error> RecordingWriter::create(const std::string& path, 
                                     fd.error().code == EEXIST ? "choose a new file name or remove the old recording"
                                                               : "check that the folder exists and is writable"));
     }
-    RecordingWriter writer(*fd, path, width, height, options.syncEveryFrame);
+    RecordingWriter writer(*fd, path, options.format, width, height, options.syncEveryFrame);
 
     RecordingFileHeader header;
+    header.format = static_cast<std::uint16_t>(options.format);
     header.width = width;
     header.height = height;
     header.calibrationBytes = static_cast<std::uint32_t>(calibrationText.size());
@@ -146,14 +149,13 @@ Result<RecordingWriter, Error> RecordingWriter::create(const std::string& path, 
 }
 
 Result<void, SysError> RecordingWriter::append(std::uint64_t sequence, std::int64_t leftStampNs,
-                                               std::int64_t rightStampNs, ConstImageViewU8 left,
-                                               ConstImageViewU8 right) noexcept
+                                               std::int64_t rightStampNs, const StereoViews& images) noexcept
 {
     if (fd_ < 0) {
         return Unexpected(SysError{EBADF});
     }
     std::byte* out = record_.data() + sizeof(RecordPrefix);
-    if (!packGreyFrame(out, width_, height_, sequence, leftStampNs, rightStampNs, left, right)) {
+    if (images.format != format_ || !packFrame(out, width_, height_, sequence, leftStampNs, rightStampNs, images)) {
         return Unexpected(SysError{EINVAL});
     }
     RecordPrefix prefix;
@@ -199,7 +201,7 @@ Result<void, SysError> RecordingWriter::close() noexcept
 
 RecordingReader::RecordingReader(int fd, RecordingInfo info, std::uint64_t firstRecord, std::uint64_t fileBytes)
     : fd_(fd), info_(std::move(info)), firstRecord_(firstRecord), fileBytes_(fileBytes), offset_(firstRecord),
-      frameBytes_(sizeof(FrameHeader) + packedPayload(info_.width, info_.height)), frame_(frameBytes_)
+      frameBytes_(packedFrameBytes(info_.format, info_.width, info_.height)), frame_(frameBytes_)
 {
 }
 
@@ -274,8 +276,9 @@ Result<RecordingReader, Error> RecordingReader::open(const std::string& path)
                         "reads version 1)",
                     "replay it with the ugvsense version that recorded it");
     }
-    if (header.headerBytes != sizeof(header) || header.format != static_cast<std::uint16_t>(PixelFormat::Grey8) ||
-        header.width == 0 || header.height == 0 || header.width > kMaxFrameSide || header.height > kMaxFrameSide ||
+    const auto format = static_cast<PixelFormat>(header.format);
+    if (header.headerBytes != sizeof(header) || bytesPerPixel(format) == 0 || header.width == 0 || header.height == 0 ||
+        header.width > kMaxFrameSide || header.height > kMaxFrameSide ||
         header.calibrationBytes > kMaxCalibrationBytes || sizeof(header) + header.calibrationBytes > fileBytes) {
         return fail("corrupt recording header (geometry " + std::to_string(header.width) + "x" +
                         std::to_string(header.height) + ", calibration " + std::to_string(header.calibrationBytes) +
@@ -283,6 +286,7 @@ Result<RecordingReader, Error> RecordingReader::open(const std::string& path)
                     "the header is damaged: the frames cannot be located; restore the file from a copy");
     }
     RecordingInfo info;
+    info.format = format;
     info.width = header.width;
     info.height = header.height;
     info.createdRealtimeNs = header.createdRealtimeNs;
@@ -336,7 +340,8 @@ ReadStatus RecordingReader::next() noexcept
         FrameHeader frameHeader;
         std::memcpy(&frameHeader, frame_.data(), sizeof(frameHeader));
         if (crc32(0, frame_.data(), frameBytes_) != prefix.crc || !validate(frameHeader, frameBytes_) ||
-            frameHeader.width != info_.width || frameHeader.height != info_.height) {
+            frameHeader.width != info_.width || frameHeader.height != info_.height ||
+            frameHeader.format != info_.format) {
             ++corrupt_;
             continue;
         }

@@ -152,12 +152,10 @@ GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout
         return GrabStatus::End;
     }
     const FrameHeader& h = reader_.header();
-    const StereoViews views = reader_.views();
     out.sequence = h.sequence + sequenceOffset_;
     out.leftStampNs = options_.restamp ? dueNs_ : h.leftStampNs;
     out.rightStampNs = options_.restamp ? dueNs_ + (h.rightStampNs - h.leftStampNs) : h.rightStampNs;
-    out.left = views.left;
-    out.right = views.right;
+    out.images = reader_.views();
     if (haveLastSequence_ && out.sequence > lastSequence_ + 1) {
         stats_.sequenceGaps += out.sequence - lastSequence_ - 1;
     }

@@ -12,6 +12,9 @@
 #include <ctime>
 #include <utility>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "ugv/hal/sys_call.hpp"
 
 namespace ugv::hal {
@@ -75,9 +78,15 @@ V4l2Ops realV4l2Ops() noexcept
     return V4l2Ops{realOpen, realClose, realIoctl, realMmap, realMunmap, realPoll, nullptr};
 }
 
-V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops)
-    : options_(options), ops_(ops), leftGrey_(options.width, options.height), rightGrey_(options.width, options.height)
+V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops) : options_(options), ops_(ops)
 {
+    if (options.colour) {
+        leftBgr_ = Image<BgrPixel>(options.width, options.height);
+        rightBgr_ = Image<BgrPixel>(options.width, options.height);
+    } else {
+        leftGrey_ = Image<std::uint8_t>(options.width, options.height);
+        rightGrey_ = Image<std::uint8_t>(options.width, options.height);
+    }
     period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
     sideBySide_ = !options.oneCamera && options.rightDevice.empty();
     description_ = options.oneCamera ? "v4l2 " + options.leftDevice + " (one camera)"
@@ -102,6 +111,10 @@ Result<std::unique_ptr<V4l2StereoCamera>, Error> V4l2StereoCamera::open(const V4
         !(options.maxPairSkewMs > 0.0)) {
         return Unexpected(Error{"v4l2 " + options.leftDevice, "size, rate, buffer count or skew out of range",
                                 "camera.width/height in 1..8192, fps > 0, 2..8 buffers, max_pair_skew_ms > 0"});
+    }
+    if (options.colour && (options.format != V4l2Format::Yuyv || options.width % 2 != 0)) {
+        return Unexpected(Error{"v4l2 " + options.leftDevice, "colour frames need the YUYV format and an even width",
+                                "set camera.format: yuyv (a grey camera has no colour), or camera.colour: false"});
     }
     std::unique_ptr<V4l2StereoCamera> camera(new V4l2StereoCamera(options, ops));
     camera->left_.path = options.leftDevice;
@@ -327,12 +340,23 @@ void V4l2StereoCamera::requeue(Device& device) noexcept
     device.held = -1;
 }
 
-bool V4l2StereoCamera::copyGrey(const Device& device, int x0, ImageViewU8 out) noexcept
+bool V4l2StereoCamera::copyImage(const Device& device, int x0, bool right) noexcept
 {
     if (device.held < 0) {
         return false;
     }
     const auto* base = static_cast<const std::uint8_t*>(device.maps[static_cast<std::size_t>(device.held)]);
+    if (options_.colour) {
+        // YUYV 4:2:2 to BGR, OpenCV's BT.601 conversion; x0 is even (a whole Y0 U Y1 V pair). The sizes were fixed at
+        // open(), so cvtColor writes into the BGR image without allocating.
+        const BgrView out = right ? rightBgr_.view() : leftBgr_.view();
+        const cv::Mat yuyv(out.height(), out.width(), CV_8UC2, const_cast<std::uint8_t*>(base) + 2 * x0, // NOLINT
+                           device.stride);
+        cv::Mat bgr(out.height(), out.width(), CV_8UC3, out.data(), static_cast<std::size_t>(out.strideBytes()));
+        cv::cvtColor(yuyv, bgr, cv::COLOR_YUV2BGR_YUYV);
+        return true;
+    }
+    const ImageViewU8 out = right ? rightGrey_.view() : leftGrey_.view();
     for (int y = 0; y < out.height(); ++y) {
         const std::uint8_t* row = base + static_cast<std::size_t>(y) * device.stride;
         std::uint8_t* dst = out.row(y);
@@ -345,6 +369,14 @@ bool V4l2StereoCamera::copyGrey(const Device& device, int x0, ImageViewU8 out) n
         }
     }
     return true;
+}
+
+StereoViews V4l2StereoCamera::images(bool leftOnly) const noexcept
+{
+    if (options_.colour) {
+        return bgrViews(leftBgr_.view(), leftOnly ? ConstBgrView() : rightBgr_.view());
+    }
+    return greyViews(leftGrey_.view(), leftOnly ? ConstImageViewU8() : rightGrey_.view());
 }
 
 GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept
@@ -365,7 +397,7 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
     }
     bool leftOnly = options_.oneCamera || rightLost_;
     if (sideBySide_) {
-        copyGrey(left_, options_.width, rightGrey_.view());
+        copyImage(left_, options_.width, true);
         out.rightStampNs = stampNs(left_.last);
     } else if (!leftOnly) {
         // The right frame is due within a period (and the skew) of the left one.
@@ -380,15 +412,14 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
         leftOnly = s != GrabStatus::Frame && rightMissing(s);
         if (!leftOnly) {
             rightMisses_ = 0;
-            copyGrey(right_, 0, rightGrey_.view());
+            copyImage(right_, 0, true);
             out.rightStampNs = stampNs(right_.last);
         }
     }
-    copyGrey(left_, 0, leftGrey_.view());
+    copyImage(left_, 0, false);
     out.sequence = left_.last.sequence;
     out.leftStampNs = stampNs(left_.last);
-    out.left = leftGrey_.view();
-    out.right = leftOnly ? ConstImageViewU8() : rightGrey_.view();
+    out.images = images(leftOnly);
     if (leftOnly) {
         out.rightStampNs = 0;
         ++stats_.leftOnlyFrames;

@@ -236,33 +236,36 @@ struct FramePublisher::Impl {
     iox::popo::UntypedPublisher publisher;
 };
 
-FramePublisher::FramePublisher(std::unique_ptr<Impl> impl, int width, int height)
-    : impl_(std::move(impl)), width_(width), height_(height)
+FramePublisher::FramePublisher(std::unique_ptr<Impl> impl, PixelFormat format, int width, int height)
+    : impl_(std::move(impl)), format_(format), width_(width), height_(height)
 {
 }
 FramePublisher::~FramePublisher() = default;
 
-Result<std::unique_ptr<FramePublisher>, Error> FramePublisher::create(int width, int height, Topic topic)
+Result<std::unique_ptr<FramePublisher>, Error> FramePublisher::create(PixelFormat format, int width, int height,
+                                                                      Topic topic)
 {
+    if (bytesPerPixel(format) == 0) {
+        return Unexpected(Error{topicName(topic), "unknown pixel format " + std::to_string(static_cast<int>(format)),
+                                "publish Grey8 or Bgr8 frames"});
+    }
     if (width <= 0 || height <= 0 || width > static_cast<int>(kMaxFrameSide) ||
         height > static_cast<int>(kMaxFrameSide)) {
         return Unexpected(Error{topicName(topic),
                                 "frame size " + std::to_string(width) + "x" + std::to_string(height) + " out of range",
                                 "configure a real camera size"});
     }
-    return std::unique_ptr<FramePublisher>(new FramePublisher(std::make_unique<Impl>(topic), width, height));
+    return std::unique_ptr<FramePublisher>(new FramePublisher(std::make_unique<Impl>(topic), format, width, height));
 }
 
 bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs,
-                             ConstImageViewU8 left, ConstImageViewU8 right,
-                             std::atomic<std::int64_t>* publishStampNs) noexcept
+                             const StereoViews& images, std::atomic<std::int64_t>* publishStampNs) noexcept
 {
-    const auto fits = [this](ConstImageViewU8 image) { return image.width() == width_ && image.height() == height_; };
-    if (!fits(left) || (!right.empty() && !fits(right))) {
+    if (images.format != format_ || !images.fits(width_, height_)) {
         ++loanFailures_;
         return false;
     }
-    const std::size_t bytes = frameBytes(width_, height_);
+    const std::size_t bytes = frameBytes(format_, width_, height_);
     auto loaned = impl_->publisher.loan(static_cast<std::uint32_t>(bytes), kChunkAlignment);
     if (loaned.has_error()) {
         ++loanFailures_;
@@ -270,8 +273,8 @@ bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, s
     }
     auto* chunk = static_cast<std::byte*>(loaned.value());
     takeOver(chunk);
-    (void)packGreyFrame(chunk, static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_), sequence,
-                        leftStampNs, rightStampNs, left, right); // the sizes were checked above
+    (void)packFrame(chunk, static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_), sequence,
+                    leftStampNs, rightStampNs, images); // the format and sizes were checked above
     if (publishStampNs != nullptr) {
         publishStampNs->store(MonotonicClock::nowNs(), std::memory_order_release);
     }

@@ -1,6 +1,7 @@
 #include "ugv/platform/frame_header.hpp"
 
 #include <cstring>
+#include <type_traits>
 
 namespace ugv {
 
@@ -23,44 +24,66 @@ const char* toString(FrameError error) noexcept
     return "unknown frame error";
 }
 
-FrameHeader makeGreyHeader(std::uint32_t width, std::uint32_t height, std::uint64_t sequence, std::int64_t leftStampNs,
-                           std::int64_t rightStampNs) noexcept
+bool StereoViews::fits(int width, int height) const noexcept
+{
+    const auto fitsView = [&](const auto& image) { return image.width() == width && image.height() == height; };
+    if (colour()) {
+        return fitsView(leftBgr) && (rightBgr.empty() || fitsView(rightBgr)) && left.empty() && right.empty();
+    }
+    return fitsView(left) && (right.empty() || fitsView(right)) && leftBgr.empty() && rightBgr.empty();
+}
+
+FrameHeader makeFrameHeader(PixelFormat format, std::uint32_t width, std::uint32_t height, std::uint64_t sequence,
+                            std::int64_t leftStampNs, std::int64_t rightStampNs) noexcept
 {
     FrameHeader header;
+    header.format = format;
     header.width = width;
     header.height = height;
-    header.strideBytes = width;
+    header.strideBytes = width * bytesPerPixel(format);
     header.sequence = sequence;
     header.leftStampNs = leftStampNs;
     header.rightStampNs = rightStampNs;
-    header.payloadBytes = 2ULL * width * height;
+    header.payloadBytes = 2ULL * header.strideBytes * height;
     return header;
 }
 
-bool packGreyFrame(std::byte* out, std::uint32_t width, std::uint32_t height, std::uint64_t sequence,
-                   std::int64_t leftStampNs, std::int64_t rightStampNs, ConstImageViewU8 left,
-                   ConstImageViewU8 right) noexcept
+namespace {
+
+/// Copies `rows` rows of `rowBytes` from `image` (zeros when it is null) to `out`; returns the byte after them.
+template <class View>
+std::byte* packRows(std::byte* out, const View& image, int rows, std::size_t rowBytes) noexcept
 {
-    const auto fits = [&](ConstImageViewU8 image) {
-        return image.width() == static_cast<int>(width) && image.height() == static_cast<int>(height);
-    };
-    const bool leftOnly = right.empty();
-    if (!fits(left) || (!leftOnly && !fits(right))) {
+    for (int y = 0; y < rows; ++y, out += rowBytes) {
+        if (image.empty()) {
+            std::memset(out, 0, rowBytes);
+        } else {
+            std::memcpy(out, image.row(y), rowBytes);
+        }
+    }
+    return out;
+}
+
+} // namespace
+
+bool packFrame(std::byte* out, std::uint32_t width, std::uint32_t height, std::uint64_t sequence,
+               std::int64_t leftStampNs, std::int64_t rightStampNs, const StereoViews& images) noexcept
+{
+    if (bytesPerPixel(images.format) == 0 || !images.fits(static_cast<int>(width), static_cast<int>(height))) {
         return false;
     }
-    FrameHeader header = makeGreyHeader(width, height, sequence, leftStampNs, rightStampNs);
-    header.flags = leftOnly ? kFrameLeftOnly : 0U;
+    FrameHeader header = makeFrameHeader(images.format, width, height, sequence, leftStampNs, rightStampNs);
+    header.flags = images.leftOnly() ? kFrameLeftOnly : 0U;
     std::memcpy(out, &header, sizeof(header));
     std::byte* pixels = out + sizeof(header);
-    for (int y = 0; y < left.height(); ++y, pixels += width) {
-        std::memcpy(pixels, left.row(y), width);
-    }
-    for (int y = 0; y < static_cast<int>(height); ++y, pixels += width) {
-        if (leftOnly) {
-            std::memset(pixels, 0, width);
-        } else {
-            std::memcpy(pixels, right.row(y), width);
-        }
+    const auto rows = static_cast<int>(height);
+    const std::size_t rowBytes = header.strideBytes;
+    if (images.colour()) {
+        pixels = packRows(pixels, images.leftBgr, rows, rowBytes);
+        (void)packRows(pixels, images.rightBgr, rows, rowBytes);
+    } else {
+        pixels = packRows(pixels, images.left, rows, rowBytes);
+        (void)packRows(pixels, images.right, rows, rowBytes);
     }
     return true;
 }
@@ -73,11 +96,12 @@ Result<void, FrameError> validate(const FrameHeader& header, std::size_t availab
     if (header.version != kFrameVersion) {
         return Unexpected(FrameError::BadVersion);
     }
-    if (header.format != PixelFormat::Grey8 || (header.flags & ~kFrameKnownFlags) != 0) {
+    const std::uint32_t pixelBytes = bytesPerPixel(header.format);
+    if (pixelBytes == 0 || (header.flags & ~kFrameKnownFlags) != 0) {
         return Unexpected(FrameError::BadFormat);
     }
     if (header.width == 0 || header.height == 0 || header.width > kMaxFrameSide || header.height > kMaxFrameSide ||
-        header.strideBytes < header.width || header.strideBytes > 4 * kMaxFrameSide) {
+        header.strideBytes < header.width * pixelBytes || header.strideBytes > 4 * kMaxFrameSide) {
         return Unexpected(FrameError::BadGeometry);
     }
     if (header.payloadBytes != 2ULL * header.strideBytes * header.height) {
@@ -99,15 +123,20 @@ Result<StereoViews, FrameError> viewFrame(const std::byte* frame, std::size_t av
     if (auto valid = validate(header, availableBytes); !valid) {
         return Unexpected(valid.error());
     }
-    const auto* pixels = reinterpret_cast<const std::uint8_t*>(frame + sizeof(FrameHeader)); // NOLINT: byte buffer
+    const std::byte* left = frame + sizeof(FrameHeader);
     const auto width = static_cast<int>(header.width);
     const auto height = static_cast<int>(header.height);
     const auto stride = static_cast<std::ptrdiff_t>(header.strideBytes);
-    const ConstImageViewU8 left(pixels, width, height, stride);
-    if ((header.flags & kFrameLeftOnly) != 0) {
-        return StereoViews{left, ConstImageViewU8()};
+    const std::byte* right = (header.flags & kFrameLeftOnly) != 0 ? nullptr : left + stride * height;
+    const auto view = [&](const std::byte* pixels, auto type) {
+        using View = decltype(type);
+        using Pixel = std::remove_pointer_t<decltype(View().data())>;
+        return pixels == nullptr ? View() : View(reinterpret_cast<Pixel*>(pixels), width, height, stride); // NOLINT
+    };
+    if (header.format == PixelFormat::Bgr8) {
+        return bgrViews(view(left, ConstBgrView()), view(right, ConstBgrView()));
     }
-    return StereoViews{left, ConstImageViewU8(pixels + stride * height, width, height, stride)};
+    return greyViews(view(left, ConstImageViewU8()), view(right, ConstImageViewU8()));
 }
 
 } // namespace ugv

@@ -177,4 +177,27 @@ RectifyStatus Rectifier::rectifyLeft(ConstImageViewU8 left) noexcept
     return RectifyStatus::Ok;
 }
 
+RectifyStatus Rectifier::rectifyLeft(ConstBgrView left, BgrView out) noexcept
+{
+    if (left.data() == nullptr || left.width() != imageSize_.width || left.height() != imageSize_.height) {
+        return RectifyStatus::WrongInputSize;
+    }
+    if (out.data() == nullptr || out.width() != roi_.width || out.height() != roi_.height) {
+        return RectifyStatus::WrongOutputSize;
+    }
+    const auto rowBytes = static_cast<std::size_t>(roi_.width) * sizeof(BgrPixel);
+    if (identity_) {
+        for (int r = 0; r < roi_.height; ++r) {
+            std::memcpy(out.row(r), left.row(roi_.y + r), rowBytes);
+        }
+        return RectifyStatus::Ok;
+    }
+    // Sizes checked above and the tables' type fixed at create(): remap writes into `out` without allocating.
+    const cv::Mat src(left.height(), left.width(), CV_8UC3, const_cast<BgrPixel*>(left.data()), // NOLINT
+                      static_cast<std::size_t>(left.strideBytes()));
+    cv::Mat dst(out.height(), out.width(), CV_8UC3, out.data(), static_cast<std::size_t>(out.strideBytes()));
+    cv::remap(src, dst, mapLeftXY_, mapLeftFrac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    return RectifyStatus::Ok;
+}
+
 } // namespace ugv::vision

@@ -45,9 +45,9 @@ cv::Mat makeImage(int width, int height)
     return bgr;
 }
 
-ugv::vision::ConstBgrView view(const cv::Mat& m)
+ugv::ConstBgrView view(const cv::Mat& m)
 {
-    return {reinterpret_cast<const ugv::vision::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
+    return {reinterpret_cast<const ugv::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
             static_cast<std::ptrdiff_t>(m.step)};
 }
 

@@ -204,6 +204,34 @@ TEST(Config, OneCameraNeedsTheOneCameraDetector)
     EXPECT_NE(text.find("set obstacles.detector: colour"), std::string::npos) << text;
 }
 
+TEST(Config, ColourFramesComeFromAYuyvCameraAndAreRefusedWhereTheCameraHasNoColour)
+{
+    const std::string v4l2 = "calibration: c\ncamera:\n  backend: v4l2\n";
+    const auto parsed = [](const std::string& text) {
+        auto config = parseConfig(text, "test.yaml", "/");
+        EXPECT_TRUE(config.has_value()) << (config ? "" : joined(config.error()));
+        return config.value_or(ServiceConfig{});
+    };
+    // auto: colour from a V4L2 yuyv camera (whatever the detector: stereo's fallback to the left camera uses it),
+    // grey from a grey V4L2 camera and from libcamera (a replay has its recording's format).
+    EXPECT_TRUE(captureInColour(parsed(v4l2)));
+    EXPECT_TRUE(captureInColour(parsed(v4l2 + "obstacles:\n  detector: colour\n")));
+    EXPECT_FALSE(captureInColour(parsed(v4l2 + "  format: grey\nobstacles:\n  detector: both\n")));
+    EXPECT_FALSE(
+        captureInColour(parsed("calibration: c\ncamera:\n  backend: libcamera\nobstacles:\n  detector: both\n")));
+    // false: grey whatever the detector; true: as auto, but an error where no colour comes (below).
+    EXPECT_TRUE(captureInColour(parsed(v4l2 + "  colour: true\n")));
+    EXPECT_FALSE(captureInColour(parsed(v4l2 + "  colour: false\nobstacles:\n  detector: colour\n")));
+
+    const std::string grey = joined(parseErrors(v4l2 + "  format: grey\n  colour: true\n"));
+    EXPECT_NE(grey.find("camera.colour"), std::string::npos) << grey;
+    EXPECT_NE(grey.find("is true but camera.format is grey (a grey camera has no colour)"), std::string::npos) << grey;
+    const std::string libcamera =
+        joined(parseErrors("calibration: c\ncamera:\n  backend: libcamera\n  colour: true\n"));
+    EXPECT_NE(libcamera.find("the libcamera backend delivers grey frames"), std::string::npos) << libcamera;
+    EXPECT_NE(libcamera.find("use backend v4l2 with format yuyv"), std::string::npos) << libcamera;
+}
+
 TEST(Config, DisparityRangeMustFitTheImage)
 {
     const auto errors = parseErrors(std::string(kValidMinimal) + "  width: 128\nstereo:\n  num_disparities: 128\n");

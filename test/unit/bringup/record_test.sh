@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `ugvsense record` against the running service, three processes as on the vehicle: iox-roudi (bringup/roudi.toml),
 # ugvsensed replaying a 12-frame simulator course, and the recorder writing the first 8 pairs it sees; the written
-# recording must hold 8 complete frames in sequence. Usage: record_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR RECORDING
+# recording must hold 8 complete frames in sequence. Then the same from a colour camera (a BGR course: RouDi's 2 MiB
+# pool, the service's grey conversion), recorded in colour. Usage: record_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR RECORDING
 set -u
 tool=$1 service=$2 config=$3 work=$4 recording=$5
 rm -rf "$work" && mkdir -p "$work"
@@ -22,6 +23,21 @@ cat "$work/record.log"
 info=$("$tool" recording info "$work/recorded.ugvrec") || { echo "$info"; exit 1; }
 echo "$info"
 grep -q "frames: 8 complete (sequence 0..7, 0 missing" <<<"$info" || { echo "expected 8 frames in sequence"; exit 1; }
+# A colour camera: BGR frames through RouDi's pools to the service and the recorder, which records them in colour.
+"$tool" sim --course default --frames 6 --colour --out "$work/colour.ugvrec" >/dev/null || exit 1
+"$tool" record --out "$work/recorded-colour.ugvrec" --calib "$work/f0/calibration.yaml" --frames 4 --seconds 60 \
+    >"$work/record-colour.log" 2>&1 &
+recorder=$!
+sleep 1.5
+"$service" --replay "$work/colour.ugvrec" --print-every 0 >"$work/service-colour.log" 2>&1 ||
+    { cat "$work/service-colour.log"; exit 1; }
+wait $recorder || { echo "record (colour) failed:"; cat "$work/record-colour.log"; exit 1; }
+info=$("$tool" recording info "$work/recorded-colour.ugvrec") || { echo "$info"; exit 1; }
+echo "$info"
+grep -q "640x480 colour (BGR) stereo" <<<"$info" || { echo "expected a colour recording"; exit 1; }
+grep -q "frames: 4 complete (sequence 0..3, 0 missing" <<<"$info" || { echo "expected 4 colour frames"; exit 1; }
+grep -q "frames: 6 published of 6 captured" "$work/service-colour.log" ||
+    { echo "the service did not publish every colour frame:"; cat "$work/service-colour.log"; exit 1; }
 # No service publishing: the recorder gives up after --seconds, says why, exits 1 and leaves no file behind.
 out=$("$tool" record --out "$work/empty.ugvrec" --calib "$work/f0/calibration.yaml" --seconds 1 2>&1)
 rc=$?

@@ -139,7 +139,7 @@ void writeRecording(const std::filesystem::path& path, cv::Size size, const std:
     ASSERT_TRUE(writer.has_value()) << writer.error().message();
     const std::vector<std::uint8_t> pixels(static_cast<std::size_t>(size.area()), 128);
     const ugv::ConstImageViewU8 view(pixels.data(), size.width, size.height, size.width);
-    ASSERT_TRUE(writer->append(0, 0, 0, view, view).has_value());
+    ASSERT_TRUE(writer->append(0, 0, 0, greyViews(view, view)).has_value());
 }
 
 /// A folder with left1.png, right1.png (plain grey of these sizes) and calib.yaml (kRectifiedCalibration, 640x480).

@@ -197,6 +197,53 @@ TEST(ToolSim, CourseRecordingHasTruthAndRoundTripsThroughExportAndImport)
     EXPECT_TRUE(contains(again.output, "EEXIST")) << again.output;
 }
 
+/// The colour type of a PNG file's IHDR chunk (byte 25): 0 grey, 2 RGB; -1 when unreadable.
+int pngColourType(const std::filesystem::path& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    char head[26] = {};
+    return in.read(head, sizeof(head)) ? static_cast<unsigned char>(head[25]) : -1;
+}
+
+TEST(ToolSim, AColourCourseRecordingRoundTripsInColourThroughExportAndImport)
+{
+    const auto dir = tempDir("colour-recording");
+    std::filesystem::create_directories(dir);
+    const std::string rec = (dir / "drive.ugvrec").string();
+
+    const ToolRun sim = run("sim --course default --frames 2 --colour --out " + rec);
+    ASSERT_EQ(sim.exitCode, 0) << sim.output;
+    const ToolRun info = run("recording info " + rec);
+    EXPECT_TRUE(contains(info.output, "640x480 colour (BGR) stereo")) << info.output;
+    EXPECT_TRUE(contains(info.output, "frames: 2 complete")) << info.output;
+    EXPECT_EQ(std::filesystem::file_size(rec) > 2 * 6 * 640 * 480, true);
+
+    const auto exported = dir / "exported";
+    ASSERT_EQ(run("recording export " + rec + " --out " + exported.string()).exitCode, 0);
+    EXPECT_EQ(pngColourType(exported / "frame_000000_left.png"), 2);
+    EXPECT_EQ(pngColourType(exported / "frame_000001_right.png"), 2);
+
+    const auto pairs = dir / "pairs";
+    std::filesystem::create_directories(pairs);
+    for (const char* n : {"000000", "000001"}) {
+        std::filesystem::copy_file(exported / ("frame_" + std::string(n) + "_left.png"),
+                                   pairs / ("left" + std::string(n) + ".png"));
+        std::filesystem::copy_file(exported / ("frame_" + std::string(n) + "_right.png"),
+                                   pairs / ("right" + std::string(n) + ".png"));
+    }
+    const std::string calib = (exported / "calibration.yaml").string();
+    const std::string colour = (dir / "colour.ugvrec").string();
+    const std::string grey = (dir / "grey.ugvrec").string();
+    ASSERT_EQ(
+        run("recording import --colour --pairs " + pairs.string() + " --calib " + calib + " --out " + colour).exitCode,
+        0);
+    ASSERT_EQ(run("recording import --pairs " + pairs.string() + " --calib " + calib + " --out " + grey).exitCode, 0);
+    EXPECT_TRUE(contains(run("recording info " + colour).output, "colour (BGR) stereo"));
+    EXPECT_TRUE(contains(run("recording info " + grey).output, "640x480 grey stereo"));
+    EXPECT_EQ(std::filesystem::file_size(colour),
+              std::filesystem::file_size(rec)); // the same frames, byte for byte size
+}
+
 TEST(ToolSim, TruncatedRecordingReportsWhatWasRecovered)
 {
     const auto dir = tempDir("truncated-recording");

@@ -43,9 +43,10 @@ protected:
         ASSERT_TRUE(writer.has_value()) << writer.error().message();
         for (int k = 0; k < frames; ++k) {
             fill(k);
-            ASSERT_TRUE(
-                writer->append(static_cast<std::uint64_t>(10 + k), 1000 * k, 1000 * k + 5, left_.view(), right_.view())
-                    .has_value());
+            ASSERT_TRUE(writer
+                            ->append(static_cast<std::uint64_t>(10 + k), 1000 * k, 1000 * k + 5,
+                                     greyViews(left_.view(), right_.view()))
+                            .has_value());
         }
         EXPECT_EQ(writer->framesWritten(), static_cast<std::uint64_t>(frames));
         ASSERT_TRUE(writer->close().has_value());
@@ -124,8 +125,8 @@ TEST_F(RecordingTest, ALeftOnlyFrameIsRecordedAndComesBackWithoutARightImage)
     {
         auto writer = RecordingWriter::create(path_, kWidth, kHeight, kCalibration, {});
         ASSERT_TRUE(writer.has_value()) << writer.error().message();
-        ASSERT_TRUE(writer->append(1, 10, 0, left_.view(), ConstImageViewU8()).has_value());
-        ASSERT_TRUE(writer->append(2, 20, 21, left_.view(), right_.view()).has_value());
+        ASSERT_TRUE(writer->append(1, 10, 0, greyViews(left_.view(), ConstImageViewU8())).has_value());
+        ASSERT_TRUE(writer->append(2, 20, 21, greyViews(left_.view(), right_.view())).has_value());
     }
     auto reader = RecordingReader::open(path_);
     ASSERT_TRUE(reader.has_value()) << reader.error().message();
@@ -134,6 +135,80 @@ TEST_F(RecordingTest, ALeftOnlyFrameIsRecordedAndComesBackWithoutARightImage)
     EXPECT_TRUE(reader->views().right.empty());
     ASSERT_EQ(reader->next(), ReadStatus::Frame); // the pair after it is whole again
     EXPECT_EQ(reader->views().right.at(7, 4), right_.view().at(7, 4));
+}
+
+TEST_F(RecordingTest, AColourRecordingKeepsBgrFramesAndRefusesAGreyOne)
+{
+    Image<BgrPixel> left(kWidth, kHeight);
+    Image<BgrPixel> right(kWidth, kHeight);
+    left.view().at(3, 2) = BgrPixel{1, 2, 3};
+    right.view().at(31, 7) = BgrPixel{200, 100, 50};
+    RecordingWriterOptions options;
+    options.format = PixelFormat::Bgr8;
+    {
+        auto writer = RecordingWriter::create(path_, kWidth, kHeight, kCalibration, options);
+        ASSERT_TRUE(writer.has_value()) << writer.error().message();
+        ASSERT_TRUE(writer->append(1, 10, 11, bgrViews(left.view(), right.view())).has_value());
+        ASSERT_TRUE(writer->append(2, 20, 0, bgrViews(left.view())).has_value()); // left-only
+        fill(0);
+        const auto grey = writer->append(3, 30, 31, greyViews(left_.view(), right_.view()));
+        ASSERT_FALSE(grey.has_value()); // one format per recording
+        EXPECT_EQ(grey.error().code, EINVAL);
+        EXPECT_EQ(writer->framesWritten(), 2U);
+    }
+    EXPECT_EQ(std::filesystem::file_size(path_),
+              kRecordingFileHeaderBytes + kCalibration.size() +
+                  2 * (sizeof(RecordPrefix) + sizeof(FrameHeader) + 6 * kWidth * kHeight));
+    auto reader = RecordingReader::open(path_);
+    ASSERT_TRUE(reader.has_value()) << reader.error().message();
+    EXPECT_EQ(reader->info().format, PixelFormat::Bgr8);
+    ASSERT_EQ(reader->next(), ReadStatus::Frame);
+    const StereoViews pair = reader->views();
+    ASSERT_EQ(pair.format, PixelFormat::Bgr8);
+    EXPECT_EQ(pair.leftBgr.at(3, 2).r, 3);
+    EXPECT_EQ(pair.rightBgr.at(31, 7).b, 200);
+    ASSERT_EQ(reader->next(), ReadStatus::Frame);
+    EXPECT_TRUE(reader->views().leftOnly());
+    EXPECT_EQ(reader->views().leftBgr.at(3, 2).g, 2);
+    EXPECT_EQ(reader->next(), ReadStatus::End);
+}
+
+TEST_F(RecordingTest, AFrameOfAnotherFormatThanTheFilesIsCountedCorrupt)
+{
+    // A grey recording whose second record (CRC and all) holds a colour frame: the reader sizes its buffer by the
+    // file's format, so the record is no frame of this recording; it is skipped and counted, never viewed.
+    writeFrames(1);
+    std::vector<char> greyRecord(kRecordBytes);
+    {
+        std::ifstream in(path_, std::ios::binary);
+        in.seekg(static_cast<std::streamoff>(recordOffset(0)));
+        in.read(greyRecord.data(), static_cast<std::streamsize>(greyRecord.size()));
+    }
+    std::vector<std::byte> record(sizeof(RecordPrefix) + packedFrameBytes(PixelFormat::Bgr8, kWidth, kHeight));
+    Image<BgrPixel> colour(kWidth, kHeight);
+    ASSERT_TRUE(packFrame(record.data() + sizeof(RecordPrefix), kWidth, kHeight, 99, 0, 0,
+                          bgrViews(colour.view(), colour.view())));
+    RecordPrefix prefix;
+    prefix.frameBytes = static_cast<std::uint32_t>(record.size() - sizeof(RecordPrefix));
+    prefix.crc = crc32(0, record.data() + sizeof(RecordPrefix), prefix.frameBytes);
+    std::memcpy(record.data(), &prefix, sizeof(prefix));
+    {
+        std::ofstream out(path_, std::ios::binary | std::ios::app);
+        out.write(reinterpret_cast<const char*>(record.data()), static_cast<std::streamsize>(record.size()));
+        out.write(greyRecord.data(), static_cast<std::streamsize>(greyRecord.size())); // a good frame after it
+    }
+
+    auto reader = RecordingReader::open(path_);
+    ASSERT_TRUE(reader.has_value());
+    int frames = 0;
+    ReadStatus status = ReadStatus::Frame;
+    while ((status = reader->next()) == ReadStatus::Frame) {
+        EXPECT_EQ(reader->views().format, PixelFormat::Grey8);
+        ++frames;
+    }
+    EXPECT_EQ(frames, 2); // the frames before and after it
+    EXPECT_EQ(status, ReadStatus::End);
+    EXPECT_GE(reader->corruptFrames(), 1U);
 }
 
 TEST_F(RecordingTest, CutOffLastFrameIsTruncatedAndEveryEarlierFrameIsRecovered)
@@ -290,7 +365,7 @@ TEST_F(RecordingTest, DiskFullKeepsEveryEarlierFrameAndAppendsGoOnOnceThereIsRoo
     std::uint64_t written = 0;
     Result<void, SysError> appended;
     for (int k = 0; k < 100 && appended; ++k) {
-        appended = writer->append(static_cast<std::uint64_t>(k), k, k, left.view(), right.view());
+        appended = writer->append(static_cast<std::uint64_t>(k), k, k, greyViews(left.view(), right.view()));
         written += appended ? 1U : 0U;
     }
     ASSERT_FALSE(appended) << "the 256 KiB disk never filled up";
@@ -315,7 +390,7 @@ TEST_F(RecordingTest, DiskFullKeepsEveryEarlierFrameAndAppendsGoOnOnceThereIsRoo
 
     // Room again (the other file removed): recording goes on where it stopped.
     std::filesystem::remove(filler);
-    ASSERT_TRUE(writer->append(1000, 0, 0, left.view(), right.view()).has_value());
+    ASSERT_TRUE(writer->append(1000, 0, 0, greyViews(left.view(), right.view())).has_value());
     ASSERT_TRUE(writer->close().has_value());
     readBack(frames);
     EXPECT_EQ(frames, written + 1);
@@ -326,11 +401,11 @@ TEST_F(RecordingTest, WrongSizeFrameAndWriteAfterCloseAreRefused)
     auto writer = RecordingWriter::create(path_, kWidth, kHeight, kCalibration);
     ASSERT_TRUE(writer.has_value());
     Image<std::uint8_t> small(kWidth - 1, kHeight);
-    const auto wrong = writer->append(1, 0, 0, small.view(), right_.view());
+    const auto wrong = writer->append(1, 0, 0, greyViews(small.view(), right_.view()));
     ASSERT_FALSE(wrong.has_value());
     EXPECT_EQ(wrong.error().code, EINVAL);
     ASSERT_TRUE(writer->close().has_value());
-    const auto closed = writer->append(1, 0, 0, left_.view(), right_.view());
+    const auto closed = writer->append(1, 0, 0, greyViews(left_.view(), right_.view()));
     ASSERT_FALSE(closed.has_value());
     EXPECT_EQ(closed.error().code, EBADF);
 }
@@ -347,7 +422,7 @@ TEST_F(RecordingTest, StridedViewsAreWrittenPacked)
     {
         auto writer = RecordingWriter::create(path_, kWidth, kHeight, kCalibration);
         ASSERT_TRUE(writer.has_value());
-        ASSERT_TRUE(writer->append(1, 0, 0, roi, roi).has_value());
+        ASSERT_TRUE(writer->append(1, 0, 0, greyViews(roi, roi)).has_value());
     }
     auto reader = RecordingReader::open(path_);
     ASSERT_TRUE(reader.has_value());

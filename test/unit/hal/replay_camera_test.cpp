@@ -58,7 +58,8 @@ protected:
                 }
             }
             const std::int64_t stamp = stampsMs[k] * 1'000'000;
-            ASSERT_TRUE(writer->append(seqs[k], stamp, stamp + 1'000'000, image.view(), image.view()).has_value());
+            ASSERT_TRUE(
+                writer->append(seqs[k], stamp, stamp + 1'000'000, greyViews(image.view(), image.view())).has_value());
         }
     }
     std::unique_ptr<ReplayCamera> open(const ReplayOptions& options)
@@ -87,13 +88,13 @@ TEST_F(ReplayCameraTest, RecordedPaceKeepsTheRecordedSpacingAndRestampsOnThisClo
     ASSERT_EQ(camera->grab(f, milliseconds(500)), GrabStatus::Frame);
     EXPECT_EQ(f.leftStampNs, start);
     EXPECT_EQ(f.rightStampNs, start + 1'000'000);
-    EXPECT_EQ(f.left.at(0, 0), 0);
+    EXPECT_EQ(f.images.left.at(0, 0), 0);
     ASSERT_EQ(camera->grab(f, milliseconds(500)), GrabStatus::Frame);
     EXPECT_EQ(f.leftStampNs, start + 100'000'000);
     EXPECT_EQ(f.sequence, 1U);
     ASSERT_EQ(camera->grab(f, milliseconds(500)), GrabStatus::Frame);
     EXPECT_EQ(f.leftStampNs, start + 250'000'000);
-    EXPECT_EQ(f.left.at(3, 3), 2);
+    EXPECT_EQ(f.images.left.at(3, 3), 2);
     EXPECT_EQ(clock_.sleeps, (std::vector<std::int64_t>{start + 100'000'000, start + 250'000'000}));
     EXPECT_EQ(camera->grab(f, milliseconds(500)), GrabStatus::End);
     EXPECT_EQ(camera->stats().frames, 3U);

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
 
@@ -30,6 +32,8 @@ struct Pending {
     std::uint32_t sequence = 0;
     std::int64_t stampUs = 0;
     bool monotonic = true; ///< the driver's V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
+    std::uint8_t u = 128;  ///< YUYV chroma of every pixel pair (128, 128: grey)
+    std::uint8_t v = 128;
 };
 
 struct FakeDevice {
@@ -172,7 +176,7 @@ private:
                     const auto v = static_cast<std::uint8_t>(p.value + (static_cast<int>(x) >= d->split ? 100 : 0));
                     pixels[y * d->stride + x * static_cast<std::uint32_t>(bpp)] = v;
                     if (bpp == 2) {
-                        pixels[y * d->stride + x * 2 + 1] = 128; // chroma
+                        pixels[y * d->stride + x * 2 + 1] = x % 2 == 0 ? p.u : p.v; // Y0 U Y1 V
                     }
                 }
             }
@@ -247,9 +251,9 @@ void expectAPairAgain(FakeV4l2& fake, StereoCamera& camera)
     fake.device("/dev/video1").pending = {{6, 9, 300'000}};
     CameraFrame f;
     ASSERT_EQ(camera.grab(f, milliseconds(50)), GrabStatus::Frame);
-    EXPECT_EQ(f.left.at(0, 0), 5);
-    ASSERT_FALSE(f.right.empty());
-    EXPECT_EQ(f.right.at(0, 0), 6);
+    EXPECT_EQ(f.images.left.at(0, 0), 5);
+    ASSERT_FALSE(f.images.right.empty());
+    EXPECT_EQ(f.images.right.at(0, 0), 6);
     EXPECT_EQ(f.sequence, 9U);
 }
 
@@ -267,11 +271,11 @@ TEST(V4l2Camera, TwoDevicesDeliverGreyPairsWithDriverStampsAndSequences)
     EXPECT_EQ(f.sequence, 0U);
     EXPECT_EQ(f.leftStampNs, 1'000'000'000);
     EXPECT_EQ(f.rightStampNs, 1'000'400'000);
-    EXPECT_EQ(f.left.at(5, 3), 10); // the Y bytes of YUYV
-    EXPECT_EQ(f.right.at(31, 7), 20);
+    EXPECT_EQ(f.images.left.at(5, 3), 10); // the Y bytes of YUYV
+    EXPECT_EQ(f.images.right.at(31, 7), 20);
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
     EXPECT_EQ(f.sequence, 1U);
-    EXPECT_EQ(f.left.at(0, 0), 11);
+    EXPECT_EQ(f.images.left.at(0, 0), 11);
     EXPECT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Timeout); // nothing more
     EXPECT_EQ((*camera)->stats().frames, 2U);
 }
@@ -308,8 +312,8 @@ TEST(V4l2Camera, SideBySideDeviceIsSplitIntoLeftAndRight)
 
     CameraFrame f;
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
-    EXPECT_EQ(f.left.at(31, 0), 40);
-    EXPECT_EQ(f.right.at(0, 0), 140);
+    EXPECT_EQ(f.images.left.at(31, 0), 40);
+    EXPECT_EQ(f.images.right.at(0, 0), 140);
     EXPECT_EQ(f.sequence, 7U);
     EXPECT_EQ(f.leftStampNs, f.rightStampNs);
 }
@@ -323,8 +327,8 @@ TEST(V4l2Camera, FramesTooFarApartAreNotPairedAndTheOlderIsDropped)
     ASSERT_TRUE(camera.has_value());
     CameraFrame f;
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
-    EXPECT_EQ(f.left.at(0, 0), 2); // left frame 0 (33 ms before the right one) was dropped
-    EXPECT_EQ(f.right.at(0, 0), 3);
+    EXPECT_EQ(f.images.left.at(0, 0), 2); // left frame 0 (33 ms before the right one) was dropped
+    EXPECT_EQ(f.images.right.at(0, 0), 3);
     EXPECT_EQ((*camera)->unpaired(), 1U);
 }
 
@@ -376,14 +380,14 @@ TEST(V4l2Camera, ARightCameraThatVanishesLeavesLeftOnlyFramesUntilReconnectBring
     fake.device("/dev/video0").pending = {{2, 1, 33'000}, {3, 2, 66'000}};
     fake.device("/dev/video1").unplugged = true;
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
-    EXPECT_EQ(f.left.at(0, 0), 2);
-    EXPECT_TRUE(f.right.empty());
+    EXPECT_EQ(f.images.left.at(0, 0), 2);
+    EXPECT_TRUE(f.images.right.empty());
     EXPECT_EQ(f.sequence, 1U);
     EXPECT_TRUE((*camera)->rightLost());
     EXPECT_FALSE((*camera)->reconnect());                               // still gone
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame); // the left camera streams on
-    EXPECT_EQ(f.left.at(0, 0), 3);
-    EXPECT_TRUE(f.right.empty());
+    EXPECT_EQ(f.images.left.at(0, 0), 3);
+    EXPECT_TRUE(f.images.right.empty());
     EXPECT_EQ((*camera)->stats().leftOnlyFrames, 2U);
     EXPECT_EQ((*camera)->stats().disconnects, 0U); // the camera as a whole never went away
 
@@ -407,8 +411,8 @@ TEST(V4l2Camera, ARightCameraThatStallsIsLostAfterThreeMissedFramesAndEveryLeftF
     const ugv::test::ThreadAllocationScope scope;
     for (int k = 0; k < 5; ++k) {
         ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame) << k;
-        EXPECT_EQ(f.left.at(0, 0), k);
-        EXPECT_TRUE(f.right.empty());
+        EXPECT_EQ(f.images.left.at(0, 0), k);
+        EXPECT_TRUE(f.images.right.empty());
         EXPECT_EQ((*camera)->rightLost(), k >= V4l2StereoCamera::kRightMissesToLose - 1) << k;
     }
     EXPECT_EQ(scope.count(), 0U);        // the fallback allocates nothing either
@@ -427,8 +431,8 @@ TEST(V4l2Camera, OneCameraDeliversLeftOnlyFramesAndNeverOpensASecondDevice)
     EXPECT_STREQ((*camera)->description(), "v4l2 /dev/video0 (one camera)");
     CameraFrame f;
     ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
-    EXPECT_EQ(f.left.at(3, 3), 9);
-    EXPECT_TRUE(f.right.empty());
+    EXPECT_EQ(f.images.left.at(3, 3), 9);
+    EXPECT_TRUE(f.images.right.empty());
     EXPECT_FALSE((*camera)->rightLost()); // one camera is what the rig is, not a loss
     EXPECT_EQ(fake.device("/dev/video0").width, 32U);
 }
@@ -458,6 +462,92 @@ TEST(V4l2Camera, OpenErrorsNameTheDeviceWhatAndTheFix)
     V4l2Options bad = stereo();
     bad.buffers = 1;
     EXPECT_FALSE(V4l2StereoCamera::open(bad, fake.ops()).has_value());
+}
+
+/// The BGR pixel OpenCV makes of a YUYV pair with luma y (both pixels) and chroma u, v.
+cv::Vec3b bgrOf(std::uint8_t y, std::uint8_t u, std::uint8_t v)
+{
+    cv::Mat yuyv(1, 2, CV_8UC2, cv::Scalar(0));
+    yuyv.at<cv::Vec2b>(0, 0) = cv::Vec2b(y, u);
+    yuyv.at<cv::Vec2b>(0, 1) = cv::Vec2b(y, v);
+    cv::Mat bgr;
+    cv::cvtColor(yuyv, bgr, cv::COLOR_YUV2BGR_YUYV);
+    return bgr.at<cv::Vec3b>(0, 0);
+}
+
+TEST(V4l2Camera, AColourCameraDeliversBgrPairsConvertedFromYuyvWithoutAllocating)
+{
+    FakeV4l2 fake;
+    FakeDevice& l = fake.add("/dev/video0");
+    FakeDevice& r = fake.add("/dev/video1");
+    for (std::uint32_t k = 0; k < 110; ++k) {
+        // Left reddish (V high, U low), right bluish: the channels must not come out swapped.
+        l.pending.push_back({100, k, 33'333 * static_cast<std::int64_t>(k), true, 100, 200});
+        r.pending.push_back({120, k, 33'333 * static_cast<std::int64_t>(k) + 100, true, 200, 100});
+    }
+    V4l2Options o = stereo();
+    o.colour = true;
+    auto camera = V4l2StereoCamera::open(o, fake.ops());
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
+    EXPECT_EQ((*camera)->format(), PixelFormat::Bgr8);
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+
+    ASSERT_EQ(f.images.format, PixelFormat::Bgr8);
+    EXPECT_TRUE(f.images.left.empty());
+    ASSERT_EQ(f.images.width(), 32);
+    const cv::Vec3b red = bgrOf(100, 100, 200);
+    const cv::Vec3b blue = bgrOf(120, 200, 100);
+    EXPECT_GT(red[2], red[1]);
+    EXPECT_GT(red[1], red[0]);
+    EXPECT_GT(blue[0], blue[2]);
+    for (const auto& [x, y] : {std::pair{0, 0}, std::pair{31, 7}, std::pair{5, 3}}) {
+        const BgrPixel left = f.images.leftBgr.at(x, y);
+        const BgrPixel right = f.images.rightBgr.at(x, y);
+        EXPECT_EQ(cv::Vec3b(left.b, left.g, left.r), red) << x << "," << y;
+        EXPECT_EQ(cv::Vec3b(right.b, right.g, right.r), blue) << x << "," << y;
+    }
+
+    const ugv::test::ThreadAllocationScope scope;
+    for (int k = 0; k < 100; ++k) {
+        ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+    }
+    EXPECT_EQ(scope.count(), 0U);
+}
+
+TEST(V4l2Camera, ASideBySideColourCameraIsSplitOnAWholePixelPair)
+{
+    FakeV4l2 fake;
+    FakeDevice& d = fake.add("/dev/video0");
+    d.split = 32; // the right half is 100 grey levels brighter
+    d.pending = {{40, 7, 5'000'000, true, 90, 170}};
+    V4l2Options o = stereo();
+    o.rightDevice.clear();
+    o.colour = true;
+    auto camera = V4l2StereoCamera::open(o, fake.ops());
+    ASSERT_TRUE(camera.has_value()) << camera.error().message();
+    CameraFrame f;
+    ASSERT_EQ((*camera)->grab(f, milliseconds(50)), GrabStatus::Frame);
+
+    const BgrPixel left = f.images.leftBgr.at(31, 0);
+    const BgrPixel right = f.images.rightBgr.at(0, 0);
+    EXPECT_EQ(cv::Vec3b(left.b, left.g, left.r), bgrOf(40, 90, 170));
+    EXPECT_EQ(cv::Vec3b(right.b, right.g, right.r), bgrOf(140, 90, 170));
+}
+
+TEST(V4l2Camera, ColourNeedsTheYuyvFormat)
+{
+    FakeV4l2 fake;
+    fake.add("/dev/video0");
+    fake.add("/dev/video1");
+    V4l2Options o = stereo(V4l2Format::Grey);
+    o.colour = true;
+
+    const auto sut = V4l2StereoCamera::open(o, fake.ops());
+
+    ASSERT_FALSE(sut.has_value());
+    EXPECT_NE(sut.error().message().find("colour frames need the YUYV format"), std::string::npos);
+    EXPECT_NE(sut.error().message().find("set camera.format: yuyv"), std::string::npos);
 }
 
 TEST(V4l2Camera, GrabAllocatesNothingOverHundredsOfFrames)

@@ -24,7 +24,7 @@ class IceoryxRings : public ::testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        auto started = EmbeddedRouDi::start("ugv-ipc-test", frameBytes(kWidth, kHeight));
+        auto started = EmbeddedRouDi::start("ugv-ipc-test", frameBytes(PixelFormat::Bgr8, kWidth, kHeight));
         ASSERT_TRUE(started.has_value()) << started.error().message();
         roudi_ = std::move(*started).release();
     }
@@ -71,7 +71,7 @@ TEST_F(IceoryxRings, RouDiIsReachableAndASecondOneIsRefused)
 // queued is still taken.
 TEST_F(IceoryxRings, WakeEndsAWaitOfAnHourAtOnce)
 {
-    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto publisher = FramePublisher::create(PixelFormat::Grey8, kWidth, kHeight).value();
     auto vision = FrameSubscriber::create(1).value();
     auto waiting = std::async(std::launch::async, [&] {
         TakenFrame frame;
@@ -86,7 +86,7 @@ TEST_F(IceoryxRings, WakeEndsAWaitOfAnHourAtOnce)
     TakenFrame frame;
     EXPECT_EQ(vision->takeOldest(frame, std::chrono::hours(1)), TakeStatus::Timeout);
     fill(1);
-    ASSERT_TRUE(publisher->publish(7, 10, 17, left_.view(), right_.view()));
+    ASSERT_TRUE(publisher->publish(7, 10, 17, greyViews(left_.view(), right_.view())));
     vision->wake();
     ASSERT_EQ(vision->take(frame, std::chrono::hours(1)), TakeStatus::Frame);
     EXPECT_EQ(frame.header.sequence, 7U);
@@ -95,14 +95,14 @@ TEST_F(IceoryxRings, WakeEndsAWaitOfAnHourAtOnce)
 
 TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)
 {
-    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto publisher = FramePublisher::create(PixelFormat::Grey8, kWidth, kHeight).value();
     auto vision = FrameSubscriber::create(1).value();
     auto recorder = FrameSubscriber::create(4).value();
     auto deep = FrameSubscriber::create(4).value(); // a deep queue read with take(): the newest, the rest dropped
     for (int k = 0; k < 3; ++k) {
         fill(k);
-        ASSERT_TRUE(publisher->publish(static_cast<std::uint64_t>(100 + k), 1000 * k, 1000 * k + 7, left_.view(),
-                                       right_.view()));
+        ASSERT_TRUE(publisher->publish(static_cast<std::uint64_t>(100 + k), 1000 * k, 1000 * k + 7,
+                                       greyViews(left_.view(), right_.view())));
     }
     EXPECT_TRUE(publisher->hasSubscribers());
 
@@ -133,10 +133,10 @@ TEST_F(IceoryxRings, LatestFrameWinsForTheVisionQueueAndARecorderSeesEveryFrame)
 
 TEST_F(IceoryxRings, ALeftOnlyFrameReachesTheSubscriberFlaggedAndWithoutARightView)
 {
-    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto publisher = FramePublisher::create(PixelFormat::Grey8, kWidth, kHeight).value();
     auto vision = FrameSubscriber::create(1).value();
     fill(4);
-    ASSERT_TRUE(publisher->publish(7, 1000, 0, left_.view(), ConstImageViewU8()));
+    ASSERT_TRUE(publisher->publish(7, 1000, 0, greyViews(left_.view(), ConstImageViewU8())));
     TakenFrame frame;
     ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
     EXPECT_EQ(frame.header.flags, kFrameLeftOnly);
@@ -145,13 +145,36 @@ TEST_F(IceoryxRings, ALeftOnlyFrameReachesTheSubscriberFlaggedAndWithoutARightVi
     vision->release(frame);
 }
 
+TEST_F(IceoryxRings, AColourPairReachesTheSubscriberInColourAndAGreyPairIsRefused)
+{
+    auto publisher = FramePublisher::create(PixelFormat::Bgr8, kWidth, kHeight).value();
+    auto vision = FrameSubscriber::create(1).value();
+    Image<BgrPixel> left(kWidth, kHeight);
+    Image<BgrPixel> right(kWidth, kHeight);
+    left.view().at(5, 1) = BgrPixel{9, 8, 7};
+    right.view().at(kWidth - 1, kHeight - 1) = BgrPixel{250, 1, 2};
+
+    ASSERT_TRUE(publisher->publish(3, 100, 101, bgrViews(left.view(), right.view())));
+    fill(1);
+    EXPECT_FALSE(publisher->publish(4, 200, 201, greyViews(left_.view(), right_.view()))); // not this ring's format
+    EXPECT_EQ(publisher->loanFailures(), 1U);
+    TakenFrame frame;
+    ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
+    EXPECT_EQ(frame.header.sequence, 3U);
+    EXPECT_GE(frame.bytes, packedFrameBytes(PixelFormat::Bgr8, kWidth, kHeight));
+    ASSERT_EQ(frame.views.format, PixelFormat::Bgr8);
+    EXPECT_EQ(frame.views.leftBgr.at(5, 1).r, 7);
+    EXPECT_EQ(frame.views.rightBgr.at(kWidth - 1, kHeight - 1).b, 250);
+    vision->release(frame);
+}
+
 TEST_F(IceoryxRings, WrongSizeImagesAreRefusedAndCounted)
 {
-    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto publisher = FramePublisher::create(PixelFormat::Grey8, kWidth, kHeight).value();
     Image<std::uint8_t> small(kWidth - 1, kHeight);
-    EXPECT_FALSE(publisher->publish(1, 0, 0, small.view(), right_.view()));
+    EXPECT_FALSE(publisher->publish(1, 0, 0, greyViews(small.view(), right_.view())));
     EXPECT_EQ(publisher->loanFailures(), 1U);
-    EXPECT_FALSE(FramePublisher::create(0, kHeight).has_value());
+    EXPECT_FALSE(FramePublisher::create(PixelFormat::Grey8, 0, kHeight).has_value());
     EXPECT_FALSE(FrameSubscriber::create(0).has_value());
 }
 
@@ -175,21 +198,21 @@ TEST_F(IceoryxRings, SectorsArriveValidatedAndMalformedOnesAreCounted)
 
 TEST_F(IceoryxRings, SteadyStateHandOverAllocatesNothing)
 {
-    auto publisher = FramePublisher::create(kWidth, kHeight).value();
+    auto publisher = FramePublisher::create(PixelFormat::Grey8, kWidth, kHeight).value();
     auto vision = FrameSubscriber::create(1).value();
     auto sectorsOut = SectorsPublisher::create().value();
     auto sectorsIn = SectorsSubscriber::create(4).value();
     fill(1);
     TakenFrame frame;
     SectorsMessage message = validMessage(0);
-    ASSERT_TRUE(publisher->publish(0, 0, 0, left_.view(), right_.view()));
+    ASSERT_TRUE(publisher->publish(0, 0, 0, greyViews(left_.view(), right_.view())));
     ASSERT_EQ(vision->take(frame, milliseconds(500)), TakeStatus::Frame);
     vision->release(frame);
 
     const ugv::test::ThreadAllocationScope scope; // this thread: RouDi's own threads are not the frame path
     int frames = 0;
     for (int k = 1; k <= 300; ++k) {
-        publisher->publish(static_cast<std::uint64_t>(k), k, k, left_.view(), right_.view());
+        publisher->publish(static_cast<std::uint64_t>(k), k, k, greyViews(left_.view(), right_.view()));
         if (vision->take(frame, milliseconds(500)) == TakeStatus::Frame) {
             ++frames;
             message.sectors.sequence = frame.header.sequence;

@@ -52,12 +52,19 @@ ConstImageViewU8 viewOf(const cv::Mat& m)
     return ConstImageViewU8(m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step));
 }
 
+ConstBgrView bgrViewOf(const cv::Mat& m)
+{
+    return ConstBgrView(m.ptr<BgrPixel>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step));
+}
+
 /// The first `frames` frames of the default course at 10 fps, as a recording in `dir`.
 /// A recording of `frames` pairs of the default course from `firstFrame`. With `distinct` > 0 only that many are
 /// rendered and repeated (for tests about the service's tasks, not the images: rendering is most of their time).
-/// Frames in [leftOnlyFrom, leftOnlyTo) are recorded left-only (the right camera lost).
+/// Frames in [leftOnlyFrom, leftOnlyTo) are recorded left-only (the right camera lost). `colour`: both cameras in
+/// BGR, as a colour camera delivers them (the simulator's colour images, whose luma is the grey images').
 Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::size_t firstFrame = 0,
-                   std::size_t distinct = 0, std::size_t leftOnlyFrom = 0, std::size_t leftOnlyTo = 0)
+                   std::size_t distinct = 0, std::size_t leftOnlyFrom = 0, std::size_t leftOnlyTo = 0,
+                   bool colour = false)
 {
     Course out;
     auto course = sim::makeCourse("default", 1.5, 10.0);
@@ -66,6 +73,7 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
     out.path = (dir / "course.ugvrec").string();
     hal::RecordingWriterOptions options;
     options.syncEveryFrame = false;
+    options.format = colour ? PixelFormat::Bgr8 : PixelFormat::Grey8;
     auto writer =
         hal::RecordingWriter::create(out.path, static_cast<std::uint32_t>(course->scene.rig.width),
                                      static_cast<std::uint32_t>(course->scene.rig.height), out.calibration, options);
@@ -73,7 +81,9 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
     const std::size_t rendered = distinct > 0 ? std::min(distinct, frames) : frames;
     std::vector<sim::RenderResult> pairs;
     for (std::size_t k = 0; k < rendered; ++k) {
-        auto frame = sim::renderCourseFrame(*course, firstFrame + k);
+        sim::RenderOptions render;
+        render.rightColour = colour;
+        auto frame = sim::renderCourseFrame(*course, firstFrame + k, render);
         EXPECT_TRUE(frame.has_value());
         pairs.push_back(frame ? std::move(*frame) : sim::RenderResult{});
     }
@@ -81,10 +91,10 @@ Course writeCourse(const std::filesystem::path& dir, std::size_t frames, std::si
         const sim::RenderResult& frame = pairs[k % rendered];
         const auto stamp = static_cast<std::int64_t>(k) * 100'000'000;
         const bool leftOnly = k >= leftOnlyFrom && k < leftOnlyTo;
-        EXPECT_TRUE(writer
-                        ->append(k, stamp, leftOnly ? 0 : stamp, viewOf(frame.left),
-                                 leftOnly ? ConstImageViewU8() : viewOf(frame.right))
-                        .has_value());
+        const StereoViews images =
+            colour ? bgrViews(bgrViewOf(frame.leftColour), leftOnly ? ConstBgrView() : bgrViewOf(frame.rightColour))
+                   : greyViews(viewOf(frame.left), leftOnly ? ConstImageViewU8() : viewOf(frame.right));
+        EXPECT_TRUE(writer->append(k, stamp, leftOnly ? 0 : stamp, images).has_value());
         out.truth.push_back(frame.sectors);
     }
     return out;
@@ -94,7 +104,7 @@ class ServiceTest : public ::testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        auto started = ipc::EmbeddedRouDi::start("ugv-service-test", ipc::frameBytes(640, 480));
+        auto started = ipc::EmbeddedRouDi::start("ugv-service-test", ipc::frameBytes(PixelFormat::Bgr8, 640, 480));
         ASSERT_TRUE(started.has_value()) << started.error().message();
         roudi_ = std::move(*started).release();
     }
@@ -239,29 +249,62 @@ TEST_F(ServiceTest, HardwareInTheLoopCourseSectorsMatchTheGroundTruth)
     EXPECT_EQ(run.falseRed, 0);
 }
 
-TEST_F(ServiceTest, TheOneCameraModeRunsInTheServiceOnTheLeftCamerasGreyLevels)
+/// obstacles.detector: colour on the first 40 frames of the default course from a grey or a colour camera: every
+/// frame is published by the one-camera detector, degraded, with no bad frame and no false red.
+HilRun runOneCameraMode(const std::filesystem::path& dir, bool colour)
 {
-    // obstacles.detector: colour. Every frame is published by the one-camera detector (its band ground-like: sectors
-    // Clear or Obstacle, not all Unknown), degraded, with no bad frame and no false red. The course's cameras are
-    // grey and its obstacles share the asphalt's grey levels, so it finds almost none of them (measured: 1 of 484
-    // obstacle sectors; course frame 20 in colour gives `detect --mono` 19): the figure is printed, not asserted.
     constexpr std::size_t kFrames = 40;
-    const Course course = writeCourse(dir_, kFrames);
+    const Course course = writeCourse(dir, kFrames, 0, 0, 0, 0, colour);
     bringup::ServiceConfig config;
     config.obstacles.detector = bringup::DetectorMode::Colour;
-
-    const HilRun run = runHil(course, config);
-
+    HilRun run = runHil(course, config);
     EXPECT_EQ(run.report.framesPublished, kFrames);
     EXPECT_EQ(run.report.badFrames, 0U);
-    ASSERT_EQ(run.received.size(), kFrames);
+    EXPECT_EQ(run.received.size(), kFrames);
     EXPECT_EQ(run.degradedFrames, static_cast<int>(kFrames));
     EXPECT_EQ(run.falseRed, 0);
+    return run;
+}
+
+TEST_F(ServiceTest, TheOneCameraModeRunsInTheServiceOnTheLeftCamerasGreyLevels)
+{
+    // The band is ground-like (sectors Clear or Obstacle, not all Unknown). A grey camera: the course's obstacles
+    // share the asphalt's grey levels, so it finds almost none of them (measured: 1 of 484 obstacle sectors; the
+    // colour camera's test below): the figure is printed, not asserted.
+    const HilRun run = runOneCameraMode(dir_, false);
+
     for (const auto& [k, got] : run.received) {
         const bool anyKnown = std::any_of(got.sectors.begin(), got.sectors.begin() + got.count,
                                           [](const Sector& s) { return s.state != SectorState::Unknown; });
         EXPECT_TRUE(anyKnown) << "frame " << k << ": every sector Unknown";
     }
+}
+
+TEST_F(ServiceTest, TheOneCameraModeTellsTheGroundByColourOnAColourCamerasFrames)
+{
+    // The same course from a colour camera (BGR frames end to end: recording, ring, rectification): the one-camera
+    // detector tells the obstacles from the asphalt by colour, where grey levels alone found 1 of 484.
+    const HilRun run = runOneCameraMode(dir_, true);
+
+    ASSERT_GT(run.truthObstacles, 50);
+    EXPECT_GE(run.detected, run.truthObstacles * 3 / 4); // measured 404 of 484
+}
+
+TEST_F(ServiceTest, StereoOnAColourCamerasFramesMatchesTheGroundTruthAsOnGreyOnes)
+{
+    // A colour camera with the stereo detector: the pair is made grey (BT.601 luma) before rectification, so stereo
+    // sees what it sees from a grey camera.
+    constexpr std::size_t kFrames = 40;
+    const Course course = writeCourse(dir_, kFrames, 0, 0, 0, 0, true);
+
+    const HilRun run = runHil(course);
+
+    EXPECT_EQ(run.report.framesPublished, kFrames);
+    EXPECT_EQ(run.report.badFrames, 0U);
+    ASSERT_EQ(run.received.size(), kFrames);
+    ASSERT_GT(run.truthObstacles, 50);
+    EXPECT_GE(run.detected, run.truthObstacles * 9 / 10);
+    EXPECT_EQ(run.falseRed, 0);
 }
 
 /// Frames k with `lost(k)` true carried no right image: each must be degraded with a sector that is not Unknown (all
@@ -332,11 +375,12 @@ TEST(FramePipeline, ALeftOnlyFrameTakesTheOneCameraPathInStereoModeAndTheNextPai
     FramePipeline& sut = **pipeline;
     std::int64_t rectifiedNs = 0;
 
-    ASSERT_EQ(sut.process(viewOf(frame->left), viewOf(frame->right), 1, 100, rectifiedNs), PipelineStatus::Ok);
+    ASSERT_EQ(sut.process(greyViews(viewOf(frame->left), viewOf(frame->right)), 1, 100, rectifiedNs),
+              PipelineStatus::Ok);
     EXPECT_FALSE(sut.sectors().degraded);
     EXPECT_FALSE(sut.lastFrameLeftOnly());
 
-    ASSERT_EQ(sut.process(viewOf(frame->left), ConstImageViewU8(), 2, 200, rectifiedNs), PipelineStatus::Ok);
+    ASSERT_EQ(sut.process(greyViews(viewOf(frame->left), ConstImageViewU8()), 2, 200, rectifiedNs), PipelineStatus::Ok);
     EXPECT_TRUE(sut.lastFrameLeftOnly());
     EXPECT_TRUE(sut.sectors().degraded); // the one-camera detector's
     EXPECT_EQ(sut.sectors().sequence, 2U);
@@ -347,12 +391,13 @@ TEST(FramePipeline, ALeftOnlyFrameTakesTheOneCameraPathInStereoModeAndTheNextPai
     EXPECT_FLOAT_EQ(mount.cameraHeightM, static_cast<float>(calibration->mount->heightM));
     EXPECT_FLOAT_EQ(mount.pitchDeg, static_cast<float>(calibration->mount->pitchDeg));
 
-    ASSERT_EQ(sut.process(viewOf(frame->left), viewOf(frame->right), 3, 300, rectifiedNs), PipelineStatus::Ok);
+    ASSERT_EQ(sut.process(greyViews(viewOf(frame->left), viewOf(frame->right)), 3, 300, rectifiedNs),
+              PipelineStatus::Ok);
     EXPECT_FALSE(sut.lastFrameLeftOnly());
     EXPECT_FALSE(sut.sectors().degraded);
     EXPECT_EQ(sut.sectors().sequence, 3U);
     const cv::Mat small(8, 8, CV_8UC1, cv::Scalar(0));
-    EXPECT_EQ(sut.process(viewOf(small), ConstImageViewU8(), 4, 400, rectifiedNs), PipelineStatus::WrongInputSize);
+    EXPECT_EQ(sut.process(greyViews(viewOf(small)), 4, 400, rectifiedNs), PipelineStatus::WrongInputSize);
 }
 
 /// What a RightCameraDropout did, kept by the test (the service owns and destroys the camera).
@@ -376,7 +421,7 @@ public:
             lost_ = true;
         }
         if (s == hal::GrabStatus::Frame && lost_) {
-            out.right = ConstImageViewU8();
+            out.images.right = ConstImageViewU8();
             out.rightStampNs = 0;
             log_.lostSequences.push_back(out.sequence);
         }
@@ -392,6 +437,7 @@ public:
         return true;
     }
     [[nodiscard]] bool rightLost() const noexcept override { return lost_; }
+    [[nodiscard]] PixelFormat format() const noexcept override { return inner_->format(); }
     [[nodiscard]] int width() const noexcept override { return inner_->width(); }
     [[nodiscard]] int height() const noexcept override { return inner_->height(); }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return inner_->period(); }
@@ -636,11 +682,11 @@ TEST_F(ServiceTest, ABusTaskThatThrowsIsLoggedAndDisabledWhileEveryFrameIsStillP
 /// With `leftOnlyEvery` the first three of the six looped frames are left-only: the frame path switches between
 /// stereo and the one-camera fallback every three frames.
 void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, const bringup::ServiceConfig& config,
-                                             bool halfLeftOnly = false)
+                                             bool halfLeftOnly = false, bool colour = false)
 {
     // Under a sanitizer only operator new/delete are counted (the sanitizer owns malloc); the test still runs.
     constexpr std::size_t kDistinct = 6;
-    const Course course = writeCourse(dir, kDistinct, 20, 0, 0, halfLeftOnly ? 3 : 0);
+    const Course course = writeCourse(dir, kDistinct, 20, 0, 0, halfLeftOnly ? 3 : 0, colour);
     hal::ReplayOptions replay;
     replay.loop = true;
     replay.pace = hal::ReplayPace::Forced;
@@ -696,6 +742,15 @@ TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingWithBothDetectors)
     bringup::ServiceConfig config;
     config.obstacles.detector = bringup::DetectorMode::Both;
     expectThreeHundredFramesAllocateNothing(dir_, config);
+}
+
+TEST_F(ServiceTest, ThreeHundredColourFramesAllocateNothingWithBothDetectorsAndLeftOnlyFrames)
+{
+    // A colour camera: BGR frames through the ring, made grey for stereo (cvtColor) and rectified in colour for the
+    // one-camera detector (remap), every third frame left-only (the colour path alone).
+    bringup::ServiceConfig config;
+    config.obstacles.detector = bringup::DetectorMode::Both;
+    expectThreeHundredFramesAllocateNothing(dir_, config, true, true);
 }
 
 TEST_F(ServiceTest, OverloadPublishesDegradedGroundOnlySectorsInsteadOfMissingEveryDeadline)
@@ -765,8 +820,8 @@ public:
         }
         ++frames_;
         if (frames_ == 10 || frames_ == 11) {
-            out.left = out.left.sub(Rect{0, 0, 320, 240});
-            out.right = out.right.sub(Rect{0, 0, 320, 240});
+            out.images.left = out.images.left.sub(Rect{0, 0, 320, 240});
+            out.images.right = out.images.right.sub(Rect{0, 0, 320, 240});
         }
         if (frames_ == 20) {
             gone_ = true;
@@ -783,6 +838,7 @@ public:
         gone_ = false;
         return true;
     }
+    [[nodiscard]] PixelFormat format() const noexcept override { return inner_->format(); }
     [[nodiscard]] int width() const noexcept override { return inner_->width(); }
     [[nodiscard]] int height() const noexcept override { return inner_->height(); }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return inner_->period(); }
@@ -834,10 +890,12 @@ TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
     EXPECT_GT(lastSequence, 20U);
     // Each event is in the log once, with what and where (the capture task's RT channel, drained at low priority).
     const std::string text = log.text();
-    EXPECT_NE(text.find(": the frame ring refused the pair (320x240: wrong size, or no free chunk); 1 refused so far"),
-              std::string::npos)
+    EXPECT_NE(
+        text.find(
+            ": the frame ring refused the pair (320x240: wrong size or format, or no free chunk); 1 refused so far"),
+        std::string::npos)
         << text;
-    EXPECT_NE(text.find("refused the pair (320x240: wrong size, or no free chunk); 2 refused so far"),
+    EXPECT_NE(text.find("refused the pair (320x240: wrong size or format, or no free chunk); 2 refused so far"),
               std::string::npos);
     EXPECT_NE(text.find("[hal] error: camera: disconnected after frame"), std::string::npos) << text;
     EXPECT_NE(text.find("[hal] info: camera: reconnected after 3 attempt(s)"), std::string::npos) << text;
@@ -853,11 +911,12 @@ public:
     {
         const hal::GrabStatus s = inner_->grab(out, timeout);
         if (s == hal::GrabStatus::Frame && ++seen_ == frames_) {
-            out.left = out.left.sub(Rect{0, 0, 100, 100});
+            out.images.left = out.images.left.sub(Rect{0, 0, 100, 100});
         }
         return s;
     }
     bool reconnect() noexcept override { return inner_->reconnect(); }
+    [[nodiscard]] PixelFormat format() const noexcept override { return inner_->format(); }
     [[nodiscard]] int width() const noexcept override { return inner_->width(); }
     [[nodiscard]] int height() const noexcept override { return inner_->height(); }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return inner_->period(); }

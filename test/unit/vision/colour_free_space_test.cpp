@@ -77,9 +77,9 @@ ugv::sim::Scene catalogue(const char* name, double rangeM, double bearingDeg)
     return std::move(scene).value();
 }
 
-ugv::vision::ConstBgrView bgrView(const cv::Mat& m)
+ugv::ConstBgrView bgrView(const cv::Mat& m)
 {
-    return {reinterpret_cast<const ugv::vision::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
+    return {reinterpret_cast<const ugv::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
             static_cast<std::ptrdiff_t>(m.step)};
 }
 

@@ -30,6 +30,7 @@ namespace ugv::bringup {
 enum class CameraBackend { V4l2, Libcamera, Replay };
 enum class ReplayPace { Recorded, Fixed, Fastest };
 enum class PixelFormatChoice { Yuyv, Grey };
+enum class ColourChoice { Auto, On, Off };
 enum class OverloadChoice { Degrade, Drop };
 enum class DetectorMode { Stereo, Colour, Both };
 using MatcherMode = vision::MatcherMode; ///< names and parsing in ugv/vision/matcher_mode.hpp
@@ -46,7 +47,8 @@ struct CameraConfig {
     int height = 480;           ///< [px]
     double fps = 30.0;          ///< [Hz] frame rate; the frame deadline is 1/fps
     double maxPairSkewMs = 5.0; ///< [ms] left/right timestamps further apart are not paired
-    PixelFormatChoice format = PixelFormatChoice::Yuyv; ///< V4L2 pixel format (the Y plane is used)
+    PixelFormatChoice format = PixelFormatChoice::Yuyv; ///< V4L2 pixel format
+    ColourChoice colour = ColourChoice::Auto;           ///< BGR frames (V4L2 yuyv): see captureInColour()
     std::string replayPath;                             ///< recording for the replay backend
     ReplayPace replayPace = ReplayPace::Recorded;
     double replayFps = 30.0; ///< [Hz] rate when replayPace is Fixed
@@ -158,6 +160,12 @@ Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, con
 
 /// The effective config as YAML, every key with its description and range as a comment.
 std::string formatConfig(const ServiceConfig& config);
+
+/// True when the camera is asked for BGR frames: camera.colour true, or auto with a V4L2 camera in yuyv (it has the
+/// colour anyway). The one-camera detector needs them, and so does the stereo detector's fallback to the left camera
+/// when the right one stops; the stereo detector itself uses their luma. A colour pair costs a conversion and three
+/// times the frame ring's bytes (false saves them).
+bool captureInColour(const ServiceConfig& config);
 
 /// The bus's security settings of `config` (its identity is vehicle_id; include ugv/ipc/dds_bus.hpp to call it).
 ipc::dds::SecurityConfig securityOf(const ServiceConfig& config);

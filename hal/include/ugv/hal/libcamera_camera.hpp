@@ -49,6 +49,7 @@ public:
 
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;
+    [[nodiscard]] PixelFormat format() const noexcept override { return PixelFormat::Grey8; }
     [[nodiscard]] int width() const noexcept override { return options_.width; }
     [[nodiscard]] int height() const noexcept override { return options_.height; }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }

@@ -14,6 +14,9 @@
 ///     record = RecordPrefix (16 bytes: magic "UGVr", frame bytes, CRC-32 of the frame bytes, reserved)
 ///              frame  = FrameHeader (56 bytes, platform/frame_header.hpp) + left rows + right rows (packed)
 ///
+/// Every frame of a recording has the file header's pixel format: Grey8, or Bgr8 from a colour camera (three times
+/// the bytes; what the one-camera detector needs to tell the ground by colour).
+///
 /// A writer appends whole records (one write per frame; with `syncEveryFrame` an fdatasync after each), so a
 /// crash or power cut loses at most the frame being written. The reader returns every complete record whose CRC
 /// matches; a record cut off at the end of the file is reported as `Truncated` (the recovered frame count is the
@@ -70,6 +73,7 @@ static_assert(sizeof(RecordPrefix) == 16, "wire format: size must not change");
 std::uint32_t crc32(std::uint32_t crc, const void* bytes, std::size_t size) noexcept;
 
 struct RecordingWriterOptions {
+    PixelFormat format = PixelFormat::Grey8; ///< of every frame (appending another format is EINVAL)
     bool syncEveryFrame = true; ///< fdatasync after each frame: a power cut loses at most the frame being written
     bool overwrite = false;     ///< replace an existing file (otherwise creating over one is an error)
 };
@@ -87,14 +91,15 @@ public:
     RecordingWriter& operator=(const RecordingWriter&) = delete;
     ~RecordingWriter();
 
-    /// Appends one frame (the images must be width x height; the header's geometry is rewritten to the packed
-    /// layout). An empty `right` is recorded as a left-only frame (kFrameLeftOnly; the reader gives it back so). No
-    /// allocation: the record is assembled in a buffer sized at create().
+    /// Appends one frame (the images must be width x height in the recording's format, else EINVAL; the header's
+    /// geometry is rewritten to the packed layout). An empty right image is recorded as a left-only frame
+    /// (kFrameLeftOnly; the reader gives it back so). No allocation: the record is assembled in a buffer sized at
+    /// create().
     /// @return nothing, or the errno of the failed write (ENOSPC: the disk is full). The file keeps every earlier
     /// frame and ends after the last one: a record that was written in part is cut off again, so appends may go on
     /// once there is room (a reader never sees a torn record from a full disk).
     Result<void, SysError> append(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs,
-                                  ConstImageViewU8 left, ConstImageViewU8 right) noexcept;
+                                  const StereoViews& images) noexcept;
     /// Flushes and closes; further appends fail with EBADF. Also done by the destructor.
     Result<void, SysError> close() noexcept;
 
@@ -102,10 +107,11 @@ public:
     [[nodiscard]] const std::string& path() const noexcept { return path_; }
 
 private:
-    RecordingWriter(int fd, std::string path, std::uint32_t width, std::uint32_t height, bool sync);
+    RecordingWriter(int fd, std::string path, PixelFormat format, std::uint32_t width, std::uint32_t height, bool sync);
 
     int fd_ = -1;
     std::string path_;
+    PixelFormat format_ = PixelFormat::Grey8;
     std::uint32_t width_ = 0;
     std::uint32_t height_ = 0;
     bool sync_ = true;
@@ -122,6 +128,7 @@ enum class ReadStatus : std::uint8_t {
 };
 
 struct RecordingInfo {
+    PixelFormat format = PixelFormat::Grey8;
     std::uint32_t width = 0;
     std::uint32_t height = 0;
     std::int64_t createdRealtimeNs = 0;

@@ -60,6 +60,7 @@ public:
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     /// A recording does not go away: rewinds to the start and returns true.
     bool reconnect() noexcept override;
+    [[nodiscard]] PixelFormat format() const noexcept override { return reader_.info().format; }
     [[nodiscard]] int width() const noexcept override { return static_cast<int>(reader_.info().width); }
     [[nodiscard]] int height() const noexcept override { return static_cast<int>(reader_.info().height); }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }

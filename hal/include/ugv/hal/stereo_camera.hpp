@@ -24,8 +24,9 @@ struct CameraFrame {
     std::uint64_t sequence = 0;
     std::int64_t leftStampNs = 0;  ///< [ns] CLOCK_MONOTONIC
     std::int64_t rightStampNs = 0; ///< [ns]
-    ConstImageViewU8 left;
-    ConstImageViewU8 right; ///< empty: a left-only frame (a one-camera rig, or the pair's right camera lost)
+    /// Grey or BGR, as the camera delivers; the right image empty: a left-only frame (a one-camera rig, or the
+    /// pair's right camera lost).
+    StereoViews images;
 };
 
 enum class GrabStatus : std::uint8_t {
@@ -63,6 +64,8 @@ public:
     /// never "lost".
     [[nodiscard]] virtual bool rightLost() const noexcept { return false; }
 
+    /// The pixel format of every frame grab() delivers (Grey8, or Bgr8 from a colour camera).
+    [[nodiscard]] virtual PixelFormat format() const noexcept = 0;
     [[nodiscard]] virtual int width() const noexcept = 0;
     [[nodiscard]] virtual int height() const noexcept = 0;
     /// The nominal frame period (from the device's frame rate or the recording) [ns].

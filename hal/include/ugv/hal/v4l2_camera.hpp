@@ -60,6 +60,9 @@ struct V4l2Options {
     int height = 480;                        ///< [px]
     double fps = 30.0;                       ///< requested rate (VIDIOC_S_PARM; drivers may refuse)
     V4l2Format format = V4l2Format::Yuyv;
+    /// Deliver BGR frames (Bgr8, OpenCV's BT.601 YUYV conversion) instead of the Y plane: what the one-camera
+    /// detector needs to tell the ground by its colour. Needs format Yuyv.
+    bool colour = false;
     int buffers = 4;          ///< MMAP buffers per device, 2..8
     double maxPairSkewMs = 5; ///< left/right stamps further apart are not a pair
 };
@@ -74,6 +77,10 @@ public:
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;
     [[nodiscard]] bool rightLost() const noexcept override { return rightLost_; }
+    [[nodiscard]] PixelFormat format() const noexcept override
+    {
+        return options_.colour ? PixelFormat::Bgr8 : PixelFormat::Grey8;
+    }
     [[nodiscard]] int width() const noexcept override { return options_.width; }
     [[nodiscard]] int height() const noexcept override { return options_.height; }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
@@ -117,8 +124,11 @@ private:
     /// The right frame missed (`s`): true when the left frame goes out alone; marks the right camera lost.
     bool rightMissing(GrabStatus s) noexcept;
     void requeue(Device& device) noexcept;
-    /// Copies the grey (or Y) bytes of columns [x0, x0 + width) of the held buffer into `out`.
-    bool copyGrey(const Device& device, int x0, ImageViewU8 out) noexcept;
+    /// Copies columns [x0, x0 + width) of the held buffer of `device` into the left or right image: the grey (or
+    /// Y) bytes, or BGR converted from YUYV with `colour`.
+    bool copyImage(const Device& device, int x0, bool right) noexcept;
+    /// The delivered images (the right one empty for a left-only frame).
+    [[nodiscard]] StereoViews images(bool leftOnly) const noexcept;
 
     V4l2Options options_;
     V4l2Ops ops_;
@@ -128,9 +138,11 @@ private:
     Device right_;
     bool sideBySide_ = false;
     bool rightLost_ = false;
-    int rightMisses_ = 0; ///< right frames missed in a row
-    Image<std::uint8_t> leftGrey_;
+    int rightMisses_ = 0;          ///< right frames missed in a row
+    Image<std::uint8_t> leftGrey_; ///< empty with `colour`
     Image<std::uint8_t> rightGrey_;
+    Image<BgrPixel> leftBgr_; ///< empty without `colour`
+    Image<BgrPixel> rightBgr_;
     CameraStats stats_{};
     std::uint64_t unpaired_ = 0;
     bool connected_ = false;

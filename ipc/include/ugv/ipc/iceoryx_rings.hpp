@@ -73,27 +73,30 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-/// Bytes of one frame chunk: header + 2 w h.
-[[nodiscard]] constexpr std::size_t frameBytes(int width, int height) noexcept
+/// Bytes of one frame chunk: header + both images (platform's packedFrameBytes).
+[[nodiscard]] constexpr std::size_t frameBytes(PixelFormat format, int width, int height) noexcept
 {
-    return sizeof(FrameHeader) + 2U * static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    return packedFrameBytes(format, static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height));
 }
 
 class FramePublisher {
 public:
-    static Result<std::unique_ptr<FramePublisher>, Error> create(int width, int height, Topic topic = kFramesTopic);
+    /// A publisher of `format` frames of width x height per image.
+    static Result<std::unique_ptr<FramePublisher>, Error> create(PixelFormat format, int width, int height,
+                                                                 Topic topic = kFramesTopic);
     ~FramePublisher();
     FramePublisher(const FramePublisher&) = delete;
     FramePublisher& operator=(const FramePublisher&) = delete;
     FramePublisher(FramePublisher&&) = delete;
     FramePublisher& operator=(FramePublisher&&) = delete;
 
-    /// Loans a chunk, writes the header and copies both images in (packed), publishes it. An empty `right` is a
+    /// Loans a chunk, writes the header and copies both images in (packed), publishes it. An empty right image is a
     /// left-only frame (kFrameLeftOnly: one camera, or the pair's right camera lost). False (counted in
-    /// loanFailures) when no chunk is free, or when an image is not width x height. `publishStampNs`, when given,
-    /// receives CLOCK_MONOTONIC right before the chunk is handed to iceoryx (the start of the hand-over).
-    bool publish(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs, ConstImageViewU8 left,
-                 ConstImageViewU8 right, std::atomic<std::int64_t>* publishStampNs = nullptr) noexcept;
+    /// loanFailures) when no chunk is free, or when the images are not width x height in the publisher's format.
+    /// `publishStampNs`, when given, receives CLOCK_MONOTONIC right before the chunk is handed to iceoryx (the start
+    /// of the hand-over).
+    bool publish(std::uint64_t sequence, std::int64_t leftStampNs, std::int64_t rightStampNs, const StereoViews& images,
+                 std::atomic<std::int64_t>* publishStampNs = nullptr) noexcept;
     [[nodiscard]] std::uint64_t published() const noexcept { return published_; }
     [[nodiscard]] std::uint64_t loanFailures() const noexcept { return loanFailures_; }
     /// True when at least one subscriber is connected.
@@ -101,8 +104,9 @@ public:
 
 private:
     struct Impl;
-    FramePublisher(std::unique_ptr<Impl> impl, int width, int height);
+    FramePublisher(std::unique_ptr<Impl> impl, PixelFormat format, int width, int height);
     std::unique_ptr<Impl> impl_;
+    PixelFormat format_;
     int width_;
     int height_;
     std::uint64_t published_ = 0;

@@ -92,6 +92,18 @@ private:
 using ImageViewU8 = ImageView<std::uint8_t>;
 using ConstImageViewU8 = ImageView<const std::uint8_t>;
 
+/// One pixel of an 8-bit BGR image (cv::Mat CV_8UC3 layout: a row of such pixels is the Mat row).
+struct BgrPixel {
+    std::uint8_t b = 0;
+    std::uint8_t g = 0;
+    std::uint8_t r = 0;
+};
+static_assert(sizeof(BgrPixel) == 3, "BgrPixel must match CV_8UC3");
+
+/// A view of a BGR image; width in pixels, stride in bytes (as cv::Mat::step).
+using BgrView = ImageView<BgrPixel>;
+using ConstBgrView = ImageView<const BgrPixel>;
+
 /// An image that owns its pixels. The buffer is allocated by the constructor (configure time) and never
 /// resized; `view()` hands out views for the frame path.
 template <class T>

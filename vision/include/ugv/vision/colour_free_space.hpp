@@ -43,17 +43,6 @@
 
 namespace ugv::vision {
 
-/// One pixel of an 8-bit BGR image (cv::Mat CV_8UC3 layout: a row of such pixels is the Mat row).
-struct BgrPixel {
-    std::uint8_t b = 0;
-    std::uint8_t g = 0;
-    std::uint8_t r = 0;
-};
-static_assert(sizeof(BgrPixel) == 3, "BgrPixel must match CV_8UC3");
-
-/// A view of a BGR image; width in pixels, stride in bytes (as cv::Mat::step).
-using ConstBgrView = ImageView<const BgrPixel>;
-
 inline constexpr int kHueBins = 16;                            ///< over OpenCV hue 0..179
 inline constexpr int kSatBins = 7;                             ///< over saturation 0..255
 inline constexpr int kGreyBins = 16;                           ///< over brightness 0..255

@@ -62,6 +62,9 @@ public:
     /// The left camera alone (the one-camera detector), into the buffer returned by rectifiedLeft(); the same rows
     /// as rectify() gives it.
     RectifyStatus rectifyLeft(ConstImageViewU8 left) noexcept;
+    /// The left camera's BGR image (a colour camera, for the one-camera detector) into `out`, roi().width x
+    /// roi().height: the same rows and the same fixed-point bilinear tables as the grey path (OpenCV's remap).
+    RectifyStatus rectifyLeft(ConstBgrView left, BgrView out) noexcept;
 
     [[nodiscard]] ConstImageViewU8 rectifiedLeft() const noexcept { return outLeft_.view(); }
     [[nodiscard]] ConstImageViewU8 rectifiedRight() const noexcept { return outRight_.view(); }
