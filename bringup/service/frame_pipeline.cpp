@@ -3,13 +3,13 @@
 #include "ugv/platform/clock.hpp"
 
 #include <ctime>
-#include <type_traits>
 #include <utility>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ugv/vision/ground_plane.hpp"
+#include "ugv/vision/mat_view.hpp"
 
 namespace ugv::service {
 
@@ -146,19 +146,14 @@ vision::RectifyStatus FramePipeline::rectify(const StereoViews& images, bool col
     if (!images.colour()) {
         return colourOnly ? rectifier_.rectifyLeft(images.left) : rectifier_.rectify(images.left, images.right);
     }
-    const auto matOf = [](auto view, int type) {
-        using Pixel = std::remove_const_t<std::remove_pointer_t<decltype(view.data())>>;
-        return cv::Mat(view.height(), view.width(), type, const_cast<Pixel*>(view.data()), // NOLINT: read only
-                       static_cast<std::size_t>(view.strideBytes()));
-    };
     if (colourOnly) {
         return rectifier_.rectifyLeft(images.leftBgr, colourRoi_.view());
     }
     // The sizes were checked by process(): cvtColor writes into the buffers of create() without allocating.
-    cv::Mat greyLeft = matOf(greyLeft_.view(), CV_8UC1);
-    cv::Mat greyRight = matOf(greyRight_.view(), CV_8UC1);
-    cv::cvtColor(matOf(images.leftBgr, CV_8UC3), greyLeft, cv::COLOR_BGR2GRAY);
-    cv::cvtColor(matOf(images.rightBgr, CV_8UC3), greyRight, cv::COLOR_BGR2GRAY);
+    cv::Mat greyLeft = vision::matOver(greyLeft_.view());
+    cv::Mat greyRight = vision::matOver(greyRight_.view());
+    cv::cvtColor(vision::matOver(images.leftBgr), greyLeft, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(vision::matOver(images.rightBgr), greyRight, cv::COLOR_BGR2GRAY);
     const vision::RectifyStatus pair = rectifier_.rectify(greyLeft_.view(), greyRight_.view());
     if (pair != vision::RectifyStatus::Ok || mode_ != bringup::DetectorMode::Both) {
         return pair;

@@ -235,7 +235,8 @@ Result<std::unique_ptr<ipc::EmbeddedRouDi>, Error> connectIceoryx(const RunOptio
 {
     if (embedded) {
         return ipc::EmbeddedRouDi::start(options.appName,
-                                         ipc::frameBytes(camera.format(), camera.width(), camera.height()));
+                                         packedFrameBytes(camera.format(), static_cast<std::uint32_t>(camera.width()),
+                                                          static_cast<std::uint32_t>(camera.height())));
     }
     const std::int64_t waitUntilNs = MonotonicClock::nowNs() + std::chrono::nanoseconds(options.roudiWait).count();
     while (!ipc::roudiReachable() && MonotonicClock::nowNs() < waitUntilNs &&

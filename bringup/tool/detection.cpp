@@ -6,13 +6,13 @@
 #include <numbers>
 #include <random>
 #include <string>
-#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
 #include "ugv/platform/angles.hpp"
+#include "ugv/vision/mat_view.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 
 namespace ugv::tool {
@@ -78,16 +78,10 @@ ConstBgrView bgrViewOf(const cv::Mat& bgr)
 
 cv::Mat matOver(const StereoViews& images, bool right)
 {
-    const auto over = [](auto view, int type) {
-        using Pixel = std::remove_const_t<std::remove_pointer_t<decltype(view.data())>>;
-        return view.empty() ? cv::Mat()
-                            : cv::Mat(view.height(), view.width(), type, const_cast<Pixel*>(view.data()), // NOLINT
-                                      static_cast<std::size_t>(view.strideBytes()));
-    };
     if (images.colour()) {
-        return over(right ? images.rightBgr : images.leftBgr, CV_8UC3);
+        return vision::matOver(right ? images.rightBgr : images.leftBgr);
     }
-    return over(right ? images.right : images.left, CV_8UC1);
+    return vision::matOver(right ? images.right : images.left);
 }
 
 Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const vision::RectifiedProjection& projection)

@@ -18,6 +18,7 @@
 #include "commands.hpp"
 #include "pair_files.hpp"
 #include "ugv/bringup/calibration_file.hpp"
+#include "ugv/vision/mat_view.hpp"
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/stereo_calibrator.hpp"
 
@@ -30,13 +31,6 @@ int fail(const Error& error)
 {
     std::cerr << "ugvsense rectify: error: " << error.message() << '\n';
     return 1;
-}
-
-cv::Mat asMat(ConstImageViewU8 view)
-{
-    return cv::Mat(view.height(), view.width(), CV_8UC1, const_cast<std::uint8_t*>(view.data()), // NOLINT
-                   static_cast<std::size_t>(view.strideBytes()))
-        .clone();
 }
 
 /// The chessboard's mean |dy| between the rectified images, when the whole board is in both.
@@ -115,8 +109,8 @@ Result<void, Error> rectifyPair(const PairFiles& files, vision::Rectifier& recti
     }
     tally.totalMicros += std::chrono::duration<double, std::micro>(stop - start).count();
     ++tally.rectified;
-    const cv::Mat outLeft = asMat(rectifier.rectifiedLeft());
-    const cv::Mat outRight = asMat(rectifier.rectifiedRight());
+    const cv::Mat outLeft = vision::matOver(rectifier.rectifiedLeft()).clone();
+    const cv::Mat outRight = vision::matOver(rectifier.rectifiedRight()).clone();
     if (const auto dy = boardDy(outLeft, outRight, board)) {
         std::printf("%s: board mean |dy| %.3f px\n", files.name.c_str(), *dy);
         tally.dySum += *dy;

@@ -265,7 +265,8 @@ bool FramePublisher::publish(std::uint64_t sequence, std::int64_t leftStampNs, s
         ++loanFailures_;
         return false;
     }
-    const std::size_t bytes = frameBytes(format_, width_, height_);
+    const std::size_t bytes =
+        packedFrameBytes(format_, static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_));
     auto loaned = impl_->publisher.loan(static_cast<std::uint32_t>(bytes), kChunkAlignment);
     if (loaned.has_error()) {
         ++loanFailures_;

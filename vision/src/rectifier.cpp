@@ -7,6 +7,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "ugv/vision/mat_view.hpp"
+
 namespace ugv::vision {
 namespace {
 
@@ -193,10 +195,8 @@ RectifyStatus Rectifier::rectifyLeft(ConstBgrView left, BgrView out) noexcept
         return RectifyStatus::Ok;
     }
     // Sizes checked above and the tables' type fixed at create(): remap writes into `out` without allocating.
-    const cv::Mat src(left.height(), left.width(), CV_8UC3, const_cast<BgrPixel*>(left.data()), // NOLINT
-                      static_cast<std::size_t>(left.strideBytes()));
-    cv::Mat dst(out.height(), out.width(), CV_8UC3, out.data(), static_cast<std::size_t>(out.strideBytes()));
-    cv::remap(src, dst, mapLeftXY_, mapLeftFrac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::Mat dst = matOver(out);
+    cv::remap(matOver(left), dst, mapLeftXY_, mapLeftFrac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
     return RectifyStatus::Ok;
 }
 

@@ -4,6 +4,8 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include "ugv/vision/mat_view.hpp"
+
 namespace ugv::vision {
 namespace {
 
@@ -28,14 +30,6 @@ int toOpenCvMode(MatcherMode mode) noexcept
         return cv::StereoSGBM::MODE_HH4;
     }
     return cv::StereoSGBM::MODE_SGBM;
-}
-
-/// A cv::Mat header over a const view. OpenCV has no const Mat header; we only read through it.
-cv::Mat header(ConstImageViewU8 view) noexcept
-{
-    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast) NOLINTJUSTIFICATION: read-only use as a cv input
-    return {view.height(), view.width(), CV_8UC1, const_cast<std::uint8_t*>(view.data()),
-            static_cast<std::size_t>(view.strideBytes())};
 }
 
 } // namespace
@@ -144,8 +138,8 @@ MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right, Vis
         const cv::Rect image(pad_, 0, roiSize_.width, roiSize_.height);
         cv::Mat leftDst = padLeft_(image);
         cv::Mat rightDst = padRight_(image);
-        header(left).copyTo(leftDst);
-        header(right).copyTo(rightDst);
+        matOver(left).copyTo(leftDst);
+        matOver(right).copyTo(rightDst);
         lap.to(VisionStage::MatchOther);
         if (census_) {
             const auto view = [](const cv::Mat& m) {

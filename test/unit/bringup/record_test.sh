@@ -36,8 +36,9 @@ info=$("$tool" recording info "$work/recorded-colour.ugvrec") || { echo "$info";
 echo "$info"
 grep -q "640x480 colour (BGR) stereo" <<<"$info" || { echo "expected a colour recording"; exit 1; }
 grep -q "frames: 4 complete (sequence 0..3, 0 missing" <<<"$info" || { echo "expected 4 colour frames"; exit 1; }
-grep -q "frames: 6 published of 6 captured" "$work/service-colour.log" ||
-    { echo "the service did not publish every colour frame:"; cat "$work/service-colour.log"; exit 1; }
+# Every colour pair went into the ring (a slow build may drop some at the vision task: latest frame wins).
+grep -q "of 6 captured.*; bad 0; loan failures 0;" "$work/service-colour.log" ||
+    { echo "the service refused colour frames:"; cat "$work/service-colour.log"; exit 1; }
 # No service publishing: the recorder gives up after --seconds, says why, exits 1 and leaves no file behind.
 out=$("$tool" record --out "$work/empty.ugvrec" --calib "$work/f0/calibration.yaml" --seconds 1 2>&1)
 rc=$?

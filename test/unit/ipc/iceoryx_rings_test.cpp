@@ -24,7 +24,7 @@ class IceoryxRings : public ::testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        auto started = EmbeddedRouDi::start("ugv-ipc-test", frameBytes(PixelFormat::Bgr8, kWidth, kHeight));
+        auto started = EmbeddedRouDi::start("ugv-ipc-test", packedFrameBytes(PixelFormat::Bgr8, kWidth, kHeight));
         ASSERT_TRUE(started.has_value()) << started.error().message();
         roudi_ = std::move(*started).release();
     }

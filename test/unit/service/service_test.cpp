@@ -18,6 +18,7 @@
 #include <mutex>
 #include <new>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -104,7 +105,7 @@ class ServiceTest : public ::testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        auto started = ipc::EmbeddedRouDi::start("ugv-service-test", ipc::frameBytes(PixelFormat::Bgr8, 640, 480));
+        auto started = ipc::EmbeddedRouDi::start("ugv-service-test", packedFrameBytes(PixelFormat::Bgr8, 640, 480));
         ASSERT_TRUE(started.has_value()) << started.error().message();
         roudi_ = std::move(*started).release();
     }
@@ -160,6 +161,7 @@ struct HilRun {
     std::uint64_t malformed = 0;
     int truthObstacles = 0;
     int detected = 0;
+    std::map<std::uint64_t, std::pair<int, int>> perFrame; ///< detected, truth obstacles of each frame
     int falseRed = 0;
     int degradedFrames = 0;
 };
@@ -212,6 +214,8 @@ HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bring
             if (w.state == SectorState::Obstacle && w.rangeM <= 8.0F) {
                 ++out.truthObstacles;
                 out.detected += reported ? 1 : 0;
+                out.perFrame[k].first += reported ? 1 : 0;
+                ++out.perFrame[k].second;
             }
             const bool truthNear = at(want, i - 1).state == SectorState::Obstacle || w.state == SectorState::Obstacle ||
                                    at(want, i + 1).state == SectorState::Obstacle;
@@ -325,6 +329,22 @@ int expectLeftOnlyFramesGaveColourSectors(const HilRun& run, const std::function
     return seen;
 }
 
+/// Obstacle sectors found and in the truth (within 8 m) over frames [from, to) of a run; printed.
+std::pair<int, int> obstaclesFound(const HilRun& run, std::uint64_t from, std::uint64_t to)
+{
+    std::pair<int, int> found{0, 0};
+    for (const auto& [k, counts] : run.perFrame) {
+        if (k >= from && k < to) {
+            found.first += counts.first;
+            found.second += counts.second;
+        }
+    }
+    std::printf("[ MEASURED ] frames %llu-%llu: %d of %d obstacle sectors (<= 8 m) found\n",
+                static_cast<unsigned long long>(from), static_cast<unsigned long long>(to - 1), found.first,
+                found.second);
+    return found;
+}
+
 TEST_F(ServiceTest, LeftOnlyFramesOfARecordingFallBackToTheOneCameraModeAndStereoResumesAfter)
 {
     // A recording made while the right camera was lost (frames 8-15 left-only) replayed with obstacles.detector:
@@ -340,6 +360,7 @@ TEST_F(ServiceTest, LeftOnlyFramesOfARecordingFallBackToTheOneCameraModeAndStere
     ASSERT_EQ(run.received.size(), kFrames);
     EXPECT_EQ(expectLeftOnlyFramesGaveColourSectors(run, [](std::uint64_t k) { return k >= 8 && k < 16; }), 8);
     EXPECT_EQ(run.falseRed, 0);
+    (void)obstaclesFound(run, 8, 16); // grey levels only: few (the colour camera's test below)
     // The message carries the ground the sectors were measured against: stereo's estimate (reliable on this flat
     // course) on a pair, the mount's plane (not reliable) on a left-only frame.
     const auto calibration = bringup::parseCalibration(course.calibration, "course");
@@ -360,6 +381,24 @@ TEST_F(ServiceTest, LeftOnlyFramesOfARecordingFallBackToTheOneCameraModeAndStere
     // The health record says why those sectors are degraded (read at publish time: a frame or so behind capture).
     EXPECT_GT(run.leftOnlyHealth, 0);
     EXPECT_LT(run.leftOnlyHealth, static_cast<int>(kFrames));
+}
+
+TEST_F(ServiceTest, AColourCamerasLeftOnlyFramesStillFindTheObstaclesByColour)
+{
+    // The stereo detector's fallback when the right camera stops, from a colour camera: the left camera's frames
+    // (8-15) go to the one-camera detector in colour, which finds most of the obstacles stereo found around them.
+    constexpr std::size_t kFrames = 24;
+    const Course course = writeCourse(dir_, kFrames, 0, 0, 8, 16, true);
+
+    const HilRun run = runHil(course);
+
+    EXPECT_EQ(run.report.framesPublished, kFrames);
+    EXPECT_EQ(run.report.leftOnlyFrames, 8U);
+    EXPECT_EQ(expectLeftOnlyFramesGaveColourSectors(run, [](std::uint64_t k) { return k >= 8 && k < 16; }), 8);
+    EXPECT_EQ(run.falseRed, 0);
+    const auto [found, truth] = obstaclesFound(run, 8, 16);
+    ASSERT_GT(truth, 20);
+    EXPECT_GE(found, truth * 2 / 3); // measured 64 of 86
 }
 
 TEST(FramePipeline, ALeftOnlyFrameTakesTheOneCameraPathInStereoModeAndTheNextPairIsStereoAgain)

@@ -73,12 +73,6 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-/// Bytes of one frame chunk: header + both images (platform's packedFrameBytes).
-[[nodiscard]] constexpr std::size_t frameBytes(PixelFormat format, int width, int height) noexcept
-{
-    return packedFrameBytes(format, static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height));
-}
-
 class FramePublisher {
 public:
     /// A publisher of `format` frames of width x height per image.
