@@ -77,15 +77,13 @@ Result<std::unique_ptr<FramePipeline>, Error> FramePipeline::create(const vision
                                 "calibrate at the camera's resolution, or set camera.width/height"});
     }
     const vision::DetectorConfig detectorConfig = detectorConfigFrom(config);
-    vision::RectifierConfig rectifierConfig;
-    rectifierConfig.roiTopFraction = config.roi.topFraction;
-    rectifierConfig.roiMarginRows = detectorConfig.marginRows;
-    auto rectifier = vision::Rectifier::create(calibration, rectifierConfig);
+    auto rectifier =
+        vision::Rectifier::create(calibration, vision::roiRectifierConfig(detectorConfig, config.roi.topFraction));
     if (!rectifier) {
         return Unexpected(rectifier.error());
     }
     const vision::GroundPlane ground = vision::GroundPlane::fromMount(*calibration.mount);
-    auto detector = vision::ObstacleDetector::create(detectorConfig, rectifier->projection(), rectifier->roi(), ground);
+    auto detector = vision::ObstacleDetector::create(detectorConfig, *rectifier, ground);
     if (!detector) {
         return Unexpected(detector.error());
     }

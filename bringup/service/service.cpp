@@ -642,19 +642,28 @@ void Service::logMiss(std::uint64_t sequence, std::int64_t endToEndNs, std::int6
     state.missesLogged = missed;
 }
 
+void Service::drainBus()
+{
+    // In place: each frame is read from its slot and the slot given back after onFrame(), also when it throws
+    // (the bus task's guard restarts the task; the frame that threw is not delivered again).
+    struct Release {
+        SpscRing<BusFrame, 8>& ring;
+        ~Release() { ring.release(); }
+    };
+    for (const BusFrame* frame = toBus_.front(); frame != nullptr; frame = toBus_.front()) {
+        const Release release{toBus_};
+        options_.bus->onFrame(*frame);
+    }
+}
+
 void Service::busLoop(const std::atomic<bool>& stop)
 {
-    BusFrame frame;
     while (!stop.load(std::memory_order_relaxed)) {
         semWait(&busReady_, std::chrono::milliseconds(20));
-        while (toBus_.tryPop(frame)) {
-            options_.bus->onFrame(frame);
-        }
+        drainBus();
         options_.bus->idle();
     }
-    while (toBus_.tryPop(frame)) {
-        options_.bus->onFrame(frame);
-    }
+    drainBus();
     cpuSeconds_[3].store(threadCpuSeconds(), std::memory_order_relaxed);
 }
 

@@ -200,6 +200,7 @@ private:
     static void publishBody(void* self, const std::atomic<bool>& stop);
     static void busBody(void* self, const std::atomic<bool>& stop);
     void busLoop(const std::atomic<bool>& stop); // may throw: see BusSink
+    void drainBus(); // every frame waiting for the bus, read in place; may throw: see BusSink
     /// The capture task's own state between grabs.
     struct CaptureState {
         std::chrono::nanoseconds backoff{};    ///< the next reconnect attempt's wait

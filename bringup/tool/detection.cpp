@@ -157,9 +157,7 @@ Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, 
                                         const std::string& calibName)
 {
     PairDetection out;
-    vision::RectifierConfig roiConfig;
-    roiConfig.roiMarginRows = config.marginRows;
-    auto rectifier = vision::Rectifier::create(calib, roiConfig);
+    auto rectifier = vision::Rectifier::create(calib, vision::roiRectifierConfig(config));
     if (!rectifier) {
         return Unexpected(std::move(rectifier).error());
     }
@@ -189,7 +187,7 @@ Result<PairDetection, Error> detectPair(const vision::StereoCalibration& calib, 
         ground = fit->ground;
         out.fit = *fit;
     }
-    auto detector = vision::ObstacleDetector::create(config, projection, roi, ground);
+    auto detector = vision::ObstacleDetector::create(config, rect, ground);
     if (!detector) {
         return Unexpected(std::move(detector).error());
     }

@@ -118,24 +118,21 @@ public:
         config.matcher.mode = matcher;
         config.matcher.groundPrior = groundPrior;
         config.matcher.groundRange = groundRange;
-        vision::RectifierConfig rectConfig;
-        rectConfig.roiMarginRows = config.marginRows;
-        auto rectifier = vision::Rectifier::create(calib, rectConfig);
+        auto rectifier = vision::Rectifier::create(calib, vision::roiRectifierConfig(config));
         if (!rectifier) {
             return Unexpected(rectifier.error());
         }
-        auto detector = vision::ObstacleDetector::create(config, rectifier->projection(), rectifier->roi(),
-                                                         vision::GroundPlane::fromMount(*calib.mount));
+        const vision::GroundPlane mountGround = vision::GroundPlane::fromMount(*calib.mount);
+        auto detector = vision::ObstacleDetector::create(config, *rectifier, mountGround);
         if (!detector) {
             return Unexpected(detector.error());
         }
-        const vision::DisparityPlane ground =
-            vision::GroundPlane::fromMount(*calib.mount).disparityPlane(rectifier->projection());
+        const vision::DisparityPlane ground = mountGround.disparityPlane(rectifier->projection());
         std::optional<vision::ColourFreeSpace> colourFreeSpace;
         if (colour) {
-            auto made = vision::ColourFreeSpace::create(vision::colourConfigFor(config.sectors),
-                                                        cv::Size(rig.width, rig.height), rectifier->projection(),
-                                                        vision::GroundPlane::fromMount(*calib.mount));
+            auto made =
+                vision::ColourFreeSpace::create(vision::colourConfigFor(config.sectors),
+                                                cv::Size(rig.width, rig.height), rectifier->projection(), mountGround);
             if (!made) {
                 return Unexpected(made.error());
             }

@@ -332,6 +332,18 @@ TEST_F(RecordingTest, MissingFileAndExistingTargetAreErrors)
     EXPECT_FALSE(RecordingWriter::create((dir_ / "x.ugvrec").string(), 0, kHeight, kCalibration).has_value());
 }
 
+TEST_F(RecordingTest, AnUnknownPixelFormatIsRefusedByNameBeforeAFileIsMade)
+{
+    RecordingWriterOptions options;
+    options.format = static_cast<PixelFormat>(7);
+    const std::string path = (dir_ / "unknown.ugvrec").string();
+    const auto writer = RecordingWriter::create(path, kWidth, kHeight, kCalibration, options);
+    ASSERT_FALSE(writer.has_value());
+    EXPECT_NE(writer.error().message().find("unknown pixel format 7"), std::string::npos) << writer.error().message();
+    EXPECT_NE(writer.error().message().find("Grey8 or Bgr8"), std::string::npos) << writer.error().message();
+    EXPECT_FALSE(std::filesystem::exists(path));
+}
+
 /// A disk that fills up while recording: a 256 KiB tmpfs mounted over a folder of the test's own (needs root, or
 /// CAP_SYS_ADMIN: skipped with a message otherwise), frames of 64 x 64 (8.3 KiB a record).
 TEST_F(RecordingTest, DiskFullKeepsEveryEarlierFrameAndAppendsGoOnOnceThereIsRoom)

@@ -178,6 +178,15 @@ TEST_F(IceoryxRings, WrongSizeImagesAreRefusedAndCounted)
     EXPECT_FALSE(FrameSubscriber::create(0).has_value());
 }
 
+TEST_F(IceoryxRings, AnUnknownPixelFormatIsRefusedByName)
+{
+    const auto publisher = FramePublisher::create(static_cast<PixelFormat>(0), kWidth, kHeight);
+    ASSERT_FALSE(publisher.has_value());
+    EXPECT_NE(publisher.error().message().find("unknown pixel format 0"), std::string::npos)
+        << publisher.error().message();
+    EXPECT_NE(publisher.error().message().find("Grey8 or Bgr8"), std::string::npos) << publisher.error().message();
+}
+
 TEST_F(IceoryxRings, SectorsArriveValidatedAndMalformedOnesAreCounted)
 {
     auto publisher = SectorsPublisher::create().value();

@@ -12,6 +12,7 @@
 #include "alloc_counter.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
+#include "ugv/vision/stereo_calibration.hpp"
 
 namespace ugv::vision {
 namespace {
@@ -262,6 +263,36 @@ TEST(ObstacleDetector, WrongSizeGivesErrorStatusAndAllUnknown)
     EXPECT_EQ(out.sequence, 2U);
     expectAllUnknown(out);
     (void)sut.process(roiView(frame.left), ConstImageViewU8{}, 3U, 9);
+    EXPECT_EQ(sut.status(), DetectorStatus::WrongInputSize);
+}
+
+/// A detector made over a rectifier with roiRectifierConfig runs on that rectifier's ROI, whatever the top fraction
+/// and margin: its pole is found, and an ROI of the default size no longer fits it.
+TEST(ObstacleDetector, ADetectorOverARectifierRunsOnThatRectifiersRoi)
+{
+    DetectorConfig config;
+    config.marginRows = 12;
+    const StereoCalibration calib = makeRectifiedCalibration(cv::Size(640, 480), kProjection.fx, kProjection.fy,
+                                                             kProjection.cx, kProjection.cy, kProjection.baselineM);
+    auto rectifier = Rectifier::create(calib, roiRectifierConfig(config, 0.6)).value();
+    ASSERT_EQ(rectifier.roi().y, 288 - 12);
+    ASSERT_EQ(rectifier.roi().height, 480 - 276);
+    auto sut = ObstacleDetector::create(config, rectifier, kGround).value();
+    const auto frame = renderScene("pole", 4.0, 0.0);
+    const auto view = [](const cv::Mat& image) { return ConstImageViewU8(image.data, image.cols, image.rows); };
+
+    ASSERT_EQ(rectifier.rectify(view(frame.left), view(frame.right)), RectifyStatus::Ok);
+    const ObstacleSectors& out = sut.process(rectifier.rectifiedLeft(), rectifier.rectifiedRight(), 1U, 0);
+
+    ASSERT_EQ(sut.status(), DetectorStatus::Ok);
+    int found = 0;
+    for (int i = 0; i < out.count; ++i) {
+        const Sector& got = out.sectors[static_cast<std::size_t>(i)];
+        found += frame.sectors.sectors[static_cast<std::size_t>(i)].state == SectorState::Obstacle &&
+                 got.state == SectorState::Obstacle && std::abs(got.rangeM - 4.0F) < 0.5F;
+    }
+    EXPECT_GT(found, 0);
+    (void)sut.process(roiView(frame.left), roiView(frame.right), 2U, 0);
     EXPECT_EQ(sut.status(), DetectorStatus::WrongInputSize);
 }
 

@@ -69,6 +69,17 @@ enum class DetectorStatus : std::uint8_t {
     BuildFailed,    ///< the sector builder rejected its inputs (a bug): all Unknown, degraded
 };
 
+/// The rectifier configuration for a detector of `config`: the ROI from `roiTopFraction` of the image height down
+/// (config roi.top_fraction), with the detector's margin rows above it (its matcher's block context).
+[[nodiscard]] inline RectifierConfig
+roiRectifierConfig(const DetectorConfig& config, double roiTopFraction = RectifierConfig{}.roiTopFraction) noexcept
+{
+    RectifierConfig rectifier;
+    rectifier.roiTopFraction = roiTopFraction;
+    rectifier.roiMarginRows = config.marginRows;
+    return rectifier;
+}
+
 /// Thread-safety: thread-bound (process() writes the internal buffers). RT-safe: process() no allocation and no
 /// exception with the census SGM; with an OpenCV matcher mode StereoSGBM::compute() allocates internally (see
 /// roi_matcher.hpp); create() no.
@@ -80,6 +91,14 @@ public:
     /// @return the detector, or an error from one of the stages' configs.
     static Result<ObstacleDetector, Error> create(const DetectorConfig& config, const RectifiedProjection& projection,
                                                   Rect roi, const GroundPlane& configuredGround);
+
+    /// The detector over `rectifier`'s ROI and projection: made with roiRectifierConfig(config, ...), the two agree
+    /// on the ROI and its margin rows.
+    static Result<ObstacleDetector, Error> create(const DetectorConfig& config, const Rectifier& rectifier,
+                                                  const GroundPlane& configuredGround)
+    {
+        return create(config, rectifier.projection(), rectifier.roi(), configuredGround);
+    }
 
     /// Runs the pipeline on one rectified ROI pair.
     /// @param[in] rectLeftRoi, rectRightRoi  roi.width x roi.height each
