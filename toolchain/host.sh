@@ -24,7 +24,7 @@ packages=(
     libfastrtps-dev fastddsgen fastdds-tools default-jre-headless   # DDS: Fast DDS 2.9, IDL generator (Java), discovery server
     cyclonedds-dev cyclonedds-tools   # a second DDS (Cyclone 0.10, idlc): the interop test, test/interop
     iproute2 nftables      # the multi-host test: network namespaces and packet loss
-    openssl                # DDS Security: bringup/security/make_security.sh (CA, certificates, signed XML)
+    openssl                # DDS Security: bringup/deploy/security/make_security.sh (CA, certificates, signed XML)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     stress-ng              # the soak: a load on the other core (ugvsense soak --load-other-core)
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
@@ -75,10 +75,10 @@ run_main_job() {
         "$tool" sim --course default --out "$recording"
     fi
     "$tool" recording info "$recording"
-    echo "== 3/5 RouDi (iceoryx): use a running one, else start iox-roudi with bringup/roudi.toml"
+    echo "== 3/5 RouDi (iceoryx): use a running one, else start iox-roudi with bringup/deploy/roudi.toml"
     roudi_pid=""
     if ! pgrep -x iox-roudi >/dev/null; then
-        iox-roudi -c bringup/roudi.toml -l warning >"$out/roudi.log" 2>&1 &
+        iox-roudi -c bringup/deploy/roudi.toml -l warning >"$out/roudi.log" 2>&1 &
         roudi_pid=$!
         trap 'if [ -n "${roudi_pid:-}" ]; then kill "$roudi_pid" 2>/dev/null || true; fi' EXIT
         for _ in $(seq 50); do [ -S /tmp/roudi ] && break; sleep 0.1; done

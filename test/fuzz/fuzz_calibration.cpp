@@ -4,11 +4,11 @@
 #include <cstdint>
 #include <string>
 
-#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/adapters/calibration_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     const std::string text(reinterpret_cast<const char*>(data), size);
-    (void)ugv::bringup::parseCalibration(text, "fuzz.yaml");
+    (void)ugv::adapters::parseCalibration(text, "fuzz.yaml");
     return 0;
 }

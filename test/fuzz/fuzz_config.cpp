@@ -3,14 +3,14 @@
 #include <cstdint>
 #include <string>
 
-#include "ugv/bringup/config.hpp"
+#include "ugv/adapters/config.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     const std::string text(reinterpret_cast<const char*>(data), size);
-    const auto parsed = ugv::bringup::parseConfig(text, "fuzz.yaml", "/nonexistent");
+    const auto parsed = ugv::adapters::parseConfig(text, "fuzz.yaml", "/nonexistent");
     if (parsed) {
-        (void)ugv::bringup::formatConfig(*parsed);
+        (void)ugv::adapters::formatConfig(*parsed);
     }
     return 0;
 }

@@ -4,16 +4,16 @@
 #include <cstdint>
 #include <string_view>
 
-#include "ugv/bringup/correlate_io.hpp"
+#include "ugv/adapters/correlate_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     const std::string_view line(reinterpret_cast<const char*>(data), size);
-    if (const auto message = ugv::bringup::parseMessageLine(line); message && ugv::bringup::checkRanges(*message)) {
-        (void)ugv::bringup::parseMessageLine(ugv::bringup::toJsonLine(*message));
+    if (const auto message = ugv::adapters::parseMessageLine(line); message && ugv::adapters::checkRanges(*message)) {
+        (void)ugv::adapters::parseMessageLine(ugv::adapters::toJsonLine(*message));
     }
-    if (const auto snapshot = ugv::bringup::parseSnapshotLine(line)) {
-        (void)ugv::bringup::parseSnapshotLine(ugv::bringup::toJsonLine(*snapshot));
+    if (const auto snapshot = ugv::adapters::parseSnapshotLine(line)) {
+        (void)ugv::adapters::parseSnapshotLine(ugv::adapters::toJsonLine(*snapshot));
     }
     return 0;
 }

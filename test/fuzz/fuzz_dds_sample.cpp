@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <cstring>
 
-#include "ugv/bringup/correlator_dds.hpp"
+#include "ugv/adapters/correlator_dds.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 
@@ -40,7 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     ++data;
     --size;
     const auto none = [](const auto&) {};
-    const auto toMessage = [](const auto& s) { (void)ugv::bringup::fromDds(s); };
+    const auto toMessage = [](const auto& s) { (void)ugv::adapters::fromDds(s); };
     switch (which % 11U) {
     case 0:
         decode<udds::msg::ObstacleSectors>(data, size, [](const udds::msg::ObstacleSectors& s) {

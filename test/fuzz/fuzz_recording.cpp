@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string>
 
-#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/adapters/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
 
 namespace {
@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     auto reader = ugv::hal::RecordingReader::open("/proc/self/fd/" + std::to_string(fd));
     if (reader) {
-        (void)ugv::bringup::parseCalibration(reader->info().calibrationText, "fuzz.ugvrec");
+        (void)ugv::adapters::parseCalibration(reader->info().calibrationText, "fuzz.ugvrec");
         readAll(*reader);
         if (reader->rewind()) {
             readAll(*reader);

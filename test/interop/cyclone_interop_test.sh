@@ -34,7 +34,7 @@ mapfile -t nav2 < <(awk '
 printf 'Nav2 (README): %s\n' "${nav2[*]}"
 
 # The default course at 1 fps: its 21 frames are 1.5 m apart and cover the whole 30 m drive, past both of its
-# negative obstacles (bringup/sim/scene.cpp makeCourse: a hole of 0.8 m diameter centred at (14.5, -0.4) and a
+# negative obstacles (bringup/sim/src/scene.cpp makeCourse: a hole of 0.8 m diameter centred at (14.5, -0.4) and a
 # trench 1 m wide across the drive at 36.5), in 10 s of rendering; replayed at 10 Hz.
 "$tool" sim --course default --fps 1 --frames 21 --out "$work/course.ugvrec" >/dev/null || fail "sim --course"
 "$daemon" --replay "$work/course.ugvrec" --embedded-roudi --rate 10 --loop --print-every 0 >"$work/service.log" 2>&1 &

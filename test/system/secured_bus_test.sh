@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The secured team bus (issue 22 item 4, DDS Security): a ground station (ugvsensed, correlator only) with
-# dds.security on, and the team's files made by bringup/security/make_security.sh (gcs, ugv-1 to ugv-4, a viewer and
+# dds.security on, and the team's files made by bringup/deploy/security/make_security.sh (gcs, ugv-1 to ugv-4, a viewer and
 # an operator console), plus ugv-2 from another CA (an attacker's). Every participant that runs at the same time as
 # another has its own certificate, as on a real team, and the intruders join once the certified participants have
 # matched: with one certificate in two live participants, or intruders (failing handshakes) joining at the same

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The systemd units (bringup/systemd/*.service.in, configured with this build tree's programs):
+# The systemd units (bringup/deploy/systemd/*.service.in, configured with this build tree's programs):
 #   - `systemd-analyze verify` passes with no output at all (it exits 0 even on unknown keys, so any line fails);
 #   - `systemd-analyze security --offline=yes` rates ugvsensed.service at 2.0 or lower ("OK"), and the other units
 #     lower still;

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "args.hpp"
-#include "bus_options.hpp"
-#include "bus_writers.hpp"
+#include "ugv/tool/args.hpp"
+#include "ugv/tool/bus_options.hpp"
+#include "ugv/tool/bus_writers.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 

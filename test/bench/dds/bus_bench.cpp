@@ -8,7 +8,7 @@
 //   time). Target: p99 under 1 ms. Baseline in the same run, BM_RawWriteToSubscriber: the same sample written
 //   directly by a Fast DDS writer in a child process (no ring, no task, no conversion).
 // - BM_SectorsHandoverToSubscriberSecured / BM_RawWriteToSubscriberSecured: the same two on a secured bus (DDS
-//   Security: PKI-DH, Access-Permissions, AES-GCM; the files made once per run by bringup/security/make_security.sh
+//   Security: PKI-DH, Access-Permissions, AES-GCM; the files made once per run by bringup/deploy/security/make_security.sh
 //   in a temporary folder): the cost of security against the open bus in the same run. Target: p99 at most 1.5x
 //   the open bus's (issue 22 item 4).
 // The latency benchmarks report p50/p99/max counters [us] over the iterations (manual time = the latency).
@@ -28,8 +28,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "dds_bridge.hpp"
-#include "service.hpp"
+#include "ugv/service/dds_bridge.hpp"
+#include "ugv/service/service.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/platform/spsc_ring.hpp"
@@ -59,7 +59,7 @@ const std::string& securityFolder(const std::string& partition)
         if (maker == 0) {
             const int quiet = ::open("/dev/null", O_WRONLY);
             ::dup2(quiet, STDOUT_FILENO);
-            ::execl("/bin/bash", "bash", UGV_SOURCE_DIR "/bringup/security/make_security.sh", dir.c_str(),
+            ::execl("/bin/bash", "bash", UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh", dir.c_str(),
                     "--partition", partition.c_str(), kWriterIdentity, kReaderIdentity, nullptr);
             ::_exit(127);
         }
@@ -102,9 +102,9 @@ service::BusFrame sampleFrame()
     return f;
 }
 
-bringup::ServiceConfig benchConfig()
+adapters::ServiceConfig benchConfig()
 {
-    bringup::ServiceConfig c;
+    adapters::ServiceConfig c;
     c.vehicleId = "bench";
     c.dds.domainId = kDomain;
     c.dds.partition = "bench-" + std::to_string(::getpid());
@@ -171,7 +171,7 @@ BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchm
 /// The child's side: the service's ring and bus task feeding the real DdsBridge, 100 frames per second.
 [[noreturn]] void runBridgeChild(const std::string& partition, const std::string& security)
 {
-    bringup::ServiceConfig config = benchConfig();
+    adapters::ServiceConfig config = benchConfig();
     config.dds.partition = partition;
     auto bus = dds::Bus::create(secured(service::busConfig(config), security, kWriterIdentity));
     auto bridge = service::DdsBridge::create(**bus, config, std::chrono::milliseconds(10));
@@ -226,7 +226,7 @@ void measure(benchmark::State& state, bool raw, bool secure)
                                           : std::string("-bridge"));
     const std::string security = secure ? securityFolder(partition) : std::string();
     if (secure && security.empty()) {
-        state.SkipWithError("bringup/security/make_security.sh failed (openssl missing?)");
+        state.SkipWithError("bringup/deploy/security/make_security.sh failed (openssl missing?)");
         return;
     }
     // A fresh process (fork + exec of this program): a forked copy of a process that already ran Fast DDS inherits

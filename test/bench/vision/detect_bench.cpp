@@ -15,8 +15,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/rt/latency_histogram.hpp"
 #include "ugv/vision/census_sgm.hpp"

@@ -13,8 +13,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_estimator.hpp"
 #include "ugv/vision/ground_mismatch.hpp"
 #include "ugv/vision/ground_plane.hpp"

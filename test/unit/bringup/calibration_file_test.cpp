@@ -1,4 +1,4 @@
-#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/adapters/calibration_file.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -9,8 +9,8 @@
 
 namespace {
 
-using ugv::bringup::loadCalibration;
-using ugv::bringup::saveCalibration;
+using ugv::adapters::loadCalibration;
+using ugv::adapters::saveCalibration;
 using ugv::vision::StereoCalibration;
 
 std::filesystem::path tempPath(const std::string& name)
@@ -315,7 +315,7 @@ TEST(CalibrationFileHostile, DeepKeyChainIsRefusedWithItsLine)
 TEST(CalibrationFileHostile, OverLongTextIsRefusedBeforeItIsRead)
 {
     const std::string message = loadRectifiedText(
-        "long.yaml", std::string(kRectified) + "# " + std::string(ugv::bringup::kMaxCalibrationBytes, 'x') + "\n");
+        "long.yaml", std::string(kRectified) + "# " + std::string(ugv::adapters::kMaxCalibrationBytes, 'x') + "\n");
 
     EXPECT_NE(message.find("long.yaml: the file is"), std::string::npos) << message;
     EXPECT_NE(message.find("more than the 65536"), std::string::npos) << message;
@@ -325,7 +325,7 @@ TEST(CalibrationFileHostile, RecordingTextIsCheckedToo)
 {
     const std::string deep = std::string(kHeader) + "x: " + std::string(30000, '{') + "\n";
 
-    const auto parsed = ugv::bringup::parseCalibration(deep, "rec.ugvrec (its stored calibration)");
+    const auto parsed = ugv::adapters::parseCalibration(deep, "rec.ugvrec (its stored calibration)");
 
     ASSERT_FALSE(parsed.has_value());
     EXPECT_NE(parsed.error().message().find("rec.ugvrec (its stored calibration):3: nested deeper"), std::string::npos)
@@ -371,7 +371,7 @@ TEST(CalibrationFileHostile, AMatrixTagCutShortIsAnErrorNotACrash)
                              "   data: [ 5.4e+02, 0., 3.1e+02, 0.,\n       5.4e+02, 2.3e+02, 0., 0., 1. ]\n"
                              "R: !!opencv-matri      4.4e+00 ]\nK2: !!opencv-matrix\n   rows: 3\n   col84183e+00 ]\n"
                              "K2: !!\n\n\n\n";
-    const auto parsed = ugv::bringup::parseCalibration(text, "cut.yaml");
+    const auto parsed = ugv::adapters::parseCalibration(text, "cut.yaml");
     ASSERT_FALSE(parsed.has_value());
     EXPECT_NE(parsed.error().message().find("cut.yaml"), std::string::npos) << parsed.error().message();
 }

@@ -1,4 +1,4 @@
-#include "ugv/bringup/config.hpp"
+#include "ugv/adapters/config.hpp"
 
 #include <unistd.h>
 
@@ -11,7 +11,7 @@
 
 #include "ugv/rt/task.hpp"
 
-namespace ugv::bringup {
+namespace ugv::adapters {
 namespace {
 
 constexpr const char* kValidMinimal = "calibration: calib.yaml\ncamera:\n  replay_path: rec.bin\n";
@@ -493,7 +493,7 @@ TEST(Config, TruncatedFileIsReportedNotSilentlyDefaulted)
 
 TEST(Config, ShippedExampleIsValid)
 {
-    const auto sut = loadConfig(UGV_SOURCE_DIR "/bringup/config.example.yaml");
+    const auto sut = loadConfig(UGV_SOURCE_DIR "/bringup/deploy/config.example.yaml");
 
     ASSERT_TRUE(sut.has_value()) << joined(sut.error());
 }
@@ -586,4 +586,4 @@ TEST(Config, CalibrationEnvironmentOverride)
 }
 
 } // namespace
-} // namespace ugv::bringup
+} // namespace ugv::adapters

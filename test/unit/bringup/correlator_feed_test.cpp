@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "ugv/bringup/correlate_io.hpp"
+#include "ugv/adapters/correlate_io.hpp"
 #include "ugv/correlator/correlator_feed.hpp"
 #include "ugv/correlator/scenario.hpp"
 
-namespace ugv::bringup {
+namespace ugv::adapters {
 namespace {
 
 using correlator::CorrelatorFeed;
@@ -221,9 +221,9 @@ TEST(CorrelatorFeed, WithoutAWindowAnOlderMessageIsRefused)
 }
 
 } // namespace
-} // namespace ugv::bringup
+} // namespace ugv::adapters
 
-namespace ugv::bringup {
+namespace ugv::adapters {
 namespace {
 
 using correlator::CorrelatorFeed;
@@ -341,4 +341,4 @@ TEST(CorrelatorFeedHostile, AnObservationCountBeyondIntIsRefusedNotConverted)
 }
 
 } // namespace
-} // namespace ugv::bringup
+} // namespace ugv::adapters

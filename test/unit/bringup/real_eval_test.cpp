@@ -1,7 +1,7 @@
 // `ugvsense eval --real` scoring: the per-sector truth from a synthetic disparity map (a flat road with a box and a
 // kerb), the outcome of every kind of report, and the tallies.
 
-#include "real_eval.hpp"
+#include "ugv/tool/real_eval.hpp"
 
 #include <cmath>
 #include <limits>

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `ugvsense record` against the running service, three processes as on the vehicle: iox-roudi (bringup/roudi.toml),
+# `ugvsense record` against the running service, three processes as on the vehicle: iox-roudi (bringup/deploy/roudi.toml),
 # ugvsensed replaying a 12-frame simulator course, and the recorder writing the first 8 pairs it sees; the written
 # recording must hold 8 complete frames in sequence. Then the same from a colour camera (a BGR course: RouDi's 2 MiB
 # pool, the service's grey conversion), recorded in colour. Usage: record_test.sh UGVSENSE UGVSENSED ROUDI_TOML WORKDIR RECORDING

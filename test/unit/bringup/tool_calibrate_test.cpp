@@ -13,7 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "run_command.hpp"
-#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/adapters/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
 namespace {
 
@@ -54,7 +54,7 @@ TEST(ToolCalibrate, RenderedPairsCalibrateWriteFileAndJsonThenRectify)
 
     ASSERT_EQ(calibrate.exitCode, 0) << calibrate.output;
     EXPECT_NE(calibrate.output.find("RMS reprojection error"), std::string::npos) << calibrate.output;
-    const auto loaded = ugv::bringup::loadCalibration(calibPath.string());
+    const auto loaded = ugv::adapters::loadCalibration(calibPath.string());
     ASSERT_TRUE(loaded.has_value()) << loaded.error().message();
     EXPECT_NEAR(loaded->baselineM(), 0.20, 0.002);
     ASSERT_TRUE(loaded->mount.has_value());

@@ -1,5 +1,5 @@
 // Runs the built `ugvsense detect` binary on simulator pairs written by `ugvsense sim` (configured and estimated
-// ground, JSON and overlay files, bad input), and tests the eval scoring functions (bringup/tool/eval_suite).
+// ground, JSON and overlay files, bad input), and tests the eval scoring functions (bringup/tool/src/eval_suite).
 
 #include <cmath>
 #include <cstdio>
@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "eval_suite.hpp"
+#include "ugv/tool/eval_suite.hpp"
 #include "run_command.hpp"
 namespace {
 

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "run_command.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/scene.hpp"
 namespace {
 
 using ToolRun = ugv::test::CommandRun;

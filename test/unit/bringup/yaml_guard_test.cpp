@@ -1,10 +1,10 @@
-#include "ugv/bringup/yaml_guard.hpp"
+#include "ugv/adapters/yaml_guard.hpp"
 
 #include <string>
 
 #include <gtest/gtest.h>
 
-namespace ugv::bringup {
+namespace ugv::adapters {
 namespace {
 
 constexpr YamlLimits kLimits{1024, 4, true, false};
@@ -102,4 +102,4 @@ TEST(YamlGuard, ReadTextFileRefusesAnOverLongFileBeforeReadingIt)
 }
 
 } // namespace
-} // namespace ugv::bringup
+} // namespace ugv::adapters

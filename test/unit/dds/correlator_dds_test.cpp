@@ -1,6 +1,6 @@
 // bringup/correlator_dds: correlator messages -> DDS samples -> messages, and the errors of hostile samples.
 
-#include "ugv/bringup/correlator_dds.hpp"
+#include "ugv/adapters/correlator_dds.hpp"
 
 #include <cstring>
 #include <limits>
@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-namespace ugv::bringup {
+namespace ugv::adapters {
 namespace {
 
 using namespace correlator;
@@ -275,4 +275,4 @@ TEST(CorrelatorDds, AbsurdFiniteNumbersAreRefusedAsFromAJsonLine)
 }
 
 } // namespace
-} // namespace ugv::bringup
+} // namespace ugv::adapters

@@ -1,7 +1,7 @@
 // service/dds_bridge on a secured bus (issue 22 item 4): the vehicle takes poses naming it only from its own
 // participants. A team member with a valid certificate of its own (ugv-2) that writes a pose naming ugv-1 is refused
 // and counted, while ugv-1's localisation (another participant with ugv-1's certificate) is used. The team's files
-// are made by bringup/security/make_security.sh (skipped with a message without openssl).
+// are made by bringup/deploy/security/make_security.sh (skipped with a message without openssl).
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "dds_bridge.hpp"
+#include "ugv/service/dds_bridge.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 
@@ -30,11 +30,11 @@ protected:
     {
         folder_ = std::filesystem::temp_directory_path() / ("ugv-dds-bridge-test-" + std::to_string(::getpid()));
         partition_ = "bridge_test_" + std::to_string(::getpid());
-        const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/security/make_security.sh' '" + folder_.string() +
+        const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" + folder_.string() +
                                     "' --partition " + partition_ + " ugv-1 ugv-2 >/dev/null 2>&1";
         const int status = std::system(command.c_str());
         if (status != 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-            GTEST_SKIP() << "bringup/security/make_security.sh failed (is openssl installed? bash "
+            GTEST_SKIP() << "bringup/deploy/security/make_security.sh failed (is openssl installed? bash "
                             "toolchain/host.sh deps installs it)";
         }
     }
@@ -44,9 +44,9 @@ protected:
         std::filesystem::remove_all(folder_, ec); // the private keys too
     }
 
-    bringup::ServiceConfig vehicle(const std::string& identity) const
+    adapters::ServiceConfig vehicle(const std::string& identity) const
     {
-        bringup::ServiceConfig c;
+        adapters::ServiceConfig c;
         c.vehicleId = identity;
         c.dds.domainId = 150 + static_cast<int>(::getpid() % 80);
         c.dds.partition = partition_;
@@ -80,7 +80,7 @@ dds::msg::VehiclePose poseNaming(const std::string& vehicle, double eastM)
 TEST_F(SecuredTeam, APoseInThisVehiclesNameFromAnotherParticipantIsRefused)
 {
     // Arrange: ugv-1's service (the bridge), ugv-1's localisation, and team member ugv-2.
-    const bringup::ServiceConfig config = vehicle("ugv-1");
+    const adapters::ServiceConfig config = vehicle("ugv-1");
     auto serviceBus = dds::Bus::create(busConfig(config));
     auto localisationBus = dds::Bus::create(busConfig(vehicle("ugv-1")));
     auto otherBus = dds::Bus::create(busConfig(vehicle("ugv-2")));

@@ -1,6 +1,6 @@
 // service::PoseHistory: the vehicle pose at a frame's capture time.
 
-#include "pose_history.hpp"
+#include "ugv/service/pose_history.hpp"
 
 #include <cstdint>
 

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Dependency direction (../shared/STYLE.md): platform includes nothing of ours; hal, rt, vision, ipc and correlator include
-# only platform and themselves; bringup may include everything. The service modules never include
-# OpenCV's imgcodecs/highgui (the service links only core, imgproc, calib3d), and vision/ includes no
-# transport, camera or OS-device headers (it must build and test on any host).
+# only platform and themselves. In bringup/: adapters include the modules; the service includes the modules and the
+# adapters; the simulator includes only platform (its truth does not come from the code it judges); the tool may
+# include everything. What the service links (the modules, adapters, service) never includes OpenCV's
+# imgcodecs/highgui (the service links only core, imgproc, calib3d), and vision/ includes no transport, camera or
+# OS-device headers (it must build and test on any host).
 # Usage: check_deps.sh ROOT   -> exit 0 when clean, 1 listing every violation.
 set -u
 root=${1:?usage: check_deps.sh ROOT}
@@ -10,8 +12,10 @@ status=0
 
 violation() { echo "forbidden include: $1"; echo "  fix: $2"; status=1; }
 
+# check_folder FOLDER ALLOWED [host]: FOLDER may include ugv/<m>/ only for m in ALLOWED; "host" allows the image-file
+# and GUI headers of OpenCV (host tools).
 check_folder() {
-    local folder=$1 allowed=$2
+    local folder=$1 allowed=$2 host=${3:-}
     [ -d "$root/$folder" ] || return 0
     while IFS= read -r hit; do
         local file=${hit%%:*} rest=${hit#*:}
@@ -20,10 +24,11 @@ check_folder() {
         used=$(sed -nE 's/.*#include *[<"]ugv\/([a-z_]+)\/.*/\1/p' <<<"$text")
         if [ -n "$used" ] && ! grep -qw -- "$used" <<<"$allowed"; then
             violation "$file:$line: $folder/ includes ugv/$used/" \
-                "$folder/ may include only: $allowed. Move the shared type to platform/ or do the wiring in bringup/."
+                "$folder/ may include only: $allowed. Move the shared type down (platform/, or adapters/ for bringup's), or do the wiring in the tool or the service."
         fi
     done < <(grep -rnE '#include *[<"]ugv/' "$root/$folder" --include='*.hpp' --include='*.cpp' --include='*.h' 2>/dev/null)
 
+    [ "$host" = host ] && return 0
     while IFS= read -r hit; do
         violation "${hit%%:*}:$(cut -d: -f2 <<<"$hit"): $folder/ includes a host-tool or transport header" \
             "the service links only OpenCV core/imgproc/calib3d; vision/ stays free of I/O and transports"
@@ -37,6 +42,11 @@ check_folder rt "platform rt"
 check_folder vision "platform vision"
 check_folder ipc "platform ipc"
 check_folder correlator "platform correlator"
+modules="platform hal rt vision ipc correlator"
+check_folder bringup/adapters "$modules adapters"
+check_folder bringup/service "$modules adapters service"
+check_folder bringup/sim "platform sim" host
+check_folder bringup/tool "$modules adapters service sim tool" host
 
 if [ -d "$root/vision" ]; then
     while IFS= read -r hit; do

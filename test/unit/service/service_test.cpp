@@ -25,12 +25,12 @@
 
 #include "alloc_counter.hpp"
 #include "captured_log.hpp"
-#include "runner.hpp"
-#include "service.hpp"
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
-#include "sim/writer.hpp"
-#include "ugv/bringup/calibration_file.hpp"
+#include "ugv/service/runner.hpp"
+#include "ugv/service/service.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
+#include "ugv/sim/writer.hpp"
+#include "ugv/adapters/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
 #include "ugv/hal/replay_camera.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
@@ -131,7 +131,7 @@ using CameraWrap = std::function<std::unique_ptr<hal::StereoCamera>(std::unique_
 
 std::unique_ptr<Service> makeService(const Course& course, const hal::ReplayOptions& replay,
                                      const ServiceOptions& options = {},
-                                     const bringup::ServiceConfig& config = bringup::ServiceConfig{},
+                                     const adapters::ServiceConfig& config = adapters::ServiceConfig{},
                                      const CameraWrap& wrap = {})
 {
     auto camera = hal::ReplayCamera::open(course.path, replay);
@@ -143,7 +143,7 @@ std::unique_ptr<Service> makeService(const Course& course, const hal::ReplayOpti
     if (wrap) {
         source = wrap(std::move(source));
     }
-    auto calibration = bringup::parseCalibration(course.calibration, "course");
+    auto calibration = adapters::parseCalibration(course.calibration, "course");
     EXPECT_TRUE(calibration.has_value());
     auto service = Service::create(config, *calibration, std::move(source), options);
     EXPECT_TRUE(service.has_value()) << (service ? "" : service.error().message());
@@ -166,7 +166,7 @@ struct HilRun {
     int degradedFrames = 0;
 };
 
-HilRun runHil(const Course& course, const bringup::ServiceConfig& config = bringup::ServiceConfig{},
+HilRun runHil(const Course& course, const adapters::ServiceConfig& config = adapters::ServiceConfig{},
               const CameraWrap& wrap = {})
 {
     HilRun out;
@@ -259,8 +259,8 @@ HilRun runOneCameraMode(const std::filesystem::path& dir, bool colour)
 {
     constexpr std::size_t kFrames = 40;
     const Course course = writeCourse(dir, kFrames, 0, 0, 0, 0, colour);
-    bringup::ServiceConfig config;
-    config.obstacles.detector = bringup::DetectorMode::Colour;
+    adapters::ServiceConfig config;
+    config.obstacles.detector = adapters::DetectorMode::Colour;
     HilRun run = runHil(course, config);
     EXPECT_EQ(run.report.framesPublished, kFrames);
     EXPECT_EQ(run.report.badFrames, 0U);
@@ -363,7 +363,7 @@ TEST_F(ServiceTest, LeftOnlyFramesOfARecordingFallBackToTheOneCameraModeAndStere
     (void)obstaclesFound(run, 8, 16); // grey levels only: few (the colour camera's test below)
     // The message carries the ground the sectors were measured against: stereo's estimate (reliable on this flat
     // course) on a pair, the mount's plane (not reliable) on a left-only frame.
-    const auto calibration = bringup::parseCalibration(course.calibration, "course");
+    const auto calibration = adapters::parseCalibration(course.calibration, "course");
     ASSERT_TRUE(calibration.has_value() && calibration->mount.has_value());
     ASSERT_EQ(run.grounds.size(), kFrames);
     int reliablePairs = 0;
@@ -407,9 +407,9 @@ TEST(FramePipeline, ALeftOnlyFrameTakesTheOneCameraPathInStereoModeAndTheNextPai
     ASSERT_TRUE(course.has_value());
     auto frame = sim::renderCourseFrame(*course, 20);
     ASSERT_TRUE(frame.has_value());
-    auto calibration = bringup::parseCalibration(sim::calibrationText(course->scene.rig), "course");
+    auto calibration = adapters::parseCalibration(sim::calibrationText(course->scene.rig), "course");
     ASSERT_TRUE(calibration.has_value());
-    auto pipeline = FramePipeline::create(*calibration, bringup::ServiceConfig{});
+    auto pipeline = FramePipeline::create(*calibration, adapters::ServiceConfig{});
     ASSERT_TRUE(pipeline.has_value()) << pipeline.error().message();
     FramePipeline& sut = **pipeline;
     std::int64_t rectifiedNs = 0;
@@ -503,7 +503,7 @@ TEST_F(ServiceTest, WhenTheRightCameraStopsTheServiceRunsOnTheLeftOneAndBringsTh
     };
     const test::CapturedLog log;
 
-    const HilRun run = runHil(course, bringup::ServiceConfig{}, wrap);
+    const HilRun run = runHil(course, adapters::ServiceConfig{}, wrap);
 
     const std::vector<std::uint64_t>& lost = dropout.lostSequences;
     std::printf("[ MEASURED ] right camera lost at frame 6: %zu left-only frame(s), back after %d reconnect "
@@ -530,8 +530,8 @@ TEST_F(ServiceTest, BothDetectorsKeepStereosSectorsAndAddOnlyObstaclesWhereItIsU
 {
     constexpr std::size_t kFrames = 20;
     const Course course = writeCourse(dir_, kFrames);
-    bringup::ServiceConfig both;
-    both.obstacles.detector = bringup::DetectorMode::Both;
+    adapters::ServiceConfig both;
+    both.obstacles.detector = adapters::DetectorMode::Both;
 
     const HilRun stereoRun = runHil(course);
     const HilRun bothRun = runHil(course, both);
@@ -720,7 +720,7 @@ TEST_F(ServiceTest, ABusTaskThatThrowsIsLoggedAndDisabledWhileEveryFrameIsStillP
 /// allocations from its steady state to its end must be 0.
 /// With `leftOnlyEvery` the first three of the six looped frames are left-only: the frame path switches between
 /// stereo and the one-camera fallback every three frames.
-void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, const bringup::ServiceConfig& config,
+void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, const adapters::ServiceConfig& config,
                                              bool halfLeftOnly = false, bool colour = false)
 {
     // Under a sanitizer only operator new/delete are counted (the sanitizer owns malloc); the test still runs.
@@ -767,19 +767,19 @@ void expectThreeHundredFramesAllocateNothing(const std::filesystem::path& dir, c
 
 TEST_F(ServiceTest, ThreeHundredFramesAllocateNothing)
 {
-    expectThreeHundredFramesAllocateNothing(dir_, bringup::ServiceConfig{});
+    expectThreeHundredFramesAllocateNothing(dir_, adapters::ServiceConfig{});
 }
 
 TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingWhenFramesSwitchBetweenPairsAndLeftOnly)
 {
-    expectThreeHundredFramesAllocateNothing(dir_, bringup::ServiceConfig{}, true);
+    expectThreeHundredFramesAllocateNothing(dir_, adapters::ServiceConfig{}, true);
 }
 
 TEST_F(ServiceTest, ThreeHundredFramesAllocateNothingWithBothDetectors)
 {
     // obstacles.detector: both runs the stereo detector, the one-camera detector and their fusion on every frame.
-    bringup::ServiceConfig config;
-    config.obstacles.detector = bringup::DetectorMode::Both;
+    adapters::ServiceConfig config;
+    config.obstacles.detector = adapters::DetectorMode::Both;
     expectThreeHundredFramesAllocateNothing(dir_, config);
 }
 
@@ -787,8 +787,8 @@ TEST_F(ServiceTest, ThreeHundredColourFramesAllocateNothingWithBothDetectorsAndL
 {
     // A colour camera: BGR frames through the ring, made grey for stereo (cvtColor) and rectified in colour for the
     // one-camera detector (remap), every third frame left-only (the colour path alone).
-    bringup::ServiceConfig config;
-    config.obstacles.detector = bringup::DetectorMode::Both;
+    adapters::ServiceConfig config;
+    config.obstacles.detector = adapters::DetectorMode::Both;
     expectThreeHundredFramesAllocateNothing(dir_, config, true, true);
 }
 
@@ -901,11 +901,11 @@ TEST_F(ServiceTest, WrongSizeFramesAndAVanishingCameraAreSurvived)
     replay.forcedFps = 20.0;
     auto inner = hal::ReplayCamera::open(course.path, replay);
     ASSERT_TRUE(inner.has_value());
-    auto calibration = bringup::parseCalibration(course.calibration, "course").value();
+    auto calibration = adapters::parseCalibration(course.calibration, "course").value();
     ServiceOptions options;
     options.maxFrames = 30;
     const test::CapturedLog log; // the service's RT log lines arrive through its drain
-    auto service = Service::create(bringup::ServiceConfig{}, calibration,
+    auto service = Service::create(adapters::ServiceConfig{}, calibration,
                                    std::make_unique<FlakyCamera>(std::move(*inner)), options);
     ASSERT_TRUE(service.has_value()) << service.error().message();
     (*service)->start();
@@ -976,8 +976,8 @@ TEST_F(ServiceTest, ARecordingWhoseLastPairIsRefusedStillFinishes)
     replay.forcedFps = 10.0;
     auto inner = hal::ReplayCamera::open(course.path, replay);
     ASSERT_TRUE(inner.has_value());
-    auto calibration = bringup::parseCalibration(course.calibration, "course").value();
-    auto service = Service::create(bringup::ServiceConfig{}, calibration,
+    auto calibration = adapters::parseCalibration(course.calibration, "course").value();
+    auto service = Service::create(adapters::ServiceConfig{}, calibration,
                                    std::make_unique<LastFrameWrongSize>(std::move(*inner), 4));
     ASSERT_TRUE(service.has_value()) << service.error().message();
     (*service)->start();
@@ -999,17 +999,17 @@ TEST_F(ServiceTest, ARecordingWhoseLastPairIsRefusedStillFinishes)
 TEST_F(ServiceTest, CalibrationWithoutMountOrOfAnotherSizeIsRefused)
 {
     const Course course = writeCourse(dir_, 1);
-    auto calibration = bringup::parseCalibration(course.calibration, "course").value();
+    auto calibration = adapters::parseCalibration(course.calibration, "course").value();
     calibration.mount.reset();
     auto camera = hal::ReplayCamera::open(course.path, {}).value();
-    auto noMount = Service::create(bringup::ServiceConfig{}, calibration, std::move(camera));
+    auto noMount = Service::create(adapters::ServiceConfig{}, calibration, std::move(camera));
     ASSERT_FALSE(noMount.has_value());
     EXPECT_NE(noMount.error().message().find("no mount section"), std::string::npos) << noMount.error().message();
 
-    auto other = bringup::parseCalibration(course.calibration, "course").value();
+    auto other = adapters::parseCalibration(course.calibration, "course").value();
     other.imageSize = cv::Size(320, 240);
     auto camera2 = hal::ReplayCamera::open(course.path, {}).value();
-    auto wrongSize = Service::create(bringup::ServiceConfig{}, other, std::move(camera2));
+    auto wrongSize = Service::create(adapters::ServiceConfig{}, other, std::move(camera2));
     ASSERT_FALSE(wrongSize.has_value());
     EXPECT_NE(wrongSize.error().message().find("delivers 640x480 frames but the calibration is for 320x240"),
               std::string::npos)

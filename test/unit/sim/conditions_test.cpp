@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 #include "sim_test_helpers.hpp"
 
 namespace ugv::sim {

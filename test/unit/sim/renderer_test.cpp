@@ -1,4 +1,4 @@
-#include "sim/renderer.hpp"
+#include "ugv/sim/renderer.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "sim/scene.hpp"
+#include "ugv/sim/scene.hpp"
 #include "sim_test_helpers.hpp"
 
 namespace ugv::sim {

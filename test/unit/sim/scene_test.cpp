@@ -1,11 +1,11 @@
-#include "sim/scene.hpp"
+#include "ugv/sim/scene.hpp"
 
 #include <cmath>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "sim/renderer.hpp"
+#include "ugv/sim/renderer.hpp"
 
 namespace ugv::sim {
 namespace {

@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 
 namespace ugv::sim {
 

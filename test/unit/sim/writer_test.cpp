@@ -1,4 +1,4 @@
-#include "sim/writer.hpp"
+#include "ugv/sim/writer.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -8,7 +8,7 @@
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "sim/renderer.hpp"
+#include "ugv/sim/renderer.hpp"
 
 namespace ugv::sim {
 namespace {

@@ -12,8 +12,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
 
 namespace {

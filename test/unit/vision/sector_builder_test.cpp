@@ -10,8 +10,8 @@
 #include <opencv2/core.hpp>
 
 #include "alloc_counter.hpp"
-#include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 
 namespace ugv::vision {
 namespace {

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "chessboard_render.hpp"
+#include "ugv/sim/chessboard_render.hpp"
 
 namespace {
 
@@ -24,7 +24,7 @@ constexpr double kNoiseSigma = 1.0;
 const std::vector<CalibrationPair>& renderedPairs()
 {
     static const std::vector<CalibrationPair> pairs = [] {
-        const ugv::tool::ChessboardRenderer renderer(ugv::tool::SimRig{}, ugv::tool::SimBoard{});
+        const ugv::sim::ChessboardRenderer renderer(ugv::sim::SimRig{}, ugv::sim::SimBoard{});
         cv::RNG rng(kSeed);
         std::vector<CalibrationPair> result;
         for (const auto& pose : renderer.poses(kPairs, kSeed)) {
@@ -59,7 +59,7 @@ bool rejectedWith(const ugv::vision::CalibrationReport& report, const std::strin
 
 TEST(StereoCalibrator, RecoversTheRenderedRig)
 {
-    const ugv::tool::SimRig truth;
+    const ugv::sim::SimRig truth;
     ASSERT_EQ(renderedPairs().size(), static_cast<std::size_t>(kPairs));
 
     const auto report = calibrateStereo(renderedPairs(), CalibratorConfig{});

@@ -2,7 +2,7 @@
 
 /// @file
 /// The correlator's inputs and outputs, as plain values. The offline tool reads and writes them as JSON lines
-/// (bringup/tool/correlate_io.*); the DDS types of a later issue carry the same fields.
+/// (bringup/adapters/src/correlate_io.cpp); the DDS samples carry the same fields (correlator_dds.cpp there).
 ///
 /// Conventions: time t in seconds (the mission clock of the messages; the correlator has no clock of its own);
 /// latitude/longitude in degrees WGS84; heading a compass heading (0 = north, clockwise, degrees); bearing

@@ -12,7 +12,7 @@
 ///
 /// Publishers never block: a subscriber that is too slow loses its oldest chunks (ConsumerTooSlowPolicy::
 /// DISCARD_OLDEST_DATA). A loan fails (counted) when the memory pool is exhausted, e.g. by a subscriber that holds
-/// chunks; the chunk sizes and counts are RouDi's config (bringup/roudi.toml).
+/// chunks; the chunk sizes and counts are RouDi's config (bringup/deploy/roudi.toml).
 ///
 /// RouDi: startRuntime() first checks that a RouDi answers on its socket and fails with a clear error otherwise
 /// (iceoryx itself would wait, then abort the process). EmbeddedRouDi runs RouDi inside this process (tests, and

@@ -1,0 +1,99 @@
+#pragma once
+
+/// @file
+/// Sending on the DDS bus from a command-line sender (`ugvsense bus-send`, and the test tool `bus-hostile`): the
+/// four writers of the correlator's inputs, waits for readers and acknowledgements, writes that retry while a
+/// keep-all history is full, and the summary line. Every wait ends on SIGINT/SIGTERM (g_stop). Init-time
+/// and tool code only (allocates, blocks).
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <iostream>
+#include <string>
+#include <thread>
+
+#include "ugv/ipc/dds_bus.hpp"
+#include "ugv/platform/error.hpp"
+#include "ugv/platform/result.hpp"
+#include "ugv/tool/bus_options.hpp"
+
+namespace ugv::tool::bus {
+
+using Clock = std::chrono::steady_clock;
+
+inline constexpr double kDefaultWaitReadersS = 20.0; ///< bus-send's --wait-timeout default
+inline constexpr auto kAckTimeout = std::chrono::seconds(60);
+inline constexpr auto kRefusedWriteTimeout = std::chrono::seconds(30); ///< a writer refusing every sample this long
+// Adelaide, the MAGIC 2010 site: where the senders' vehicles drive and their objects stand.
+inline constexpr double kSiteLat = -34.9285;
+inline constexpr double kSiteLon = 138.6007;
+
+/// Prints "ugvsense COMMAND: error: ..." and returns 1 (the job failed).
+int fail(const std::string& command, const Error& error);
+
+/// Sleeps until `until` in short slices; false when a signal stopped it first.
+bool sleepUntil(Clock::time_point until);
+
+/// How many matched readers a sender waits for before it sends, and for how long at most.
+struct ReaderWait {
+    int readers = 1;
+    double timeoutS = kDefaultWaitReadersS;
+};
+
+/// Waits up to wait.timeoutS for wait.readers matched readers of `writer`; a warning on stderr if fewer came.
+template <class T>
+void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, const std::string& topic,
+                    const std::string& command)
+{
+    if (wait.readers <= 0) {
+        return;
+    }
+    const auto until =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait.timeoutS));
+    while (writer.matched() < wait.readers && Clock::now() < until && !g_stop.load()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    if (writer.matched() < wait.readers && !g_stop.load()) {
+        std::cerr << "ugvsense " << command << ": warning: " << writer.matched() << " of " << wait.readers
+                  << " reader(s) of " << topic << " after " << wait.timeoutS
+                  << " s; sending anyway (late reliable readers get the history while this process lives)\n";
+    }
+}
+
+/// Writes one sample, retrying while Fast DDS refuses it (a full keep-all history: a reader is slow to
+/// acknowledge). False after kRefusedWriteTimeout or a signal.
+template <class T>
+bool writeOne(ipc::dds::Writer<T>& writer, const T& sample)
+{
+    const auto until = Clock::now() + kRefusedWriteTimeout;
+    while (!writer.write(sample)) {
+        if (g_stop.load() || Clock::now() >= until) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/// The four writers of the correlator's inputs and what each sent.
+struct InputWriters {
+    ipc::dds::Writer<ipc::dds::msg::OoiObservation> observations;
+    ipc::dds::Writer<ipc::dds::msg::UavObservation> uav;
+    ipc::dds::Writer<ipc::dds::msg::ConfirmationState> confirmations;
+    ipc::dds::Writer<ipc::dds::msg::PoseCorrection> corrections;
+    std::array<std::uint64_t, 4> sent{}; ///< per topic, in this order
+
+    static Result<InputWriters, Error> create(ipc::dds::Bus& bus);
+    [[nodiscard]] std::uint64_t total() const { return sent[0] + sent[1] + sent[2] + sent[3]; }
+    /// The most readers any used writer has.
+    [[nodiscard]] int readers() const;
+    /// Every used writer's samples acknowledged by all its matched reliable readers, within kAckTimeout in all.
+    bool waitForAcks();
+};
+
+/// The end of a reliable sender: acknowledgements, the summary line ("sent N message(s) ... WHAT on BUS,
+/// acknowledged by R reader(s)"), then `lingerS` more seconds. The exit code: 1 when not all was acknowledged.
+int finish(InputWriters& w, const std::string& command, const std::string& what, double lingerS,
+           const ipc::dds::BusConfig& config);
+
+} // namespace ugv::tool::bus

@@ -1,0 +1,2 @@
+// Planted: the adapters are linked by the service, which must not read image files.
+#include <opencv2/imgcodecs.hpp>

@@ -1,0 +1,2 @@
+// Planted: the simulator must not include the vision code it judges.
+#include "ugv/vision/rectifier.hpp"
