@@ -5,6 +5,7 @@
 
 #include <libcamera/libcamera.h>
 
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -12,8 +13,10 @@
 #include <cstring>
 #include <ctime>
 #include <map>
+#include <optional>
 #include <vector>
 
+#include "ugv/hal/yuv420.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/platform/spsc_ring.hpp"
@@ -23,6 +26,7 @@ namespace ugv::hal {
 namespace {
 
 constexpr unsigned kBuffers = 4;
+constexpr std::size_t kPlanes = 3; // YUV420: Y, U, V
 
 } // namespace
 
@@ -33,15 +37,17 @@ struct Side {
     libcamera::Stream* stream = nullptr;
     std::unique_ptr<libcamera::FrameBufferAllocator> allocator;
     std::vector<std::unique_ptr<libcamera::Request>> requests;
+    /// A buffer's planes mapped (the Y plane only for grey frames): each from the start of its dmabuf.
     struct Mapping {
-        void* address = nullptr;
-        std::size_t length = 0;
+        std::array<void*, kPlanes> address{};
+        std::array<std::size_t, kPlanes> length{};
+        std::array<const std::uint8_t*, kPlanes> plane{}; ///< address + the plane's offset
     };
     std::map<const libcamera::FrameBuffer*, Mapping> maps;
     SpscRing<libcamera::Request*, 16> completed; ///< libcamera's thread -> capture thread
     libcamera::Request* pending = nullptr;       ///< popped, not yet delivered
     libcamera::Request* delivered = nullptr;     ///< its buffer backs the last frame's copy: requeued next grab
-    unsigned stride = 0;
+    unsigned stride = 0;                         ///< of the Y plane; U and V rows are half as long (libcamera's YUV420)
     bool acquired = false;
     bool started = false;
     std::atomic<bool> failed{false};
@@ -57,9 +63,17 @@ struct LibcameraStereoCamera::Impl {
     bool semaphore = false;
     Image<std::uint8_t> leftGrey;
     Image<std::uint8_t> rightGrey;
+    Image<BgrPixel> leftBgr; ///< colour: the frames (empty otherwise)
+    Image<BgrPixel> rightBgr;
+    std::optional<Yuv420ToBgr> toBgr;
 
-    Impl(int width, int height) : leftGrey(width, height), rightGrey(width, height)
+    Impl(int width, int height, bool colour)
+        : leftGrey(width, height), rightGrey(width, height), leftBgr(colour ? width : 0, colour ? height : 0),
+          rightBgr(colour ? width : 0, colour ? height : 0)
     {
+        if (colour) {
+            toBgr.emplace(width, height);
+        }
         semaphore = ::sem_init(&ready, 0, 0) == 0;
     }
     ~Impl()
@@ -85,6 +99,9 @@ struct LibcameraStereoCamera::Impl {
     }
     void onLeft(libcamera::Request* request) { complete(left, request); }
     void onRight(libcamera::Request* request) { complete(right, request); }
+    /// The side's request, columns [x0, x0 + width), into the left or right image: grey (the Y plane) or BGR.
+    void copy(const Side& side, const libcamera::Request* request, int x0, bool intoRight) noexcept;
+    [[nodiscard]] StereoViews images(bool leftOnly) const noexcept;
 };
 
 namespace {
@@ -122,21 +139,41 @@ Result<void, Error> configureSide(Side& side, const std::shared_ptr<libcamera::C
     return {};
 }
 
-/// Allocates the side's frame buffers, maps their Y planes and makes one capture request per buffer.
-Result<void, Error> mapBuffers(Side& side, const std::string& name)
+/// Maps the first `planes` planes of `buffer`, each from the start of its dmabuf (a plane's offset need not be
+/// page-aligned); what was mapped stays in `mapping` for stop() to unmap, also on failure.
+bool mapPlanes(const libcamera::FrameBuffer& buffer, std::size_t planes, Side::Mapping& mapping)
+{
+    if (buffer.planes().size() < planes) {
+        return false;
+    }
+    for (std::size_t i = 0; i < planes; ++i) {
+        const libcamera::FrameBuffer::Plane& plane = buffer.planes()[i];
+        const std::size_t length = plane.offset + plane.length;
+        void* address = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, plane.fd.get(), 0);
+        if (address == MAP_FAILED) {
+            return false;
+        }
+        mapping.address[i] = address;
+        mapping.length[i] = length;
+        mapping.plane[i] = static_cast<const std::uint8_t*>(address) + plane.offset;
+    }
+    return true;
+}
+
+/// Allocates the side's frame buffers, maps their Y planes (all three for colour) and makes one capture request per
+/// buffer.
+Result<void, Error> mapBuffers(Side& side, const std::string& name, bool colour)
 {
     side.allocator = std::make_unique<libcamera::FrameBufferAllocator>(side.camera);
     if (side.allocator->allocate(side.stream) < 0) {
         return Unexpected(Error{name, "cannot allocate frame buffers", "check the memory limits"});
     }
     for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : side.allocator->buffers(side.stream)) {
-        const libcamera::FrameBuffer::Plane& y = buffer->planes()[0];
-        const std::size_t length = y.offset + y.length;
-        void* address = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, y.fd.get(), 0);
-        if (address == MAP_FAILED) {
-            return Unexpected(Error{name, "cannot map a frame buffer", "check the memory limits"});
+        if (!mapPlanes(*buffer, colour ? kPlanes : 1, side.maps[buffer.get()])) {
+            return Unexpected(
+                Error{name, colour ? "cannot map a frame buffer's Y, U and V planes" : "cannot map a frame buffer",
+                      "check the memory limits"});
         }
-        side.maps[buffer.get()] = Side::Mapping{address, length};
         std::unique_ptr<libcamera::Request> request = side.camera->createRequest();
         if (!request || request->addBuffer(side.stream, buffer.get()) != 0) {
             return Unexpected(Error{name, "cannot create a capture request", "check the camera"});
@@ -187,6 +224,12 @@ Result<std::unique_ptr<LibcameraStereoCamera>, Error> LibcameraStereoCamera::ope
     if (options.width <= 0 || options.height <= 0 || !(options.fps > 0.0) || !(options.maxPairSkewMs > 0.0)) {
         return Unexpected(Error{"libcamera", "size, rate or skew out of range", "check camera.width/height/fps"});
     }
+    if (options.colour && (options.width % 2 != 0 || options.height % 2 != 0)) {
+        return Unexpected(Error{"libcamera",
+                                "colour frames need an even width and height (a YUV420 chroma sample covers 2 x 2 "
+                                "pixels)",
+                                "set camera.width/height to even numbers, or camera.colour: false"});
+    }
     std::unique_ptr<LibcameraStereoCamera> camera(new LibcameraStereoCamera(options));
     if (auto started = camera->start(); !started) {
         return Unexpected(started.error());
@@ -196,7 +239,7 @@ Result<std::unique_ptr<LibcameraStereoCamera>, Error> LibcameraStereoCamera::ope
 
 Result<void, Error> LibcameraStereoCamera::start()
 {
-    impl_ = std::make_unique<Impl>(options_.width, options_.height);
+    impl_ = std::make_unique<Impl>(options_.width, options_.height, options_.colour);
     if (!impl_->semaphore) {
         return Unexpected(Error{"libcamera", "sem_init failed", "check the system"});
     }
@@ -232,7 +275,7 @@ Result<void, Error> LibcameraStereoCamera::start()
         if (auto configured = configureSide(side, cam, name, frameWidth, options_.height); !configured) {
             return configured;
         }
-        if (auto mapped = mapBuffers(side, name); !mapped) {
+        if (auto mapped = mapBuffers(side, name, options_.colour); !mapped) {
             return mapped;
         }
         cam->requestCompleted.connect(impl_.get(), handler);
@@ -266,7 +309,11 @@ void LibcameraStereoCamera::stop() noexcept
         }
         for (auto& [buffer, mapping] : side->maps) {
             (void)buffer;
-            ::munmap(mapping.address, mapping.length);
+            for (std::size_t i = 0; i < kPlanes; ++i) {
+                if (mapping.address[i] != nullptr) {
+                    ::munmap(mapping.address[i], mapping.length[i]);
+                }
+            }
         }
         side->maps.clear();
         side->requests.clear();
@@ -303,22 +350,55 @@ std::int64_t sensorStamp(const Side& side, const libcamera::Request* request) no
     return buffer != nullptr ? static_cast<std::int64_t>(buffer->metadata().timestamp) : 0;
 }
 
+const Side::Mapping* mappingOf(const Side& side, const libcamera::Request* request) noexcept
+{
+    const auto it = side.maps.find(request->findBuffer(side.stream));
+    return it == side.maps.end() ? nullptr : &it->second;
+}
+
 /// Copies the Y plane columns [x0, x0 + width) of the request's buffer into `out`.
 void copyY(const Side& side, const libcamera::Request* request, int x0, ImageViewU8 out) noexcept
 {
-    const libcamera::FrameBuffer* buffer = request->findBuffer(side.stream);
-    const auto it = side.maps.find(buffer);
-    if (it == side.maps.end()) {
+    const Side::Mapping* mapping = mappingOf(side, request);
+    if (mapping == nullptr) {
         return;
     }
-    const auto* base = static_cast<const std::uint8_t*>(it->second.address) + buffer->planes()[0].offset;
     for (int y = 0; y < out.height(); ++y) {
-        std::memcpy(out.row(y), base + static_cast<std::size_t>(y) * side.stride + x0,
+        std::memcpy(out.row(y), mapping->plane[0] + static_cast<std::size_t>(y) * side.stride + x0,
                     static_cast<std::size_t>(out.width()));
     }
 }
 
+/// Converts the columns [x0, x0 + width) of the request's YUV420 buffer into `out`.
+void copyBgr(const Side& side, const libcamera::Request* request, int x0, Yuv420ToBgr& toBgr, BgrView out) noexcept
+{
+    const Side::Mapping* mapping = mappingOf(side, request);
+    if (mapping == nullptr) {
+        return;
+    }
+    const Yuv420View yuv{mapping->plane[0], mapping->plane[1], mapping->plane[2], side.stride, side.stride / 2U};
+    (void)toBgr.convert(yuv, x0, out);
+}
+
 } // namespace
+
+void LibcameraStereoCamera::Impl::copy(const Side& side, const libcamera::Request* request, int x0,
+                                       bool intoRight) noexcept
+{
+    if (toBgr) {
+        copyBgr(side, request, x0, *toBgr, intoRight ? rightBgr.view() : leftBgr.view());
+    } else {
+        copyY(side, request, x0, intoRight ? rightGrey.view() : leftGrey.view());
+    }
+}
+
+StereoViews LibcameraStereoCamera::Impl::images(bool leftOnly) const noexcept
+{
+    if (toBgr) {
+        return bgrViews(leftBgr.view(), leftOnly ? ConstBgrView() : rightBgr.view());
+    }
+    return greyViews(leftGrey.view(), leftOnly ? ConstImageViewU8() : rightGrey.view());
+}
 
 GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept
 {
@@ -369,12 +449,12 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     }
     im.left.haveSequence = true;
     im.left.lastSequence = sequence;
-    copyY(im.left, im.left.pending, 0, im.leftGrey.view());
+    im.copy(im.left, im.left.pending, 0, false);
     if (stereo) {
-        copyY(im.right, im.right.pending, 0, im.rightGrey.view());
+        im.copy(im.right, im.right.pending, 0, true);
         out.rightStampNs = sensorStamp(im.right, im.right.pending);
     } else if (options_.sideBySide) {
-        copyY(im.left, im.left.pending, options_.width, im.rightGrey.view());
+        im.copy(im.left, im.left.pending, options_.width, true);
         out.rightStampNs = sensorStamp(im.left, im.left.pending);
     } else {
         out.rightStampNs = 0; // one camera: a left-only frame
@@ -382,7 +462,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     }
     out.leftStampNs = sensorStamp(im.left, im.left.pending);
     out.sequence = sequence;
-    out.images = greyViews(im.leftGrey.view(), options_.oneCamera ? ConstImageViewU8() : im.rightGrey.view());
+    out.images = im.images(options_.oneCamera);
     im.left.delivered = im.left.pending;
     im.left.pending = nullptr;
     im.right.delivered = im.right.pending;

@@ -67,6 +67,7 @@ Result<std::unique_ptr<hal::StereoCamera>, Error> openCamera(const ServiceConfig
         options.height = config.camera.height;
         options.fps = config.camera.fps;
         options.maxPairSkewMs = config.camera.maxPairSkewMs;
+        options.colour = captureInColour(config);
         return upcast(hal::LibcameraStereoCamera::open(options));
     }
     }

@@ -120,7 +120,8 @@ std::vector<KeySpec> cameraKeys()
         choiceKey<ColourChoice>(
             "camera.colour",
             "BGR frames for the one-camera detector and stereo's fallback to the left camera: auto = from a V4L2 "
-            "yuyv camera; false = grey (the Y plane: saves a conversion)",
+            "yuyv camera; true = also from libcamera (its YUV420 converted); false = grey (the Y plane: saves a "
+            "conversion)",
             {{"auto", ColourChoice::Auto}, {"true", ColourChoice::On}, {"false", ColourChoice::Off}},
             UGV_REF(camera.colour)),
         textKey("camera.replay_path", Kind::Path, "recording to replay (backend: replay)", UGV_REF(camera.replayPath)),
@@ -481,13 +482,10 @@ public:
                   "is none (one camera) but obstacles.detector needs a stereo pair",
                   "set obstacles.detector: colour for a one-camera rig, or name the right camera's device");
         }
-        if (config_.camera.colour == ColourChoice::On &&
-            (config_.camera.backend == CameraBackend::Libcamera || config_.camera.format == PixelFormatChoice::Grey)) {
-            error(at("camera"), "camera.colour",
-                  config_.camera.backend == CameraBackend::Libcamera
-                      ? "is true but the libcamera backend delivers grey frames (the Y plane) in this version"
-                      : "is true but camera.format is grey (a grey camera has no colour)",
-                  "use backend v4l2 with format yuyv for colour, or set camera.colour: auto");
+        if (config_.camera.colour == ColourChoice::On && config_.camera.backend == CameraBackend::V4l2 &&
+            config_.camera.format == PixelFormatChoice::Grey) {
+            error(at("camera"), "camera.colour", "is true but camera.format is grey (a grey camera has no colour)",
+                  "set camera.format: yuyv for colour, or camera.colour: auto");
         }
         if (config_.camera.backend == CameraBackend::V4l2 && config_.camera.leftDevice.empty()) {
             error(at("camera"), "camera.left_device", "is empty but camera.backend is v4l2",

@@ -36,6 +36,14 @@ TEST(LibcameraCamera, SideBySideWithoutACameraAndBadOptionsAreErrors)
     auto refused = LibcameraStereoCamera::open(bad);
     ASSERT_FALSE(refused.has_value());
     EXPECT_NE(refused.error().message().find("out of range"), std::string::npos);
+
+    LibcameraOptions oddColour;
+    oddColour.colour = true;
+    oddColour.width = 641;
+    auto odd = LibcameraStereoCamera::open(oddColour);
+    ASSERT_FALSE(odd.has_value());
+    EXPECT_NE(odd.error().message().find("colour frames need an even width and height"), std::string::npos)
+        << odd.error().message();
 }
 
 } // namespace

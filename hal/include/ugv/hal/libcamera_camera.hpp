@@ -3,10 +3,10 @@
 /// @file
 /// The libcamera backend (libcamera 0.0.3): two cameras (left, right), one side-by-side stereo camera, or one camera
 /// alone (left-only frames, for the one-camera mode), streaming
-/// YUV420 at the configured size and rate (FrameDurationLimits); the Y plane is the grey image. Each camera's
-/// requests complete on libcamera's thread, which hands the Request pointer to the capture thread through a
-/// wait-free ring and a semaphore; grab() pairs the two cameras' frames by their sensor timestamps within a skew,
-/// copies the Y planes and requeues the requests.
+/// YUV420 at the configured size and rate (FrameDurationLimits); the Y plane is the grey image, or with `colour` the
+/// three planes are converted to BGR. Each camera's requests complete on libcamera's thread, which hands the Request
+/// pointer to the capture thread through a wait-free ring and a semaphore; grab() pairs the two cameras' frames by
+/// their sensor timestamps within a skew, copies (or converts) the images and requeues the requests.
 ///
 /// With no camera present, open() fails with a clear error (tested here; no camera exists on our machines, so the
 /// streaming path is untested here and is checked on the vehicle: `ugvsensed --config` with camera.backend libcamera).
@@ -34,6 +34,9 @@ struct LibcameraOptions {
     std::string rightId;     ///< empty with sideBySide false: the second camera
     bool sideBySide = false; ///< one camera delivering 2 w x h, left half then right half
     bool oneCamera = false;  ///< leftId alone: every frame left-only (rightId and sideBySide unused)
+    /// Deliver BGR frames (Bgr8) converted from the YUV420 buffers (all three planes mapped; OpenCV's BT.601
+    /// conversion, as V4L2's colour) instead of the Y plane; width and height must be even.
+    bool colour = false;
     int width = 640;
     int height = 480;
     double fps = 30.0;
@@ -49,7 +52,10 @@ public:
 
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;
-    [[nodiscard]] PixelFormat format() const noexcept override { return PixelFormat::Grey8; }
+    [[nodiscard]] PixelFormat format() const noexcept override
+    {
+        return options_.colour ? PixelFormat::Bgr8 : PixelFormat::Grey8;
+    }
     [[nodiscard]] int width() const noexcept override { return options_.width; }
     [[nodiscard]] int height() const noexcept override { return options_.height; }
     [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
