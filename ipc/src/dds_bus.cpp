@@ -103,7 +103,8 @@ Result<void, Error> parseServers(const std::string& list, rtps::RemoteServerList
 }
 
 constexpr std::uintmax_t kMaxSecurityFileBytes = 1U << 20U;
-constexpr const char* kSecurityFix = "make the files with bringup/deploy/security/make_security.sh (README \"Secured bus\")";
+constexpr const char* kSecurityFix =
+    "make the files with bringup/deploy/security/make_security.sh (README \"Secured bus\")";
 
 /// The Fast DDS properties that load the three builtin security plugins with `c`'s files.
 void addSecurityProperties(const SecurityConfig& c, fdds::DomainParticipantQos& pq)

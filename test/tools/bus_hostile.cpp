@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "ugv/ipc/dds_bus.hpp"
+#include "ugv/ipc/dds_convert.hpp"
 #include "ugv/tool/args.hpp"
 #include "ugv/tool/bus_options.hpp"
 #include "ugv/tool/bus_writers.hpp"
-#include "ugv/ipc/dds_bus.hpp"
-#include "ugv/ipc/dds_convert.hpp"
 
 namespace ugv::tool {
 namespace {

@@ -8,9 +8,9 @@
 //   time). Target: p99 under 1 ms. Baseline in the same run, BM_RawWriteToSubscriber: the same sample written
 //   directly by a Fast DDS writer in a child process (no ring, no task, no conversion).
 // - BM_SectorsHandoverToSubscriberSecured / BM_RawWriteToSubscriberSecured: the same two on a secured bus (DDS
-//   Security: PKI-DH, Access-Permissions, AES-GCM; the files made once per run by bringup/deploy/security/make_security.sh
-//   in a temporary folder): the cost of security against the open bus in the same run. Target: p99 at most 1.5x
-//   the open bus's (issue 22 item 4).
+//   Security: PKI-DH, Access-Permissions, AES-GCM; the files made once per run by
+//   bringup/deploy/security/make_security.sh in a temporary folder): the cost of security against the open bus in the
+//   same run. Target: p99 at most 1.5x the open bus's (issue 22 item 4).
 // The latency benchmarks report p50/p99/max counters [us] over the iterations (manual time = the latency).
 #include <fcntl.h>
 #include <semaphore.h>
@@ -28,11 +28,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ugv/service/dds_bridge.hpp"
-#include "ugv/service/service.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/platform/spsc_ring.hpp"
+#include "ugv/service/dds_bridge.hpp"
+#include "ugv/service/service.hpp"
 
 namespace {
 

@@ -15,10 +15,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
-#include "ugv/sim/renderer.hpp"
-#include "ugv/sim/scene.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/rt/latency_histogram.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
 #include "ugv/vision/census_sgm.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/obstacle_verifier.hpp"

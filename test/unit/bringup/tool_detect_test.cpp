@@ -14,8 +14,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "ugv/tool/eval_suite.hpp"
 #include "run_command.hpp"
+#include "ugv/tool/eval_suite.hpp"
 namespace {
 
 using ToolRun = ugv::test::CommandRun;

@@ -14,9 +14,9 @@
 
 #include <gtest/gtest.h>
 
-#include "ugv/service/dds_bridge.hpp"
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/ipc/dds_convert.hpp"
+#include "ugv/service/dds_bridge.hpp"
 
 namespace ugv::service {
 namespace {
@@ -30,8 +30,8 @@ protected:
     {
         folder_ = std::filesystem::temp_directory_path() / ("ugv-dds-bridge-test-" + std::to_string(::getpid()));
         partition_ = "bridge_test_" + std::to_string(::getpid());
-        const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" + folder_.string() +
-                                    "' --partition " + partition_ + " ugv-1 ugv-2 >/dev/null 2>&1";
+        const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" +
+                                    folder_.string() + "' --partition " + partition_ + " ugv-1 ugv-2 >/dev/null 2>&1";
         const int status = std::system(command.c_str());
         if (status != 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
             GTEST_SKIP() << "bringup/deploy/security/make_security.sh failed (is openssl installed? bash "

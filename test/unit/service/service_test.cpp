@@ -25,16 +25,16 @@
 
 #include "alloc_counter.hpp"
 #include "captured_log.hpp"
-#include "ugv/service/runner.hpp"
-#include "ugv/service/service.hpp"
-#include "ugv/sim/renderer.hpp"
-#include "ugv/sim/scene.hpp"
-#include "ugv/sim/writer.hpp"
 #include "ugv/adapters/calibration_file.hpp"
 #include "ugv/hal/recording.hpp"
 #include "ugv/hal/replay_camera.hpp"
 #include "ugv/ipc/iceoryx_rings.hpp"
 #include "ugv/platform/log.hpp"
+#include "ugv/service/runner.hpp"
+#include "ugv/service/service.hpp"
+#include "ugv/sim/renderer.hpp"
+#include "ugv/sim/scene.hpp"
+#include "ugv/sim/writer.hpp"
 #include "ugv/vision/roi_matcher.hpp"
 
 namespace ugv::service {

@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "sim_test_helpers.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
-#include "sim_test_helpers.hpp"
 
 namespace ugv::sim {
 namespace {

@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "ugv/sim/scene.hpp"
 #include "sim_test_helpers.hpp"
+#include "ugv/sim/scene.hpp"
 
 namespace ugv::sim {
 namespace {

@@ -13,9 +13,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "ugv/platform/cpu_level.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
-#include "ugv/platform/cpu_level.hpp"
 #include "ugv/vision/ground_plane.hpp"
 
 namespace ugv::vision {

@@ -2,8 +2,9 @@
 
 /// @file
 /// The correlator driven by a stream of messages in mission-time order, the same way for every caller: the offline
-/// tool (`ugvsense correlate` on a JSON-lines file), the live task on the bus (bringup/service/include/ugv/service/correlator_task.hpp)
-/// and `correlate --from-dds`. Same messages in the same order give the same snapshots, by construction.
+/// tool (`ugvsense correlate` on a JSON-lines file), the live task on the bus
+/// (bringup/service/include/ugv/service/correlator_task.hpp) and `correlate --from-dds`. Same messages in the same
+/// order give the same snapshots, by construction.
 ///
 /// Rules: a snapshot is taken at every period boundary of mission time that a message passes (boundaries at
 /// multiples of the period), at most kMaxSnapshotsPerGap for one message: the boundaries of a longer gap (a jump in

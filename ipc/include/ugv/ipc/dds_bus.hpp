@@ -29,7 +29,8 @@
 ///
 /// Thread-safety: Bus::create/writer/reader from one thread; a Writer or Reader is used by one thread at a time;
 /// different ones may be used concurrently (Fast DDS locks inside). RT-safe: no (Fast DDS allocates and locks).
-/// Keep it off the frame path: the service's DDS task (bringup/service/include/ugv/service/dds_bridge.hpp) is the only user there.
+/// Keep it off the frame path: the service's DDS task (bringup/service/include/ugv/service/dds_bridge.hpp) is the only
+/// user there.
 
 #include <array>
 #include <chrono>
@@ -67,8 +68,8 @@ inline constexpr std::size_t kMaxNameLength = 64;
 
 /// DDS Security (Fast DDS's builtin plugins: PKI-DH authentication, Access-Permissions access control, AES-GCM-GMAC
 /// encryption; OpenSSL 3). Paths of PEM certificates and keys and of S/MIME-signed XML documents, as made by
-/// bringup/deploy/security/make_security.sh (the file names of a ROS 2 SROS2 enclave). With it on, this participant talks
-/// only to participants whose certificate the identity CA signed and whose signed permissions allow the topic.
+/// bringup/deploy/security/make_security.sh (the file names of a ROS 2 SROS2 enclave). With it on, this participant
+/// talks only to participants whose certificate the identity CA signed and whose signed permissions allow the topic.
 /// Our topics are then written in the partition `<partition>.<identity>` (each participant's permissions allow it
 /// only its own) and read in `<partition>.*`: Bus::writerIdentity() tells a reader whose partition a sample came
 /// from, so that a receiver can drop a sample claiming another sender (README "Secured bus").
