@@ -97,7 +97,18 @@ run_tests() {
     build release
     echo "== release: unit and data tests"
     local status=0
-    ctest --preset release -j "$(nproc)" || status=1
+    if ! ctest --preset release -j "$(nproc)"; then
+        # One more try for the multi-process DDS tests alone (system.team-bus.*): Fast DDS's discovery of a process
+        # restarted after SIGKILL, or of a secured participant's handshakes, sometimes misses its 60 s
+        # (eProsima/Fast-DDS#3822; a rerun on the same machine passes). Any other failure stands.
+        local failed=build/release/Testing/Temporary/LastTestsFailed.log
+        if [ -s "$failed" ] && ! grep -qv ':system[.]team-bus[.]' "$failed"; then
+            echo "== release: the team-bus tests that failed, once more: $(cut -d: -f2 "$failed" | tr '\n' ' ')"
+            ctest --preset release --rerun-failed || status=1
+        else
+            status=1
+        fi
+    fi
     if [ "${UGV_SKIP_ASAN:-0}" != 1 ]; then
         build asan
         echo "== asan (address + undefined sanitizers): unit tests"
