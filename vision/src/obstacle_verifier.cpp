@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <string>
 
+#include "obstacle_verifier.simd.hpp"
+
 namespace ugv::vision {
 namespace {
 
@@ -18,60 +20,86 @@ Error configError(const std::string& what)
     return Error{"ObstacleVerifierConfig", what, "see vision/include/ugv/vision/obstacle_verifier.hpp"};
 }
 
+/// std::lround for x >= 0, inline (x - (int)x is exact: a double's fractional part is representable).
+int roundNonNegative(double x) noexcept
+{
+    const auto i = static_cast<int>(x);
+    return x - i >= 0.5 ? i + 1 : i;
+}
+
 /// The left window of one pixel, zero-mean, prepared once for its costs at several disparities: the zero-mean SAD
 /// against the right image shifted by d16 / 16 px (linear interpolation along x), in 1/16 grey levels summed over
-/// the window. The caller checks the bounds.
+/// the window. The caller checks the bounds. Rows of simd::kWindowLanes values, zero past the window's width (the
+/// layout of the universal-intrinsics kernel).
 class LeftWindow {
 public:
     LeftWindow(ConstImageViewU8 left, int x, int v, int hw, int hh) noexcept : x_(x), v_(v), hw_(hw), hh_(hh)
     {
+        const int width = 2 * hw + 1;
+        const int rows = 2 * hh + 1;
         int sum = 0;
-        for (int j = -hh; j <= hh; ++j) {
-            const std::uint8_t* l = left.row(v + j);
-            for (int i = -hw; i <= hw; ++i) {
-                l16_[n_] = kSub * l[x + i];
-                sum += l16_[n_++];
+        for (int j = 0; j < rows; ++j) {
+            const std::uint8_t* l = left.row(v - hh + j) + x - hw;
+            std::int16_t* dst = l16_ + j * kLanes;
+            for (int i = 0; i < width; ++i) {
+                dst[i] = static_cast<std::int16_t>(kSub * l[i]);
+                sum += dst[i];
             }
+            std::fill(dst + width, dst + kLanes, std::int16_t{0});
         }
-        const int mean = sum / n_;
-        for (int k = 0; k < n_; ++k) {
-            l16_[k] -= mean;
-            contrast_ += std::abs(l16_[k]);
+        const int mean = sum / (width * rows);
+        for (int j = 0; j < rows; ++j) {
+            std::int16_t* dst = l16_ + j * kLanes;
+            for (int i = 0; i < width; ++i) {
+                dst[i] = static_cast<std::int16_t>(dst[i] - mean);
+                contrast_ += std::abs(dst[i]);
+            }
         }
     }
     /// Sum of |L - mean L| over the window [1/16 grey].
     [[nodiscard]] int contrast() const noexcept { return contrast_; }
 
-    /// The window's zero-mean SAD against the right image at disparity d16.
-    [[nodiscard]] int costAt(ConstImageViewU8 right, int d16) const noexcept
+    /// The window's zero-mean SAD against the right image at disparity d16; `simd` false: the scalar reference.
+    [[nodiscard]] int costAt(ConstImageViewU8 right, int d16, bool simd) const noexcept
     {
-        int r16[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
-        int n = 0;
-        int sum = 0;
         // Every column of the window shares the sub-pixel fraction: column i reads right columns xi0 + i and
         // xi0 + i + 1 with the same weights ((x + i) 16 - d16 differs from the first by 16 i).
         const int xr16 = (x_ - hw_) * kSub - d16;
         const int xi0 = xr16 >> 4;
         const int f = xr16 & (kSub - 1);
         const int width = 2 * hw_ + 1;
-        for (int j = -hh_; j <= hh_; ++j) {
-            const std::uint8_t* r = right.row(v_ + j) + xi0;
+        const int rows = 2 * hh_ + 1;
+#if CV_SIMD128
+        if (simd && xi0 + simd::readColumns(width) <= right.width()) {
+            return simd::zeroMeanSad(l16_, right, v_ - hh_, rows, xi0, f, width);
+        }
+#else
+        static_cast<void>(simd);
+#endif
+        int r16[kLanes * kMaxRows];
+        int sum = 0;
+        for (int j = 0; j < rows; ++j) {
+            const std::uint8_t* r = right.row(v_ - hh_ + j) + xi0;
             for (int i = 0; i < width; ++i) {
-                r16[n] = (kSub - f) * r[i] + f * r[i + 1];
-                sum += r16[n++];
+                r16[j * kLanes + i] = (kSub - f) * r[i] + f * r[i + 1];
+                sum += r16[j * kLanes + i];
             }
         }
-        const int mean = sum / n;
+        const int mean = sum / (width * rows);
         int cost = 0;
-        for (int k = 0; k < n; ++k) {
-            cost += std::abs(l16_[k] - (r16[k] - mean));
+        for (int j = 0; j < rows; ++j) {
+            for (int i = 0; i < width; ++i) {
+                cost += std::abs(l16_[j * kLanes + i] - (r16[j * kLanes + i] - mean));
+            }
         }
         return cost;
     }
 
 private:
-    int l16_[(2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)];
-    int n_ = 0;
+    static constexpr int kLanes = 16; ///< simd::kWindowLanes
+    static constexpr int kMaxRows = 2 * kMaxHalfHeight + 1;
+    static_assert(2 * kMaxHalfWidth + 1 <= kLanes);
+    alignas(16) std::int16_t l16_[kLanes * kMaxRows];
     int contrast_ = 0;
     int x_;
     int v_;
@@ -168,7 +196,7 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
             if (!(dg >= 0.0)) {
                 continue; // above the ground's horizon: no ground hypothesis
             }
-            const auto dg16 = static_cast<int>(std::lround(dg * kSub));
+            const int dg16 = roundNonNegative(dg * kSub);
             if (std::abs(d16 - dg16) <= minResidual16) {
                 continue;
             }
@@ -187,8 +215,8 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
                 ++counts_.undecided;
                 continue;
             }
-            const int atD = window.costAt(right, d16);
-            const int atGround = window.costAt(right, dg16);
+            const int atD = window.costAt(right, d16, config_.simd);
+            const int atGround = window.costAt(right, dg16, config_.simd);
             if (static_cast<long>(atD) * 1024 >= ratio1024 * atGround) {
                 dst[x] = kInvalid;
                 ++counts_.rejected;
@@ -223,10 +251,10 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     }
     // Coarse search in 1/2 px steps, then 1/8 px steps around the coarse best.
     int best = lo;
-    const int atGround = window.costAt(right, dg16);
-    int bestCost = window.costAt(right, lo);
+    const int atGround = window.costAt(right, dg16, config_.simd);
+    int bestCost = window.costAt(right, lo, config_.simd);
     for (int d = lo + kSub / 2; d <= hi; d += kSub / 2) {
-        const int cost = window.costAt(right, d);
+        const int cost = window.costAt(right, d, config_.simd);
         if (cost < bestCost) {
             bestCost = cost;
             best = d;
@@ -237,7 +265,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
         if (d == coarse) {
             continue;
         }
-        const int cost = window.costAt(right, d);
+        const int cost = window.costAt(right, d, config_.simd);
         if (cost < bestCost) {
             bestCost = cost;
             best = d;
@@ -251,7 +279,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     };
     bool accepted = beatsGround(atGround);
     for (int d = dg16 - kSub / 2; accepted && d <= dg16 + kSub / 2; d += 2) {
-        accepted = d == dg16 || beatsGround(window.costAt(right, d));
+        accepted = d == dg16 || beatsGround(window.costAt(right, d, config_.simd));
     }
     if (!accepted) {
         ++counts_.rejected;

@@ -7,7 +7,8 @@
 // Covered: CensusSgm::match (integer census, 8-bit path costs, integer sub-pixel, OpenCV's integer speckle
 // filter), warpGround / warpGroundReference (float coordinate rounded to 5 fractional bits, then integer
 // interpolation; our code is compiled with -std=c++20, so without FMA contraction on any target), GroundMismatch
-// run / runReference (integer ZSAD and residual search), Rectifier::rectify (integer bilinear on fixed-point
+// run / runReference (integer ZSAD and residual search), ObstacleVerifier::run with simd on and off (integer
+// zero-mean SAD at 1/16 px, the below-ground re-estimate), Rectifier::rectify (integer bilinear on fixed-point
 // tables; the tables come from OpenCV's float initUndistortRectifyMap, and are hashed too so that a difference
 // there is told apart from one in our kernel).
 //
@@ -31,6 +32,7 @@
 #include "ugv/vision/ground_mismatch.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/ground_warp.hpp"
+#include "ugv/vision/obstacle_verifier.hpp"
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
 
@@ -169,6 +171,7 @@ constexpr std::uint64_t kGroundWarp = 0xcd969df459f7d0c9ULL;
 constexpr std::uint64_t kGroundMismatch = 0x12fd4ff378de4f1fULL;
 constexpr std::uint64_t kRectifierTables = 0xce70db439efb8d46ULL;
 constexpr std::uint64_t kRectifier = 0x5ac16c3a81cccf50ULL;
+constexpr std::uint64_t kObstacleVerifier = 0x6a1c8d77f504be07ULL;
 
 TEST(Golden, CensusSgmDisparityIsTheSameOnEveryTarget)
 {
@@ -275,6 +278,62 @@ TEST(Golden, GroundWarpAndMismatchAreTheSameOnEveryTarget)
     printHash("kGroundMismatch", mismatchHashes[0]);
     EXPECT_EQ(warpHashes[0], kGroundWarp);
     EXPECT_EQ(mismatchHashes[0], kGroundMismatch);
+}
+
+/// The matcher's disparity for groundRight(): the scene's x16 with jitter, and every 7th pixel a wrong guess in
+/// [0, 90) px, so that the verifier keeps, rejects and re-estimates.
+cv::Mat matcherGuess(std::uint64_t seed)
+{
+    Lcg lcg(seed);
+    cv::Mat disp(kRoiHeight, kRoiWidth, CV_16SC1);
+    for (int r = 0; r < kRoiHeight; ++r) {
+        for (int x = 0; x < kRoiWidth; ++x) {
+            double d = kPlane.at(x, kY0 + r);
+            if (x >= 200 && x < 260 && r >= 40 && r < 140) {
+                d += 12.0;
+            } else if (x >= 400 && x < 470 && r >= 150) {
+                d -= 6.0;
+            }
+            const int jitter = static_cast<int>(lcg.next() % 17U) - 8;
+            const bool wrong = (r * kRoiWidth + x) % 7 == 0;
+            const unsigned random = static_cast<unsigned>(lcg.next()) << 8U | lcg.next();
+            const int d16 = wrong ? static_cast<int>(random % (90U * 16U)) : static_cast<int>(d * 16.0) + jitter;
+            disp.at<std::int16_t>(r, x) = static_cast<std::int16_t>(d16);
+        }
+    }
+    return disp;
+}
+
+TEST(Golden, ObstacleVerifierIsTheSameOnEveryTarget)
+{
+    const cv::Mat left = texture(kRoiWidth, kRoiHeight, 7);
+    const cv::Mat right = groundRight(left, 8);
+    const cv::Mat guess = matcherGuess(9);
+    const ImageView<const std::int16_t> guessView(reinterpret_cast<const std::int16_t*>(guess.data), guess.cols,
+                                                  guess.rows, static_cast<std::ptrdiff_t>(guess.step));
+    std::uint64_t hashes[2] = {};
+    for (const bool simd : {true, false}) {
+        ObstacleVerifierConfig config;
+        config.width = kRoiWidth;
+        config.height = kRoiHeight;
+        config.simd = simd;
+        auto sut = ObstacleVerifier::create(config);
+        ASSERT_TRUE(sut.has_value()) << sut.error().message();
+        ASSERT_EQ(sut->run(view(left), view(right), guessView, kPlane, kY0), VerifyStatus::Ok);
+        const VerifyCounts& counts = sut->counts();
+        EXPECT_GT(counts.rejected, 1000);
+        EXPECT_GT(counts.refined, 100);
+        EXPECT_GT(counts.tested - counts.rejected - counts.refined - counts.undecided, 1000) << "kept";
+        Fnv1a hash;
+        hash.addImage(sut->disparity());
+        for (const int n : {counts.tested, counts.rejected, counts.refined, counts.undecided}) {
+            hash.addInt(n);
+        }
+        hashes[simd ? 0 : 1] = hash.value();
+    }
+    EXPECT_EQ(hashes[0], hashes[1]) << "SIMD and scalar reference differ";
+    printHash("kObstacleVerifier", hashes[0]);
+    EXPECT_EQ(hashes[0], kObstacleVerifier);
 }
 
 /// A rig with distortion and a small rotation, rectification given directly (no stereoRectify).

@@ -68,6 +68,9 @@ struct ObstacleVerifierConfig {
     /// on some frames of the default course; with this bound the run's detect p99 is 56 ms against 45 ms without
     /// the re-match (`toolchain/host.sh run`).
     float refineMaxGroundPx = 55.0F; ///< ObstacleDetector sets it from the rig (DetectorConfig::refineMinRangeM)
+    /// The window costs with universal intrinsics (obstacle_verifier.simd.hpp, the same integers); false: the scalar
+    /// reference (tests).
+    bool simd = true;
 };
 
 enum class VerifyStatus : std::uint8_t {
