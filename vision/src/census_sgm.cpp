@@ -109,20 +109,41 @@ std::uint16_t addAndMinScalar(const std::uint8_t* a, std::uint16_t* sum, int d) 
     return acc;
 }
 
-std::uint16_t minOf(const std::uint16_t* sum, int d, bool useSimd) noexcept
+/// The least of sum[0, d) outside [lo, hi] (kNoCost when nothing is outside). Only the blocks that overlap [lo, hi]
+/// are masked, in registers: writing the excluded entries over and loading them back would stall every pixel on
+/// store forwarding.
+std::uint16_t minOutside(const std::uint16_t* sum, int d, int lo, int hi, bool useSimd) noexcept
 {
 #if (CV_SIMD || CV_SIMD_SCALABLE)
     if (useSimd) {
         using namespace cv; // NOLINT(google-build-using-namespace)
         const int lanes = simd::VTraits<v_uint16>::vlanes();
-        v_uint16 acc = vx_setall_u16(kNoCost);
+        alignas(64) static constexpr std::uint16_t kIota[32] = {0,  1,  2,  3,  4,  5,  6,  7,  8,  9,  10,
+                                                                11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21,
+                                                                22, 23, 24, 25, 26, 27, 28, 29, 30, 31};
+        static_assert(simd::VTraits<v_uint16>::max_nlanes <= 32);
+        const v_uint16 none = vx_setall_u16(kNoCost);
+        const v_uint16 span = vx_setall_u16(static_cast<std::uint16_t>(hi - lo));
+        v_uint16 acc = none;
         for (int k = 0; k < d; k += lanes) {
-            acc = v_min(acc, vx_load(sum + k));
+            v_uint16 v = vx_load(sum + k);
+            if (k <= hi && k + lanes > lo) {
+                // Lane index - lo, wrapping below lo: inside [lo, hi] exactly when it is <= hi - lo.
+                const v_uint16 offset = v_sub_wrap(vx_load(kIota), vx_setall_u16(static_cast<std::uint16_t>(lo - k)));
+                v = v_select(simd::v_gt(offset, span), v, none);
+            }
+            acc = v_min(acc, v);
         }
         return v_reduce_min(acc);
     }
 #endif
-    return *std::min_element(sum, sum + d);
+    std::uint16_t acc = kNoCost;
+    for (int k = 0; k < d; ++k) {
+        if (k < lo || k > hi) {
+            acc = std::min(acc, sum[k]);
+        }
+    }
+    return acc;
 }
 
 int firstIndexOf(const std::uint16_t* sum, int d, std::uint16_t value, bool useSimd) noexcept
@@ -469,18 +490,8 @@ void CensusSgm::winner(int i, int lo, std::uint16_t minSum, std::int16_t* disp) 
     const int x = x0_ + i;
     const int j = firstIndexOf(sum, n, minSum, config_.simd);
     const int best = lo + j;
-    // Second best outside best +- 1: mask the three, take the minimum, restore.
-    const int maskLo = std::max(0, j - 1);
-    const int maskHi = std::min(n - 1, j + 1);
-    std::uint16_t saved[3] = {0, 0, 0};
-    for (int k = maskLo; k <= maskHi; ++k) {
-        saved[k - maskLo] = sum[k];
-        sum[k] = kNoCost;
-    }
-    const std::uint16_t second = minOf(sum, n, config_.simd);
-    for (int k = maskLo; k <= maskHi; ++k) {
-        sum[k] = saved[k - maskLo];
-    }
+    // Second best outside best +- 1.
+    const std::uint16_t second = minOutside(sum, n, j - 1, j + 1, config_.simd);
     if (static_cast<int>(second) * (100 - config_.uniquenessRatio) <= static_cast<int>(minSum) * 100) {
         disp[x] = kInvalid;
         return;
