@@ -154,8 +154,11 @@ int firstIndexOf(const std::uint16_t* sum, int d, std::uint16_t value, bool useS
         using namespace cv; // NOLINT(google-build-using-namespace)
         const int lanes = simd::VTraits<v_uint16>::vlanes();
         const v_uint16 target = vx_setall_u16(value);
-        while (k + lanes <= d && !v_check_any(simd::v_eq(vx_load(sum + k), target))) {
-            k += lanes;
+        for (; k + lanes <= d; k += lanes) {
+            const v_uint16 equal = simd::v_eq(vx_load(sum + k), target);
+            if (v_check_any(equal)) {
+                return k + v_scan_forward(equal); // the first equal lane
+            }
         }
     }
 #endif

@@ -1,8 +1,9 @@
 // bench-detect: the per-frame obstacle pipeline (ObstacleDetector::process, with our census SGM and with OpenCV's
 // SGBM_3WAY) against OpenCV StereoSGBM on the full 640x480 frame (the baselines, same settings, MODE_SGBM and
-// MODE_SGBM_3WAY, measured in the same run), our census SGM on the full frame, the ROI matcher alone (each mode)
-// and the sector builder alone. Input: one ugvsense sim pair (pole at 4 m, asphalt, seed 0), 128 disparities,
-// block 5. Report ratios against BM_FullFrameSgbmBaseline (shared, noisy machines).
+// MODE_SGBM_3WAY, measured in the same run), our census SGM on the full frame (SIMD and its scalar reference), the
+// ROI matcher alone (each mode), the sector builder alone and the obstacle verifier alone (SIMD and scalar). Input: one
+// ugvsense sim pair (pole at 4 m, asphalt, seed 0), 128 disparities, block 5. Report ratios against
+// BM_FullFrameSgbmBaseline (shared, noisy machines).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -86,9 +87,12 @@ void BM_FullFrameSgbmBaseline(benchmark::State& state)
 }
 
 /// Our census SGM on the full frame: the matcher-for-matcher comparison with BM_FullFrameSgbmBaseline.
+/// state.range(0): 1 the universal-intrinsics kernels, 0 the scalar reference (the same output).
 void BM_FullFrameCensusSgm(benchmark::State& state)
 {
-    auto sut = CensusSgm::create(CensusSgmConfig{}, cv::Size(640, 480)).value();
+    CensusSgmConfig config;
+    config.simd = state.range(0) != 0;
+    auto sut = CensusSgm::create(config, cv::Size(640, 480)).value();
     cv::Mat disparity(480, 640, CV_16SC1);
     const auto view = [](const cv::Mat& m) {
         return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
@@ -160,6 +164,7 @@ void BM_SectorBuilder(benchmark::State& state)
     }
 }
 
+/// state.range(0): 1 the universal-intrinsics window costs, 0 the scalar reference (the same output).
 void BM_ObstacleVerifier(benchmark::State& state)
 {
     auto matcher = RoiMatcher::create(RoiMatcherConfig{}, cv::Size(kRoi.width, kRoi.height)).value();
@@ -167,6 +172,7 @@ void BM_ObstacleVerifier(benchmark::State& state)
     ObstacleVerifierConfig config;
     config.width = kRoi.width;
     config.height = kRoi.height;
+    config.simd = state.range(0) != 0;
     auto sut = ObstacleVerifier::create(config).value();
     const DisparityPlane ground = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0}).disparityPlane(kProjection);
     for (auto _ : state) {
@@ -181,7 +187,7 @@ BENCHMARK(BM_FullFrameSgbmBaseline)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3)
     ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
-BENCHMARK(BM_FullFrameCensusSgm)->Unit(benchmark::kMillisecond)->Repetitions(3);
+BENCHMARK(BM_FullFrameCensusSgm)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Repetitions(3);
 BENCHMARK(BM_DetectorPipeline)
     ->Args({static_cast<int>(MatcherMode::CensusSgm), 0})
     ->Args({static_cast<int>(MatcherMode::CensusSgm), 1})
@@ -196,7 +202,7 @@ BENCHMARK(BM_RoiMatcher)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3);
 BENCHMARK(BM_SectorBuilder)->Unit(benchmark::kMillisecond)->Repetitions(3);
-BENCHMARK(BM_ObstacleVerifier)->Unit(benchmark::kMillisecond)->Repetitions(3);
+BENCHMARK(BM_ObstacleVerifier)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Repetitions(3);
 
 } // namespace
 
