@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -80,6 +81,40 @@ TEST(ImageNoise, ClippedBlocksCarryNoNoiseAndAreLeftOut)
     EXPECT_EQ(sut.estimate(image.view()), 0.0F);
     const Image<std::uint8_t> tiny(9, 9);
     EXPECT_EQ(sut.estimate(tiny.view()), 0.0F);
+}
+
+TEST(ImageNoise, TheVectorPathReadsWhatTheScalarReferenceReads)
+{
+    // Flat, noisy, textured, clipped and a 1/254 checkerboard (the largest response, 16 x 253 a pixel), whole and
+    // as odd-sized views; the quantiles 0 and 1 read the flattest and the busiest block, so a sum that overflowed
+    // its lanes would show.
+    std::vector<Image<std::uint8_t>> images;
+    images.push_back(noisyImage(0.5, 0));
+    images.push_back(noisyImage(3.0, kWidth / 3, 5));
+    images.push_back(noisyImage(20.0, kWidth, 7));
+    Image<std::uint8_t> clipped = noisyImage(2.0, kWidth / 2, 9);
+    for (int y = 0; y < kHeight; y += 7) {
+        clipped.view().row(y)[(y * 13) % kWidth] = y % 2 == 0 ? 0 : 255;
+    }
+    images.push_back(std::move(clipped));
+    Image<std::uint8_t> checkerboard(kWidth, kHeight);
+    for (int y = 0; y < kHeight; ++y) {
+        for (int x = 0; x < kWidth; ++x) {
+            checkerboard.view().row(y)[x] = (x + y) % 2 == 0 ? 1 : 254;
+        }
+    }
+    images.push_back(std::move(checkerboard));
+    for (const float quantile : {0.0F, 0.1F, 0.5F, 1.0F}) {
+        auto sut = ImageNoise::create(kWidth, kHeight, quantile).value();
+        for (std::size_t i = 0; i < images.size(); ++i) {
+            const ConstImageViewU8 whole = images[i].view();
+            for (const Rect& r : {Rect{0, 0, kWidth, kHeight}, Rect{3, 5, 83, 57}, Rect{1, 1, 17, 10}}) {
+                const ConstImageViewU8 view = whole.sub(r);
+                EXPECT_EQ(sut.estimate(view), sut.estimateReference(view))
+                    << "image " << i << ", quantile " << quantile << ", view " << r.width << "x" << r.height;
+            }
+        }
+    }
 }
 
 TEST(ImageNoise, RejectsAnImageLargerThanCreatedForAndABadQuantile)

@@ -33,9 +33,15 @@ public:
     /// @return the noise sigma of `image` [grey levels]; 0 when no block is unclipped (or the image is smaller than
     ///         one block plus the mask's border, or larger than create()'s size).
     [[nodiscard]] float estimate(ConstImageViewU8 image) noexcept;
+    /// estimate() by the scalar reference (tests): the same value, bit for bit.
+    [[nodiscard]] float estimateReference(ConstImageViewU8 image) noexcept;
 
 private:
     ImageNoise(int width, int height, float quantile);
+    [[nodiscard]] float estimateImpl(ConstImageViewU8 image, bool useSimd) noexcept;
+    /// sums_ and clipped_ of the bw x bh blocks; the SIMD path (universal intrinsics) gives the same integers.
+    void blockSumsReference(ConstImageViewU8 image, int bw, int bh) noexcept;
+    void blockSumsSimd(ConstImageViewU8 image, int bw, int bh) noexcept;
 
     int width_ = 0;
     int height_ = 0;
