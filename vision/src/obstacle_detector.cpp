@@ -38,6 +38,28 @@ void setSearchFloor(RoiMatcher& matcher, const GroundEstimate& estimate, const R
     matcher.setSearchFloor(scale * g.a, scale * g.b, scale * (g.c + g.a * roi.x + g.b * roi.y) - marginPx);
 }
 
+/// The ROI rows to match at half resolution (DetectorConfig::halfResolutionMinGroundPx): from the first row on which
+/// the ground's disparity is at least minGroundPx at both ends of the row down to the ROI's bottom, an even count
+/// that leaves the full-resolution part its seam overlap; 0 when fewer than 16 rows qualify or the threshold is 0.
+int halfResolutionRows(const DisparityPlane& ground, Rect roi, double minGroundPx) noexcept
+{
+    if (!(minGroundPx > 0.0)) {
+        return 0;
+    }
+    int first = roi.height;
+    while (first > 0) {
+        const int y = roi.y + first - 1;
+        if (std::min(ground.at(roi.x, y), ground.at(roi.x + roi.width - 1, y)) < minGroundPx) {
+            break;
+        }
+        --first;
+    }
+    int rows = std::min(roi.height - first, roi.height - 2 * RoiMatcher::kHalfOverlapRows);
+    rows -= rows % 2;
+    constexpr int kMinRows = 16;
+    return rows >= kMinRows ? rows : 0;
+}
+
 } // namespace
 
 Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& config,
@@ -54,7 +76,18 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
         return Unexpected(
             Error{"ObstacleDetector::create", "configured ground has no positive camera height", "set mount.height_m"});
     }
-    auto matcherResult = RoiMatcher::create(config.matcher, cv::Size(roi.width, roi.height));
+    if (!(config.halfResolutionMinGroundPx >= 0.0)) {
+        return Unexpected(
+            Error{"ObstacleDetector::create",
+                  "halfResolutionMinGroundPx " + std::to_string(config.halfResolutionMinGroundPx) + " is not >= 0",
+                  "set stereo.half_resolution_min_ground_px to 0 (off) or a disparity in pixels"});
+    }
+    RoiMatcherConfig matcherConfig = config.matcher;
+    if (config.halfResolutionMinGroundPx > 0.0) {
+        matcherConfig.halfResolutionRows =
+            halfResolutionRows(configuredGround.disparityPlane(projection), roi, config.halfResolutionMinGroundPx);
+    }
+    auto matcherResult = RoiMatcher::create(matcherConfig, cv::Size(roi.width, roi.height));
     if (!matcherResult) {
         return Unexpected(std::move(matcherResult).error());
     }

@@ -1,5 +1,6 @@
 #include "ugv/vision/roi_matcher.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include <opencv2/core/utility.hpp>
@@ -54,6 +55,14 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
                                       std::to_string(config.groundRangeMarginDeg) +
                                       " (need [0, 10] deg) out of range"));
     }
+    const int halfRows = config.halfResolutionRows;
+    if (halfRows != 0 && (config.mode != MatcherMode::CensusSgm || config.padLeft || config.numDisparities % 32 != 0 ||
+                          halfRows < 0 || halfRows % 2 != 0 || halfRows + 2 * kHalfOverlapRows > roiSize.height)) {
+        return Unexpected(configError("halfResolutionRows " + std::to_string(halfRows) +
+                                      " needs the census matcher without padLeft, numDisparities a multiple of 32 "
+                                      "and an even count of at most the ROI height " +
+                                      std::to_string(roiSize.height) + " - " + std::to_string(2 * kHalfOverlapRows)));
+    }
     if (roiSize.width <= config.numDisparities || roiSize.height < config.blockSize) {
         return Unexpected(configError("ROI " + std::to_string(roiSize.width) + "x" + std::to_string(roiSize.height) +
                                       " is too small for numDisparities " + std::to_string(config.numDisparities) +
@@ -79,11 +88,27 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
             census.disp12MaxDiff = config.disp12MaxDiff;
             census.speckleWindowSize = config.speckleWindowSize;
             census.speckleRange = config.speckleRange;
-            auto matcher = CensusSgm::create(census, padded);
+            sut.fullRows_ = halfRows > 0 ? roiSize.height - halfRows + kHalfOverlapRows : roiSize.height;
+            auto matcher = CensusSgm::create(census, cv::Size(padded.width, sut.fullRows_));
             if (!matcher) {
                 return Unexpected(matcher.error());
             }
             sut.census_.emplace(std::move(matcher).value());
+            if (halfRows > 0) {
+                CensusSgmConfig half = census;
+                half.numDisparities = census.numDisparities / 2;
+                half.speckleWindowSize = census.speckleWindowSize / 4; // the same area in the scene
+                const cv::Size halfSize(roiSize.width / 2, (halfRows + kHalfOverlapRows) / 2);
+                auto halfMatcher = CensusSgm::create(half, halfSize);
+                if (!halfMatcher) {
+                    return Unexpected(halfMatcher.error());
+                }
+                sut.halfCensus_.emplace(std::move(halfMatcher).value());
+                sut.halfLeft_ = cv::Mat::zeros(halfSize, CV_8UC1);
+                sut.halfRight_ = cv::Mat::zeros(halfSize, CV_8UC1);
+                sut.halfDisp16_ = cv::Mat(halfSize, CV_16SC1, cv::Scalar(-kScale));
+                sut.halfTop_ = roiSize.height - halfRows - kHalfOverlapRows;
+            }
             return sut;
         }
         sut.sgbm_ = cv::StereoSGBM::create(0, config.numDisparities, config.blockSize, 8 * area, 32 * area,
@@ -97,10 +122,28 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
     return sut;
 }
 
+namespace {
+
+/// A ROI plane d = a x + b y + c [px] in the half-resolution images whose first row is ROI row `top`: half pixel
+/// (hx, hy) covers ROI pixels 2 hx .. 2 hx + 1 of rows top + 2 hy .. top + 2 hy + 1, and its disparity is half.
+struct HalfPlane {
+    double a, b, c;
+};
+HalfPlane toHalf(double a, double b, double c, int top) noexcept
+{
+    return {a, b, (0.5 * a + b * (top + 0.5) + c) / 2.0};
+}
+
+} // namespace
+
 void RoiMatcher::setGroundPrior(double a, double b, double c) noexcept
 {
     if (census_ && config_.groundPrior) {
         census_->setGroundPrior(a, b, c - a * pad_); // padded column x_p = x + pad_
+        if (halfCensus_) {
+            const HalfPlane h = toHalf(a, b, c, halfTop_);
+            halfCensus_->setGroundPrior(h.a, h.b, h.c);
+        }
     }
 }
 
@@ -108,6 +151,10 @@ void RoiMatcher::setSearchFloor(double a, double b, double c) noexcept
 {
     if (census_ && config_.groundRange) {
         census_->setSearchFloor(a, b, c - a * pad_); // padded column x_p = x + pad_
+        if (halfCensus_) {
+            const HalfPlane h = toHalf(a, b, c, halfTop_);
+            halfCensus_->setSearchFloor(h.a, h.b, h.c);
+        }
     }
 }
 
@@ -116,11 +163,94 @@ void RoiMatcher::clearSearchFloor() noexcept
     if (census_) {
         census_->clearSearchFloor();
     }
+    if (halfCensus_) {
+        halfCensus_->clearSearchFloor();
+    }
 }
 
 double RoiMatcher::searchedFraction() const noexcept
 {
-    return census_ ? census_->searchedFraction() : 1.0;
+    if (!census_) {
+        return 1.0;
+    }
+    if (!halfCensus_) {
+        return census_->searchedFraction();
+    }
+    // Cells over those of the whole ROI at full resolution and range: a half-resolution cell is 1/8 of one.
+    const double d = config_.numDisparities;
+    const double full = static_cast<double>(roiSize_.width + pad_) * fullRows_ * d;
+    const double half = static_cast<double>(halfLeft_.cols) * halfLeft_.rows * (d / 2.0);
+    const double whole = static_cast<double>(roiSize_.width + pad_) * roiSize_.height * d;
+    return (census_->searchedFraction() * full + halfCensus_->searchedFraction() * half) / whole;
+}
+
+bool RoiMatcher::matchHalf(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times) noexcept
+{
+    StageLap lap(times);
+    const int halfWidth = halfLeft_.cols;
+    const auto average = [this, halfWidth](ConstImageViewU8 src, cv::Mat& dst) {
+        for (int r = 0; r < dst.rows; ++r) {
+            const std::uint8_t* a = src.row(halfTop_ + 2 * r);
+            const std::uint8_t* b = src.row(halfTop_ + 2 * r + 1);
+            auto* out = dst.ptr<std::uint8_t>(r);
+            for (int c = 0; c < halfWidth; ++c) {
+                out[c] = static_cast<std::uint8_t>((a[2 * c] + a[2 * c + 1] + b[2 * c] + b[2 * c + 1] + 2) >> 2);
+            }
+        }
+    };
+    average(left, halfLeft_);
+    average(right, halfRight_);
+    lap.to(VisionStage::MatchOther);
+    const auto view = [](const cv::Mat& m) {
+        return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+    };
+    if (!halfCensus_->match(view(halfLeft_), view(halfRight_), halfDisp16_, times)) {
+        return false;
+    }
+    StageLap back(times);
+    upsampleHalf();
+    back.to(VisionStage::MatchOther);
+    return true;
+}
+
+void RoiMatcher::upsampleHalf() noexcept
+{
+    // Full pixel (x, y) lies at half-resolution coordinates ((x - 0.5) / 2, (y - halfTop_ - 0.5) / 2): between four
+    // half pixels, with weights of 1/4 and 3/4 along each axis. Bilinear where the four are valid and within one
+    // half-resolution pixel of each other (a surface: the ground's slope is kept, not stepped every two rows);
+    // otherwise the half pixel that covers it (an edge stays an edge). Disparities double.
+    const int halfWidth = halfDisp16_.cols;
+    const int halfHeight = halfDisp16_.rows;
+    for (int y = roiSize_.height - config_.halfResolutionRows; y < roiSize_.height; ++y) {
+        const int v = y - halfTop_;
+        const int cover = v / 2;
+        const int y0 = (v & 1) != 0 ? cover : std::max(cover - 1, 0); // the half row above the point
+        const int y1 = std::min(y0 + 1, halfHeight - 1);
+        const int wy1 = (v & 1) != 0 ? 1 : 3; // [1/4] weight of y1
+        const auto* r0 = halfDisp16_.ptr<std::int16_t>(y0);
+        const auto* r1 = halfDisp16_.ptr<std::int16_t>(y1);
+        const auto* rc = halfDisp16_.ptr<std::int16_t>(cover);
+        auto* dst = disp16_.ptr<std::int16_t>(y);
+        for (int x = 0; x < roiSize_.width; ++x) {
+            const int hx = std::min(x / 2, halfWidth - 1);
+            const int x0 = (x & 1) != 0 ? hx : std::max(hx - 1, 0);
+            const int x1 = std::min(x0 + 1, halfWidth - 1);
+            const int wx1 = (x & 1) != 0 ? 1 : 3;
+            const int d00 = r0[x0];
+            const int d01 = r0[x1];
+            const int d10 = r1[x0];
+            const int d11 = r1[x1];
+            const int lo = std::min(std::min(d00, d01), std::min(d10, d11));
+            const int hi = std::max(std::max(d00, d01), std::max(d10, d11));
+            if (lo >= 0 && hi - lo <= kScale) {
+                const int sum = (4 - wy1) * ((4 - wx1) * d00 + wx1 * d01) + wy1 * ((4 - wx1) * d10 + wx1 * d11);
+                dst[x] = static_cast<std::int16_t>((sum + 4) >> 3); // 2 sum / 16
+                continue;
+            }
+            const int d = rc[hx];
+            dst[x] = static_cast<std::int16_t>(d < 0 ? -kScale : 2 * d);
+        }
+    }
 }
 
 MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times) noexcept
@@ -142,10 +272,14 @@ MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right, Vis
         matOver(right).copyTo(rightDst);
         lap.to(VisionStage::MatchOther);
         if (census_) {
-            const auto view = [](const cv::Mat& m) {
-                return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
+            // The full-resolution rows (all of them without halfResolutionRows); a row range is a header, no copy.
+            cv::Mat fullDisp = disp16Padded_.rowRange(0, fullRows_);
+            const auto rows = [this](const cv::Mat& m) {
+                return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, fullRows_,
+                                        static_cast<std::ptrdiff_t>(m.step[0])};
             };
-            if (!census_->match(view(padLeft_), view(padRight_), disp16Padded_, times)) {
+            if (!census_->match(rows(padLeft_), rows(padRight_), fullDisp, times) ||
+                (halfCensus_ && !matchHalf(left, right, times))) {
                 disp16Padded_.setTo(-kScale);
                 return MatchStatus::MatcherFailed;
             }

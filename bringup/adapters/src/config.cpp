@@ -159,6 +159,10 @@ std::vector<KeySpec> visionKeys()
         numberKey("stereo.ground_range_margin_deg", Kind::Double, 0, 10,
                   "ground_range: pitch and roll change between two frames that the search floor absorbs [deg]",
                   UGV_REF(stereo.groundRangeMarginDeg)),
+        numberKey("stereo.half_resolution_min_ground_px", Kind::Double, 0, 1000,
+                  "census SGM: the ROI rows where the mount's ground disparity is at least this are matched at half "
+                  "resolution (0: every row at full resolution) [px]",
+                  UGV_REF(stereo.halfResolutionMinGroundPx)),
         choiceKey<DetectorMode>(
             "obstacles.detector", "stereo (two cameras), colour (one camera) or both",
             {{"stereo", DetectorMode::Stereo}, {"colour", DetectorMode::Colour}, {"both", DetectorMode::Both}},
@@ -467,6 +471,15 @@ public:
                   std::string("is true but stereo.mode is ") +
                       std::string(vision::matcherModeName(config_.stereo.mode)),
                   "only census_sgm searches ground-guided ranges: set mode: census_sgm or ground_range: false");
+        }
+        if (config_.stereo.halfResolutionMinGroundPx > 0.0 &&
+            (config_.stereo.mode != MatcherMode::CensusSgm || config_.stereo.numDisparities % 32 != 0)) {
+            error(at("stereo"), "stereo.half_resolution_min_ground_px",
+                  "is " + std::to_string(config_.stereo.halfResolutionMinGroundPx) + " with stereo.mode " +
+                      std::string(vision::matcherModeName(config_.stereo.mode)) + " and num_disparities " +
+                      std::to_string(config_.stereo.numDisparities),
+                  "only census_sgm matches rows at half resolution, with num_disparities a multiple of 32: set "
+                  "half_resolution_min_ground_px: 0 or mode: census_sgm");
         }
         if (config_.stereo.blockSize % 2 == 0) {
             error(at("stereo"), "stereo.block_size", "value " + std::to_string(config_.stereo.blockSize) + " is even",

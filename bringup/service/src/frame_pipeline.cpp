@@ -22,6 +22,7 @@ vision::DetectorConfig detectorConfigFrom(const adapters::ServiceConfig& config)
     d.matcher.groundRange = config.stereo.groundRange;
     d.matcher.groundRangeDropM = config.stereo.groundRangeDropM;
     d.matcher.groundRangeMarginDeg = config.stereo.groundRangeMarginDeg;
+    d.halfResolutionMinGroundPx = config.stereo.halfResolutionMinGroundPx;
     d.sectors.sectorCount = config.obstacles.sectorCount;
     d.sectors.dangerDistanceM = static_cast<float>(config.obstacles.dangerDistanceM);
     d.sectors.cautionDistanceM = static_cast<float>(config.obstacles.cautionDistanceM);

@@ -85,6 +85,7 @@ struct SimOptions {
     bool groundPrior = false; ///< RoiMatcherConfig::groundPrior
     bool groundRange = false; ///< RoiMatcherConfig::groundRange
     bool colour = false;      ///< --detector colour: ColourFreeSpace on the left colour image, not stereo
+    double halfResPx = vision::DetectorConfig{}.halfResolutionMinGroundPx; ///< --half-res
 };
 
 const char* textureName(sim::GroundTexture t)
@@ -108,7 +109,7 @@ const char* textureName(sim::GroundTexture t)
 class SimDetector {
 public:
     static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior, bool groundRange,
-                                             bool colour)
+                                             bool colour, double halfResPx)
     {
         const sim::Rig rig;
         vision::StereoCalibration calib = vision::makeRectifiedCalibration(
@@ -118,6 +119,7 @@ public:
         config.matcher.mode = matcher;
         config.matcher.groundPrior = groundPrior;
         config.matcher.groundRange = groundRange;
+        config.halfResolutionMinGroundPx = halfResPx;
         auto rectifier = vision::Rectifier::create(calib, vision::roiRectifierConfig(config));
         if (!rectifier) {
             return Unexpected(rectifier.error());
@@ -230,7 +232,7 @@ std::vector<std::string> obstacleTypes(const SimOptions& o)
 /// A fresh detector for a run (the ground estimate's smoothing starts anew); prints the error when it cannot be made.
 std::optional<SimDetector> makeSimDetector(const SimOptions& o)
 {
-    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.groundRange, o.colour);
+    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.groundRange, o.colour, o.halfResPx);
     if (!detector) {
         std::cerr << "ugvsense eval: error: " << detector.error().message() << '\n';
         return std::nullopt;
@@ -791,8 +793,10 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
          << ", \"overhang\": " << (overhangFalseFrames == 0 ? "true" : "false")
          << ", \"doorway\": " << (doorwayOk ? "true" : "false") << "}";
     const int rc = o.groundKinds.empty() && o.obstacleGrounds.empty() ? 0 : runGroundsSuite(o, det, json);
-    std::printf("matcher cost cells searched (ground range %s): %.1f %% of the full range, mean over %d frames\n",
-                o.groundRange ? "on" : "off", 100.0 * det.meanSearchedFraction(), static_cast<int>(det.frames()));
+    std::printf("matcher cost cells searched (ground range %s, half resolution from %.0f px): %.1f %% of the full "
+                "range, mean over %d frames\n",
+                o.groundRange ? "on" : "off", o.halfResPx, 100.0 * det.meanSearchedFraction(),
+                static_cast<int>(det.frames()));
     json << ",\n    \"searched_fraction\": " << jsonNumber(det.meanSearchedFraction()) << "\n  }";
     return rc;
 }
@@ -1062,7 +1066,7 @@ Args evalArgs()
         "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
         "MODE] "
-        "[--ground-prior] [--ground-range on|off] [--detector stereo|colour] [--json OUT] [--data DIR] "
+        "[--ground-prior] [--ground-range on|off] [--half-res PX] [--detector stereo|colour] [--json OUT] [--data DIR] "
         "[--skip-missing]",
         {{"sim", "",
           "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway, and the new grounds: "
@@ -1103,6 +1107,10 @@ Args evalArgs()
           "simulator and real: census SGM's ground-guided disparity ranges (RoiMatcherConfig::groundRange; default: "
           "its default); real pairs are then run twice, the second frame searching from the first's ground",
           false},
+         {"half-res", "PX",
+          "simulator and real: match the near rows at half resolution, from the row where the configured ground's "
+          "disparity reaches PX on (DetectorConfig::halfResolutionMinGroundPx; 0: off; default: its default)",
+          false},
          {"detector", "NAME",
           "simulator suite: stereo (default) or colour: the one-camera mode (ColourFreeSpace on the left colour "
           "image) on asphalt, grass and floor at 1-6 m, scored by the same scorer, and its false sectors on empty "
@@ -1119,6 +1127,7 @@ struct EvalChoices {
     vision::MatcherMode matcher = vision::MatcherMode::CensusSgm;
     bool colourDetector = false;
     bool groundRange = vision::RoiMatcherConfig{}.groundRange;
+    double halfResPx = vision::DetectorConfig{}.halfResolutionMinGroundPx;
     std::filesystem::path root = "../shared/data";
 };
 
@@ -1185,6 +1194,11 @@ std::optional<int> readChoices(const Args& args, EvalChoices& c)
         }
         c.groundRange = value == "on";
     }
+    const auto halfRes = args.number("half-res", c.halfResPx, 0.0, 1000.0);
+    if (!halfRes) {
+        return reportUsageError("eval", halfRes.error());
+    }
+    c.halfResPx = *halfRes;
     if (args.has("data")) {
         c.root = args.get("data");
     } else if (const char* env = std::getenv("UGV_SHARED_DATA"); env != nullptr && *env != '\0') {
@@ -1266,6 +1280,7 @@ Result<SimOptions, Error> simOptions(const Args& args, const EvalChoices& c)
     o.matcher = c.matcher;
     o.groundPrior = args.has("ground-prior");
     o.groundRange = c.groundRange;
+    o.halfResPx = c.halfResPx;
     if (c.colourDetector) {
         // The grounds of issue 23's one-camera targets; the empty scenes on the same ones.
         o.colour = true;
@@ -1316,6 +1331,7 @@ int runReal(const Args& args, const EvalChoices& choices, std::ostringstream& js
     real.mount = args.get("mount");
     real.verbose = args.has("verbose");
     real.groundRange = choices.groundRange;
+    real.halfResPx = choices.halfResPx;
     std::stringstream list(args.get("pairs"));
     for (std::string name; std::getline(list, name, ',');) {
         real.pairs.push_back(name);

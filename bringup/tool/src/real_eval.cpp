@@ -728,6 +728,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         r.mount = *parsed;
     }
     r.config.matcher.groundRange = options.groundRange;
+    r.config.halfResolutionMinGroundPx = options.halfResPx;
     std::printf("\nReal pairs (%s), ground %s: obstacle sectors (GT 0.25-2.5 m above the GT road within 25 m) right "
                 "within max(1 m, 10 %%); ours against OpenCV StereoSGBM + RANSAC ground + 0.25 m threshold\n",
                 options.dir.string().c_str(),

@@ -109,12 +109,14 @@ void BM_FullFrameCensusSgm(benchmark::State& state)
 
 /// state.range(0): the MatcherMode (0 census SGM, the default; 2 OpenCV SGBM_3WAY); state.range(1): 1 turns the
 /// census SGM's ground-guided ranges on (RoiMatcherConfig::groundRange; every frame after the first searches from
-/// the previous frame's ground, here the same pair's), 0 off.
+/// the previous frame's ground, here the same pair's), 0 off; state.range(2), when given: the near rows at half
+/// resolution from this ground disparity on [px] (DetectorConfig::halfResolutionMinGroundPx).
 void BM_DetectorPipeline(benchmark::State& state)
 {
     DetectorConfig config;
     config.matcher.mode = static_cast<MatcherMode>(state.range(0));
     config.matcher.groundRange = state.range(1) != 0;
+    config.halfResolutionMinGroundPx = static_cast<double>(state.range(2));
     auto sut =
         ObstacleDetector::create(config, kProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0})).value();
     sut.setStageClock(&ugv::MonotonicClock::nowNs);
@@ -189,9 +191,10 @@ BENCHMARK(BM_FullFrameSgbmBaseline)
     ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
 BENCHMARK(BM_FullFrameCensusSgm)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Repetitions(3);
 BENCHMARK(BM_DetectorPipeline)
-    ->Args({static_cast<int>(MatcherMode::CensusSgm), 0})
-    ->Args({static_cast<int>(MatcherMode::CensusSgm), 1})
-    ->Args({static_cast<int>(MatcherMode::Sgbm3Way), 0})
+    ->Args({static_cast<int>(MatcherMode::CensusSgm), 0, 0})
+    ->Args({static_cast<int>(MatcherMode::CensusSgm), 1, 0})
+    ->Args({static_cast<int>(MatcherMode::CensusSgm), 0, 48})
+    ->Args({static_cast<int>(MatcherMode::Sgbm3Way), 0, 0})
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3)
     ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });

@@ -56,7 +56,7 @@ TEST(Config, EveryKeyIsParsed)
         "  height: 720\n  fps: 15\n  max_pair_skew_ms: 2.5\n  replay_path: /r\n  replay_pace: fixed\n  replay_fps: 60\n"
         "roi:\n  top_fraction: 0.4\n  matcher_margin_rows: 4\n"
         "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n  ground_range: false\n"
-        "  ground_range_drop_m: 0.5\n  ground_range_margin_deg: 2.5\n"
+        "  ground_range_drop_m: 0.5\n  ground_range_margin_deg: 2.5\n  half_resolution_min_ground_px: 0\n"
         "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
         "  min_height_m: 0.2\n  min_depth_m: 0.15\n"
         "overload:\n  policy: drop\n  deadline_factor: 2\n"
@@ -187,6 +187,21 @@ TEST(Config, GroundRangeNeedsTheCensusMatcherAndAPositiveDrop)
     EXPECT_EQ(errors.size(), 2u) << text;
     EXPECT_NE(text.find("stereo.ground_range_drop_m"), std::string::npos) << text;
     EXPECT_NE(text.find("is true but stereo.mode is sgbm"), std::string::npos) << text;
+}
+
+TEST(Config, HalfResolutionRowsNeedTheCensusMatcherAndDisparitiesInThirtyTwos)
+{
+    const auto on =
+        parseConfig(std::string(kValidMinimal) + "stereo:\n  half_resolution_min_ground_px: 48\n", "test.yaml", "/");
+    ASSERT_TRUE(on.has_value()) << joined(on.error());
+    EXPECT_DOUBLE_EQ(on->stereo.halfResolutionMinGroundPx, 48.0);
+    for (const char* stereo : {"stereo:\n  mode: sgbm_3way\n  half_resolution_min_ground_px: 48\n",
+                               "stereo:\n  num_disparities: 48\n  half_resolution_min_ground_px: 48\n",
+                               "stereo:\n  half_resolution_min_ground_px: -1\n"}) {
+        const auto errors = parseErrors(std::string(kValidMinimal) + stereo);
+        ASSERT_EQ(errors.size(), 1u) << stereo << joined(errors);
+        EXPECT_NE(errors[0].where.find("stereo.half_resolution_min_ground_px"), std::string::npos) << joined(errors);
+    }
 }
 
 TEST(Config, OneCameraNeedsTheOneCameraDetector)

@@ -392,6 +392,40 @@ TEST(ObstacleDetector, GroundRangeFollowsThePreviousFramesReliableGround)
     EXPECT_NEAR(nearestInTruthSectors(second, frame.sectors), 4.0, 0.12);
 }
 
+TEST(ObstacleDetector, NearRowsAtHalfResolutionFromTheConfiguredGroundsDisparity)
+{
+    // The default rig's ground reaches 48 px of disparity at image row 334 (3.4 m): ROI rows 102..247, 146 rows,
+    // are matched at half resolution, so (248 - 146 + 8 + (146 + 8) / 8) / 248 of the cost cells are searched.
+    DetectorConfig config;
+    config.halfResolutionMinGroundPx = 48.0;
+    auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
+    for (const double rangeM : {2.0, 4.0}) {
+        const auto frame = renderScene("pole", rangeM, 0.0);
+        const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+        ASSERT_EQ(sut.status(), DetectorStatus::Ok);
+        const double nearest = nearestInTruthSectors(out, frame.sectors);
+        std::printf("[ MEASURED ] pole %.0f m, near rows at half resolution: range %.3f m\n", rangeM, nearest);
+        EXPECT_NEAR(nearest, rangeM, std::max(0.10, 0.03 * rangeM));
+    }
+    EXPECT_NEAR(sut.searchedFraction(), (248.0 - 146.0 + 8.0 + (146.0 + 8.0) / 8.0) / 248.0, 1e-9);
+
+    const auto frame = renderScene("pole", 3.0, 0.0);
+    const test::AllocationScope scope;
+    for (int i = 0; i < 20; ++i) {
+        (void)sut.process(roiView(frame.left), roiView(frame.right), 2U + static_cast<std::uint64_t>(i), 0);
+    }
+    EXPECT_EQ(scope.count(), 0U);
+
+    DetectorConfig negative;
+    negative.halfResolutionMinGroundPx = -1.0;
+    EXPECT_FALSE(ObstacleDetector::create(negative, kProjection, kRoi, kGround).has_value());
+    DetectorConfig none; // a threshold no row reaches: every row at full resolution
+    none.halfResolutionMinGroundPx = 500.0;
+    auto full = ObstacleDetector::create(none, kProjection, kRoi, kGround).value();
+    (void)full.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    EXPECT_EQ(full.searchedFraction(), 1.0);
+}
+
 TEST(ObstacleDetector, GroundOnlyPathFindsObstaclesIsNeverClearAndIsFlaggedDegraded)
 {
     auto sut = makeDetector();

@@ -59,6 +59,10 @@ struct DetectorConfig {
     /// The verifier re-matches below-ground pixels only where the ground is at least this far [m]: its
     /// refineMaxGroundPx is set from the rig, fx B / this (the default rig: 55 px).
     double refineMinRangeM = 3.0;
+    /// The near rows matched at half resolution (RoiMatcherConfig::halfResolutionRows): create() sets them to the
+    /// ROI rows from the first one on which the configured ground's disparity is at least this everywhere [px],
+    /// an even count, none when fewer than 16 rows qualify. 0: every row at full resolution.
+    double halfResolutionMinGroundPx = 0.0;
 };
 
 /// Outcome of the last ObstacleDetector::process(); no strings on the frame path.

@@ -74,6 +74,15 @@ struct RoiMatcherConfig {
     /// (whole 32-disparity blocks, per-column work), 3-7 % of the pipeline's time, while the simulator suite
     /// reports a little more Clear in front of a fence at 1-3 m; real pairs: one sector more correct.
     bool groundRange = false;
+    /// Census SGM: the bottom rows of the ROI, where the ground is near and disparities are large, matched at half
+    /// resolution (even; 0: none). The pair's rows [H - rows - kHalfOverlapRows, H) are averaged 2 x 2, matched with
+    /// numDisparities / 2, and each disparity is written twice as large to the 2 x 2 pixels it covers of rows
+    /// [H - rows, H); the rows above are matched at full resolution over [0, H - rows + kHalfOverlapRows) and
+    /// their top H - rows kept (the overlaps give both parts their census and path context at the seam). A quarter
+    /// of the pixels and half the disparities: about 1/8 of the matching work in those rows, where a disparity
+    /// step of 1/16 half-resolution pixel is still under 0.5 % of the range. ObstacleDetector sets it from
+    /// DetectorConfig::halfResolutionMinGroundPx. Needs numDisparities a multiple of 32 and no padLeft.
+    int halfResolutionRows = 0;
     double groundRangeDropM = 0.3;     ///< [m] deepest drop below the ground plane seen at its true depth
     double groundRangeMarginDeg = 1.5; ///< [deg] pitch and roll change between two frames that the floor absorbs
     /// Census SGM settings (penalties, paths, intensity term); its numDisparities, uniquenessRatio,
@@ -96,7 +105,8 @@ enum class MatchStatus : std::uint8_t {
 /// comment); create() no.
 class RoiMatcher {
 public:
-    static constexpr int kScale = 16; ///< fixed-point scale of disparity16()
+    static constexpr int kScale = 16;          ///< fixed-point scale of disparity16()
+    static constexpr int kHalfOverlapRows = 8; ///< [px] seam overlap of the two parts (halfResolutionRows)
 
     /// Validates the config, creates the StereoSGBM and allocates all buffers for images of `roiSize`.
     /// @return the matcher, or an error naming the invalid field.
@@ -142,10 +152,19 @@ private:
     cv::Size roiSize_;
     int pad_ = 0;                     ///< [px] left padding columns
     cv::Ptr<cv::StereoSGBM> sgbm_;    ///< OpenCV modes
-    std::optional<CensusSgm> census_; ///< MatcherMode::CensusSgm
-    cv::Mat padLeft_, padRight_;      ///< CV_8U (width + pad) x height; pad columns stay 0
-    cv::Mat disp16Padded_;            ///< CV_16S (width + pad) x height, compute() output
-    cv::Mat disp16_;                  ///< header view of the unpadded columns
+    std::optional<CensusSgm> census_; ///< MatcherMode::CensusSgm (the full-resolution rows)
+    /// halfResolutionRows: the near rows' matcher, their 2 x 2 averaged images and disparity.
+    std::optional<CensusSgm> halfCensus_;
+    cv::Mat halfLeft_, halfRight_, halfDisp16_;
+    int fullRows_ = 0; ///< [px] rows matched at full resolution (with the seam overlap)
+    int halfTop_ = 0;  ///< [px] the first ROI row of the half-resolution images
+    /// The half-resolution rows: average, match and write back; false when the matcher refused its buffers.
+    bool matchHalf(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times) noexcept;
+    /// The half-resolution disparity into the bottom halfResolutionRows rows of the output.
+    void upsampleHalf() noexcept;
+    cv::Mat padLeft_, padRight_; ///< CV_8U (width + pad) x height; pad columns stay 0
+    cv::Mat disp16Padded_;       ///< CV_16S (width + pad) x height, compute() output
+    cv::Mat disp16_;             ///< header view of the unpadded columns
 };
 
 } // namespace ugv::vision

@@ -69,6 +69,8 @@ struct StereoConfig {
     bool groundRange = false;
     double groundRangeDropM = 0.3;     ///< [m]
     double groundRangeMarginDeg = 1.5; ///< [deg]
+    /// vision::DetectorConfig::halfResolutionMinGroundPx, the same default [px]; 0: every row at full resolution.
+    double halfResolutionMinGroundPx = 0.0;
 };
 
 struct ObstacleConfig {

@@ -105,6 +105,7 @@ struct RealEvalOptions {
     std::vector<std::string> pairs;   ///< only these pairs (empty: all)
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
     bool groundRange = false;         ///< RoiMatcherConfig::groundRange (detectPair then runs each pair twice)
+    double halfResPx = 0.0;           ///< DetectorConfig::halfResolutionMinGroundPx (eval --half-res)
     /// --detector colour: also the one-camera mode (vision::ColourFreeSpace on the left colour image, the ground of
     /// --mount, else of the stereo detector's estimate as a calibrated mount would give it), scored the same way
     bool colour = false;
