@@ -60,6 +60,22 @@ int halfResolutionRows(const DisparityPlane& ground, Rect roi, double minGroundP
     return rows >= kMinRows ? rows : 0;
 }
 
+/// The ROI matcher of `config`, its half-resolution rows from the configured ground.
+Result<RoiMatcher, Error> makeMatcher(const DetectorConfig& config, const DisparityPlane& ground, Rect roi)
+{
+    if (!(config.halfResolutionMinGroundPx >= 0.0)) {
+        return Unexpected(
+            Error{"ObstacleDetector::create",
+                  "halfResolutionMinGroundPx " + std::to_string(config.halfResolutionMinGroundPx) + " is not >= 0",
+                  "set stereo.half_resolution_min_ground_px to 0 (off) or a disparity in pixels"});
+    }
+    RoiMatcherConfig matcherConfig = config.matcher;
+    if (config.halfResolutionMinGroundPx > 0.0) {
+        matcherConfig.halfResolutionRows = halfResolutionRows(ground, roi, config.halfResolutionMinGroundPx);
+    }
+    return RoiMatcher::create(matcherConfig, cv::Size(roi.width, roi.height));
+}
+
 } // namespace
 
 Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& config,
@@ -76,18 +92,7 @@ Result<ObstacleDetector, Error> ObstacleDetector::create(const DetectorConfig& c
         return Unexpected(
             Error{"ObstacleDetector::create", "configured ground has no positive camera height", "set mount.height_m"});
     }
-    if (!(config.halfResolutionMinGroundPx >= 0.0)) {
-        return Unexpected(
-            Error{"ObstacleDetector::create",
-                  "halfResolutionMinGroundPx " + std::to_string(config.halfResolutionMinGroundPx) + " is not >= 0",
-                  "set stereo.half_resolution_min_ground_px to 0 (off) or a disparity in pixels"});
-    }
-    RoiMatcherConfig matcherConfig = config.matcher;
-    if (config.halfResolutionMinGroundPx > 0.0) {
-        matcherConfig.halfResolutionRows =
-            halfResolutionRows(configuredGround.disparityPlane(projection), roi, config.halfResolutionMinGroundPx);
-    }
-    auto matcherResult = RoiMatcher::create(matcherConfig, cv::Size(roi.width, roi.height));
+    auto matcherResult = makeMatcher(config, configuredGround.disparityPlane(projection), roi);
     if (!matcherResult) {
         return Unexpected(std::move(matcherResult).error());
     }

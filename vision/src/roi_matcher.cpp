@@ -1,7 +1,9 @@
 #include "ugv/vision/roi_matcher.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include <opencv2/core/utility.hpp>
 
@@ -82,32 +84,8 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
         sut.disp16Padded_ = cv::Mat(padded, CV_16SC1, cv::Scalar(-kScale));
         sut.disp16_ = sut.disp16Padded_(cv::Rect(sut.pad_, 0, roiSize.width, roiSize.height));
         if (config.mode == MatcherMode::CensusSgm) {
-            CensusSgmConfig census = config.census;
-            census.numDisparities = config.numDisparities;
-            census.uniquenessRatio = config.uniquenessRatio;
-            census.disp12MaxDiff = config.disp12MaxDiff;
-            census.speckleWindowSize = config.speckleWindowSize;
-            census.speckleRange = config.speckleRange;
-            sut.fullRows_ = halfRows > 0 ? roiSize.height - halfRows + kHalfOverlapRows : roiSize.height;
-            auto matcher = CensusSgm::create(census, cv::Size(padded.width, sut.fullRows_));
-            if (!matcher) {
-                return Unexpected(matcher.error());
-            }
-            sut.census_.emplace(std::move(matcher).value());
-            if (halfRows > 0) {
-                CensusSgmConfig half = census;
-                half.numDisparities = census.numDisparities / 2;
-                half.speckleWindowSize = census.speckleWindowSize / 4; // the same area in the scene
-                const cv::Size halfSize(roiSize.width / 2, (halfRows + kHalfOverlapRows) / 2);
-                auto halfMatcher = CensusSgm::create(half, halfSize);
-                if (!halfMatcher) {
-                    return Unexpected(halfMatcher.error());
-                }
-                sut.halfCensus_.emplace(std::move(halfMatcher).value());
-                sut.halfLeft_ = cv::Mat::zeros(halfSize, CV_8UC1);
-                sut.halfRight_ = cv::Mat::zeros(halfSize, CV_8UC1);
-                sut.halfDisp16_ = cv::Mat(halfSize, CV_16SC1, cv::Scalar(-kScale));
-                sut.halfTop_ = roiSize.height - halfRows - kHalfOverlapRows;
+            if (auto error = sut.createCensus(padded)) {
+                return Unexpected(std::move(*error));
             }
             return sut;
         }
@@ -120,6 +98,40 @@ Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv:
         return Unexpected(Error{"RoiMatcher::create", std::string("OpenCV: ") + e.what(), ""});
     }
     return sut;
+}
+
+std::optional<Error> RoiMatcher::createCensus(cv::Size padded)
+{
+    CensusSgmConfig census = config_.census;
+    census.numDisparities = config_.numDisparities;
+    census.uniquenessRatio = config_.uniquenessRatio;
+    census.disp12MaxDiff = config_.disp12MaxDiff;
+    census.speckleWindowSize = config_.speckleWindowSize;
+    census.speckleRange = config_.speckleRange;
+    const int halfRows = config_.halfResolutionRows;
+    fullRows_ = halfRows > 0 ? roiSize_.height - halfRows + kHalfOverlapRows : roiSize_.height;
+    auto matcher = CensusSgm::create(census, cv::Size(padded.width, fullRows_));
+    if (!matcher) {
+        return matcher.error();
+    }
+    census_.emplace(std::move(matcher).value());
+    if (halfRows == 0) {
+        return std::nullopt;
+    }
+    CensusSgmConfig half = census;
+    half.numDisparities = census.numDisparities / 2;
+    half.speckleWindowSize = census.speckleWindowSize / 4; // the same area in the scene
+    const cv::Size halfSize(roiSize_.width / 2, (halfRows + kHalfOverlapRows) / 2);
+    auto halfMatcher = CensusSgm::create(half, halfSize);
+    if (!halfMatcher) {
+        return halfMatcher.error();
+    }
+    halfCensus_.emplace(std::move(halfMatcher).value());
+    halfLeft_ = cv::Mat::zeros(halfSize, CV_8UC1);
+    halfRight_ = cv::Mat::zeros(halfSize, CV_8UC1);
+    halfDisp16_ = cv::Mat(halfSize, CV_16SC1, cv::Scalar(-kScale));
+    halfTop_ = roiSize_.height - halfRows - kHalfOverlapRows;
+    return std::nullopt;
 }
 
 namespace {

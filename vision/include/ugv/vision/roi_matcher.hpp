@@ -158,6 +158,8 @@ private:
     cv::Mat halfLeft_, halfRight_, halfDisp16_;
     int fullRows_ = 0; ///< [px] rows matched at full resolution (with the seam overlap)
     int halfTop_ = 0;  ///< [px] the first ROI row of the half-resolution images
+    /// The census matchers of the full- and (halfResolutionRows) the half-resolution rows with their buffers.
+    std::optional<Error> createCensus(cv::Size padded);
     /// The half-resolution rows: average, match and write back; false when the matcher refused its buffers.
     bool matchHalf(ConstImageViewU8 left, ConstImageViewU8 right, VisionStageTimes* times) noexcept;
     /// The half-resolution disparity into the bottom halfResolutionRows rows of the output.
