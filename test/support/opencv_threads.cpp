@@ -1,7 +1,7 @@
-// Linked into every test executable (test/CMakeLists.txt) and benchmark (test/bench/CMakeLists.txt): with UGV_UNDER_QEMU set (the aarch64 test preset and
-// toolchain/cross.sh set it), OpenCV's thread pool is turned off before any test runs. Under qemu-user 7.2 the
-// pool's workers spin forever (100 % CPU, the test never ends) unless cv::setNumThreads(0) comes first. Natively
-// nothing changes.
+// Linked into every test executable (test/CMakeLists.txt) and benchmark (test/bench/CMakeLists.txt): with
+// UGV_UNDER_QEMU set (the aarch64 test preset and toolchain/cross.sh set it), OpenCV's thread pool is turned off before
+// any test runs. Under qemu-user 7.2 the pool's workers spin forever (100 % CPU, the test never ends) unless
+// cv::setNumThreads(0) comes first. Natively nothing changes.
 
 #include <cstdlib>
 
