@@ -99,6 +99,9 @@ private:
     static constexpr int kLanes = 16; ///< simd::kWindowLanes
     static constexpr int kMaxRows = 2 * kMaxHalfHeight + 1;
     static_assert(2 * kMaxHalfWidth + 1 <= kLanes);
+#if CV_SIMD128
+    static_assert(kLanes == simd::kWindowLanes && kMaxRows <= simd::kWindowMaxRows, "the kernel's layout");
+#endif
     alignas(16) std::int16_t l16_[kLanes * kMaxRows];
     int contrast_ = 0;
     int x_;

@@ -136,6 +136,12 @@ std::optional<Error> RoiMatcher::createCensus(cv::Size padded)
 
 namespace {
 
+/// The first `rows` rows of an 8-bit matrix as a view (no copy).
+ConstImageViewU8 rowsOf(const cv::Mat& m, int rows) noexcept
+{
+    return {m.ptr<std::uint8_t>(0), m.cols, rows, static_cast<std::ptrdiff_t>(m.step[0])};
+}
+
 /// A ROI plane d = a x + b y + c [px] in the half-resolution images whose first row is ROI row `top`: half pixel
 /// (hx, hy) covers ROI pixels 2 hx .. 2 hx + 1 of rows top + 2 hy .. top + 2 hy + 1, and its disparity is half.
 struct HalfPlane {
@@ -213,10 +219,8 @@ bool RoiMatcher::matchHalf(ConstImageViewU8 left, ConstImageViewU8 right, Vision
     average(left, halfLeft_);
     average(right, halfRight_);
     lap.to(VisionStage::MatchOther);
-    const auto view = [](const cv::Mat& m) {
-        return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
-    };
-    if (!halfCensus_->match(view(halfLeft_), view(halfRight_), halfDisp16_, times)) {
+    if (!halfCensus_->match(rowsOf(halfLeft_, halfLeft_.rows), rowsOf(halfRight_, halfRight_.rows), halfDisp16_,
+                            times)) {
         return false;
     }
     StageLap back(times);
@@ -286,11 +290,7 @@ MatchStatus RoiMatcher::match(ConstImageViewU8 left, ConstImageViewU8 right, Vis
         if (census_) {
             // The full-resolution rows (all of them without halfResolutionRows); a row range is a header, no copy.
             cv::Mat fullDisp = disp16Padded_.rowRange(0, fullRows_);
-            const auto rows = [this](const cv::Mat& m) {
-                return ConstImageViewU8{m.ptr<std::uint8_t>(0), m.cols, fullRows_,
-                                        static_cast<std::ptrdiff_t>(m.step[0])};
-            };
-            if (!census_->match(rows(padLeft_), rows(padRight_), fullDisp, times) ||
+            if (!census_->match(rowsOf(padLeft_, fullRows_), rowsOf(padRight_, fullRows_), fullDisp, times) ||
                 (halfCensus_ && !matchHalf(left, right, times))) {
                 disp16Padded_.setTo(-kScale);
                 return MatchStatus::MatcherFailed;
