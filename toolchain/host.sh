@@ -26,6 +26,7 @@ packages=(
     iproute2 nftables      # the multi-host test: network namespaces and packet loss
     openssl                # DDS Security: bringup/deploy/security/make_security.sh (CA, certificates, signed XML)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
+    clang-tidy             # static analysis: the lint-tidy.* tests (.clang-tidy, README "Static analysis")
     stress-ng              # the soak: a load on the other core (ugvsense soak --load-other-core)
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
     qemu-user              # an older x86-64 CPU for the CPU-level check's test (and aarch64 for cross.sh)

@@ -254,8 +254,17 @@ void OriginalCorrelator::refreshStatic(int object)
 
 void OriginalCorrelator::mergeStatic(int object)
 {
+    // A merge may bring the kept object close to another: merge again from it. A loop, not a recursion: one object
+    // dies per round, so there are at most as many rounds as objects.
+    for (std::optional<int> next = object; next.has_value();) {
+        next = mergeStaticOnce(*next);
+    }
+}
+
+std::optional<int> OriginalCorrelator::mergeStaticOnce(int object)
+{
     if (!staticObjects_[static_cast<std::size_t>(object)].alive) {
-        return;
+        return std::nullopt;
     }
     for (int i = 0; i < static_cast<int>(staticObjects_.size()); ++i) {
         const StaticObject& other = staticObjects_[static_cast<std::size_t>(i)];
@@ -286,9 +295,9 @@ void OriginalCorrelator::mergeStatic(int object)
         }
         gone.members.clear();
         refreshStatic(keep);
-        mergeStatic(keep);
-        return;
+        return keep;
     }
+    return std::nullopt;
 }
 
 // ------------------------------------------------------------------------------------------------------ mobile

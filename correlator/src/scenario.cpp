@@ -87,7 +87,7 @@ std::size_t gridCount(double end, double step)
 std::string numberedId(const char* prefix, std::size_t number)
 {
     char text[32];
-    std::snprintf(text, sizeof(text), "%s-%02zu", prefix, number);
+    (void)std::snprintf(text, sizeof(text), "%s-%02zu", prefix, number);
     return text;
 }
 
@@ -131,7 +131,7 @@ public:
         const std::uint64_t hi = (engine_() & ~kVersionMask) | kVersion4;
         const std::uint64_t lo = (engine_() & ~kVariantMask) | kVariantRfc;
         char text[40];
-        std::snprintf(
+        (void)std::snprintf(
             text, sizeof(text), "%08llx-%04llx-%04llx-%04llx-%012llx", static_cast<unsigned long long>(hi >> 32U),
             static_cast<unsigned long long>((hi >> 16U) & 0xFFFFU), static_cast<unsigned long long>(hi & 0xFFFFU),
             static_cast<unsigned long long>(lo >> 48U), static_cast<unsigned long long>(lo & 0xFFFFFFFFFFFFULL));
@@ -594,6 +594,7 @@ std::vector<Check> checks(const ScenarioConfig& c)
     const double moving = static_cast<double>(c.mobileCount) + c.nonCombatantCount;
     const double instants = c.durationS * c.observationRateHz * c.ugvCount;
     const double truthSamples = c.durationS / c.truthPeriodS * moving;
+    const int maxClosePairs = c.staticCount / 2; // whole pairs
     return {
         {within(c.originLat, -kMaxLatitudeDeg, kMaxLatitudeDeg), "originLat", c.originLat, "in [-85, 85] deg"},
         {within(c.originLon, -kHalfTurnDeg, kHalfTurnDeg), "originLon", c.originLon, "in [-180, 180] deg"},
@@ -607,7 +608,7 @@ std::vector<Check> checks(const ScenarioConfig& c)
         {within(c.ugvMaxSpeedMps, c.ugvMinSpeedMps, kMaxSpeedMps), "ugvMaxSpeedMps", c.ugvMaxSpeedMps,
          "in [ugvMinSpeedMps, 100] m/s"},
         {within(c.staticCount, 0, kMaxCount), "staticCount", static_cast<double>(c.staticCount), "in [0, 10000]"},
-        {within(c.closePairCount, 0, c.staticCount / 2), "closePairCount", static_cast<double>(c.closePairCount),
+        {within(c.closePairCount, 0, maxClosePairs), "closePairCount", static_cast<double>(c.closePairCount),
          "in [0, staticCount/2]"},
         {within(c.closePairMinM, 0, kMaxDistanceM), "closePairMinM", c.closePairMinM, "in [0, 100000] m"},
         {within(c.closePairMaxM, c.closePairMinM, kMaxDistanceM), "closePairMaxM", c.closePairMaxM,
@@ -721,7 +722,7 @@ Result<void, Error> validateScenarioConfig(const ScenarioConfig& config)
     for (const Check& check : checks(config)) {
         if (!check.ok) {
             char value[32];
-            std::snprintf(value, sizeof(value), "%g", check.value);
+            (void)std::snprintf(value, sizeof(value), "%g", check.value);
             return Unexpected(Error{std::string("scenario config ") + check.field,
                                     std::string("value ") + value + " is out of range",
                                     std::string("give a value ") + check.requirement});

@@ -16,6 +16,7 @@
 #include <optional>
 #include <vector>
 
+#include "ugv/hal/sys_call.hpp"
 #include "ugv/hal/yuv420.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/platform/image_view.hpp"
@@ -230,6 +231,10 @@ Result<std::unique_ptr<LibcameraStereoCamera>, Error> LibcameraStereoCamera::ope
                                 "pixels)",
                                 "set camera.width/height to even numbers, or camera.colour: false"});
     }
+    // libcamera is chatty at INFO. Set here, not in start(): open() runs while the program starts, before its threads
+    // (reopen() after a lost camera calls start() only), and setenv races with any thread that reads the environment.
+    // NOLINTNEXTLINE(concurrency-mt-unsafe): before the program's threads start (above)
+    ::setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
     std::unique_ptr<LibcameraStereoCamera> camera(new LibcameraStereoCamera(options));
     if (auto started = camera->start(); !started) {
         return Unexpected(started.error());
@@ -243,12 +248,9 @@ Result<void, Error> LibcameraStereoCamera::start()
     if (!impl_->semaphore) {
         return Unexpected(Error{"libcamera", "sem_init failed", "check the system"});
     }
-    if (std::getenv("LIBCAMERA_LOG_LEVELS") == nullptr) {
-        ::setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0); // libcamera is chatty at INFO
-    }
     impl_->manager = std::make_unique<libcamera::CameraManager>();
     if (const int rc = impl_->manager->start(); rc != 0) {
-        return Unexpected(Error{"libcamera", std::string("CameraManager::start failed: ") + std::strerror(-rc),
+        return Unexpected(Error{"libcamera", std::string("CameraManager::start failed: ") + SysError{-rc}.text(),
                                 "check that libcamera can access /dev/media* and /dev/video*"});
     }
     const auto cameras = impl_->manager->cameras();
@@ -266,7 +268,7 @@ Result<void, Error> LibcameraStereoCamera::start()
         return id.empty() ? cameras[index] : impl_->manager->get(id);
     };
     const int frameWidth = options_.sideBySide ? 2 * options_.width : options_.width;
-    const auto setUp = [&](Side& side, std::shared_ptr<libcamera::Camera> cam, const std::string& id,
+    const auto setUp = [&](Side& side, const std::shared_ptr<libcamera::Camera>& cam, const std::string& id,
                            void (Impl::*handler)(libcamera::Request*)) -> Result<void, Error> {
         const std::string name = "libcamera " + (cam ? cam->id() : id);
         if (!cam) {

@@ -302,7 +302,7 @@ Result<RecordingReader, Error> RecordingReader::open(const std::string& path)
     return RecordingReader(*fd, std::move(info), sizeof(header) + header.calibrationBytes, fileBytes);
 }
 
-long RecordingReader::readFully(std::byte* out, std::size_t size) noexcept
+ssize_t RecordingReader::readFully(std::byte* out, std::size_t size) noexcept
 {
     std::size_t got = 0;
     while (got < size) {
@@ -316,7 +316,7 @@ long RecordingReader::readFully(std::byte* out, std::size_t size) noexcept
         }
         got += static_cast<std::size_t>(*n);
     }
-    return static_cast<long>(got);
+    return static_cast<ssize_t>(got);
 }
 
 ReadStatus RecordingReader::next() noexcept
@@ -328,11 +328,11 @@ ReadStatus RecordingReader::next() noexcept
             return status;
         }
         RecordPrefix prefix;
-        if (readFully(reinterpret_cast<std::byte*>(&prefix), sizeof(prefix)) != static_cast<long>(sizeof(prefix))) {
+        if (readFully(reinterpret_cast<std::byte*>(&prefix), sizeof(prefix)) != static_cast<ssize_t>(sizeof(prefix))) {
             return ReadStatus::IoError;
         }
         offset_ += sizeof(prefix);
-        if (readFully(frame_.data(), frameBytes_) != static_cast<long>(frameBytes_)) {
+        if (readFully(frame_.data(), frameBytes_) != static_cast<ssize_t>(frameBytes_)) {
             offset_ -= sizeof(prefix);
             return ReadStatus::IoError; // peek() saw the whole record in the file
         }
@@ -359,7 +359,7 @@ ReadStatus RecordingReader::peek() noexcept
             return ReadStatus::End;
         }
         std::byte head[sizeof(RecordPrefix) + sizeof(FrameHeader)];
-        const long got = readFully(head, sizeof(head));
+        const ssize_t got = readFully(head, sizeof(head));
         if (got < 0) {
             return ReadStatus::IoError;
         }
@@ -395,12 +395,12 @@ bool RecordingReader::resync() noexcept
     while (at + sizeof(RecordPrefix) <= fileBytes_) {
         const std::uint64_t saved = offset_;
         offset_ = at;
-        const long got = readFully(window, sizeof(window));
+        const ssize_t got = readFully(window, sizeof(window));
         offset_ = saved;
-        if (got < static_cast<long>(sizeof(std::uint32_t))) {
+        if (got < static_cast<ssize_t>(sizeof(std::uint32_t))) {
             return false;
         }
-        for (long i = 0; i + 4 <= got; ++i) {
+        for (ssize_t i = 0; i + 4 <= got; ++i) {
             std::uint32_t magic = 0;
             std::memcpy(&magic, window + i, sizeof(magic));
             if (magic == kRecordMagic) {

@@ -23,15 +23,16 @@ namespace {
 
 int realOpen(void* /*context*/, const char* path, int flags)
 {
-    return ::open(path, flags); // NOLINT(cppcoreguidelines-pro-type-vararg)
+    return ::open(path, flags);
 }
 int realClose(void* /*context*/, int fd)
 {
     return ::close(fd);
 }
+// NOLINTNEXTLINE(google-runtime-int): ioctl(2)'s request type
 int realIoctl(void* /*context*/, int fd, unsigned long request, void* arg)
 {
-    return ::ioctl(fd, request, arg); // NOLINT(cppcoreguidelines-pro-type-vararg)
+    return ::ioctl(fd, request, arg);
 }
 void* realMmap(void* /*context*/, std::size_t length, int fd, std::int64_t offset)
 {
@@ -350,8 +351,8 @@ bool V4l2StereoCamera::copyImage(const Device& device, int x0, bool right) noexc
         // YUYV 4:2:2 to BGR, OpenCV's BT.601 conversion; x0 is even (a whole Y0 U Y1 V pair). The sizes were fixed at
         // open(), so cvtColor writes into the BGR image without allocating.
         const BgrView out = right ? rightBgr_.view() : leftBgr_.view();
-        const cv::Mat yuyv(out.height(), out.width(), CV_8UC2, const_cast<std::uint8_t*>(base) + 2 * x0, // NOLINT
-                           device.stride);
+        // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): cv::Mat takes no const data; yuyv is only read
+        const cv::Mat yuyv(out.height(), out.width(), CV_8UC2, const_cast<std::uint8_t*>(base) + 2 * x0, device.stride);
         cv::Mat bgr(out.height(), out.width(), CV_8UC3, out.data(), static_cast<std::size_t>(out.strideBytes()));
         cv::cvtColor(yuyv, bgr, cv::COLOR_YUV2BGR_YUYV);
         return true;
@@ -364,7 +365,7 @@ bool V4l2StereoCamera::copyImage(const Device& device, int x0, bool right) noexc
             std::memcpy(dst, row + x0, static_cast<std::size_t>(out.width()));
         } else {
             for (int x = 0; x < out.width(); ++x) {
-                dst[x] = row[2 * (x0 + x)]; // YUYV: Y0 U Y1 V
+                dst[x] = row[2 * static_cast<std::ptrdiff_t>(x0 + x)]; // YUYV: Y0 U Y1 V
             }
         }
     }

@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
+#include <charconv>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -316,18 +317,18 @@ Result<void, Error> validate(const BusConfig& config, const std::string& where)
 
 Result<std::optional<int>, Error> domainFromEnvironment(const char* variable)
 {
-    const char* env = std::getenv(variable); // NOLINT(concurrency-mt-unsafe): init, before threads
+    const char* env = std::getenv(variable);
     if (env == nullptr || *env == '\0') {
         return std::optional<int>();
     }
-    char* end = nullptr;
-    errno = 0;
-    const long id = std::strtol(env, &end, 10);
-    if (errno != 0 || end == env || *end != '\0' || id < 0 || id > kMaxDomainId) {
+    const char* const end = env + std::strlen(env);
+    int id = -1;
+    const auto [stop, error] = std::from_chars(env, end, id);
+    if (error != std::errc{} || stop != end || id < 0 || id > kMaxDomainId) {
         return Unexpected(Error{std::string("$") + variable, std::string("'") + env + "' is not a DDS domain id",
                                 "give a whole number in 0..232, or unset it"});
     }
-    return std::optional<int>(static_cast<int>(id));
+    return std::optional<int>(id);
 }
 
 Result<void, Error> checkDiscoveryServers(const std::string& list, const std::string& where)
@@ -488,7 +489,7 @@ graph::Gid_ rosGid(const rtps::GUID_t& guid)
 Result<void, Error> Bus::announceRosNode(const std::string& nodeName)
 {
     const std::string where = "dds topic ros_discovery_info";
-    if (nodeName.empty() || nodeName.size() > 255 || std::isdigit(static_cast<unsigned char>(nodeName.front())) ||
+    if (nodeName.empty() || nodeName.size() > 255 || std::isdigit(static_cast<unsigned char>(nodeName.front())) != 0 ||
         nodeName.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") !=
             std::string::npos) {
         return Unexpected(Error{where, "'" + nodeName + "' is not a ROS 2 node name",

@@ -33,16 +33,19 @@ constexpr std::uint64_t kFramePoolChunks = 16;
 // frame's pixels as a race. handOver() where our code gives a chunk away (publish, release), takeOver() where it gets
 // one (loan, take); the chunk's address is the synchronisation object. Nothing in other builds.
 #if defined(__SANITIZE_THREAD__)
-extern "C" void __tsan_acquire(void* address); // NOLINT(bugprone-reserved-identifier): TSan's interface
-extern "C" void __tsan_release(void* address); // NOLINT(bugprone-reserved-identifier)
+// NOLINTBEGIN(readability-identifier-naming,cppcoreguidelines-pro-type-const-cast): TSan's
+// interface, by its names; it takes the address as void* and only uses it as a key
+extern "C" void __tsan_acquire(void* address);
+extern "C" void __tsan_release(void* address);
 void handOver(const void* chunk) noexcept
 {
-    __tsan_release(const_cast<void*>(chunk)); // NOLINT(cppcoreguidelines-pro-type-const-cast)
+    __tsan_release(const_cast<void*>(chunk));
 }
 void takeOver(const void* chunk) noexcept
 {
-    __tsan_acquire(const_cast<void*>(chunk)); // NOLINT(cppcoreguidelines-pro-type-const-cast)
+    __tsan_acquire(const_cast<void*>(chunk));
 }
+// NOLINTEND(readability-identifier-naming,cppcoreguidelines-pro-type-const-cast)
 #else
 void handOver(const void* /*chunk*/) noexcept {}
 void takeOver(const void* /*chunk*/) noexcept {}
@@ -58,7 +61,7 @@ iox::capro::ServiceDescription describe(Topic topic)
 iox::units::Duration toDuration(std::chrono::nanoseconds timeout)
 {
     return iox::units::Duration::fromNanoseconds(
-        static_cast<unsigned long long>(std::max<std::int64_t>(0, timeout.count())));
+        static_cast<std::uint64_t>(std::max<std::int64_t>(0, timeout.count())));
 }
 
 std::uint32_t payloadSize(const void* userPayload)

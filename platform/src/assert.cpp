@@ -8,7 +8,7 @@ namespace ugv::platform::detail {
 void contractFailed(const char* kind, const char* condition, const char* file, int line) noexcept
 {
     // fprintf to an unbuffered stderr: no allocation, safe to call from any thread.
-    std::fprintf(stderr, "ugvsense: %s failed: %s (%s:%d)\n", kind, condition, file, line);
+    (void)std::fprintf(stderr, "ugvsense: %s failed: %s (%s:%d)\n", kind, condition, file, line);
     std::abort();
 }
 

@@ -55,8 +55,8 @@ void exitUnlessCpuRunsBuild(const char* program) noexcept
     const char* level = builtCpuLevel();
     if (!cpuRuns(level)) {
         char line[512];
-        formatCpuLevelError(line, sizeof(line), program, level);
-        std::fprintf(stderr, "%s\n", line);
+        (void)formatCpuLevelError(line, sizeof(line), program, level);
+        (void)std::fprintf(stderr, "%s\n", line);
         std::_Exit(1);
     }
 }

@@ -131,7 +131,7 @@ Result<StereoViews, FrameError> viewFrame(const std::byte* frame, std::size_t av
     const auto view = [&](const std::byte* pixels, auto type) {
         using View = decltype(type);
         using Pixel = std::remove_pointer_t<decltype(View().data())>;
-        return pixels == nullptr ? View() : View(reinterpret_cast<Pixel*>(pixels), width, height, stride); // NOLINT
+        return pixels == nullptr ? View() : View(reinterpret_cast<Pixel*>(pixels), width, height, stride);
     };
     if (header.format == PixelFormat::Bgr8) {
         return bgrViews(view(left, ConstBgrView()), view(right, ConstBgrView()));

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +24,8 @@ constexpr std::array<const char*, 5> kLevelNames{"debug", "info", "warn", "error
 constexpr const char* kEnvName = "UGV_LOG_LEVELS";
 constexpr int kStderrFd = 2;
 
+// NOLINTBEGIN(cppcoreguidelines-avoid-non-const-global-variables): the logger's process-wide state, atomics any thread
+// reads
 std::array<std::atomic<LogLevel>, kLogCategoryCount> gThresholds{kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel,
                                                                  kDefaultLogLevel, kDefaultLogLevel, kDefaultLogLevel,
                                                                  kDefaultLogLevel};
@@ -30,6 +33,7 @@ std::atomic<bool> gEnvRead{false};
 std::once_flag gEnvOnce;
 std::atomic<int> gOutputFd{kStderrFd};
 std::atomic<bool> gJournal{false};
+// NOLINTEND(cppcoreguidelines-avoid-non-const-global-variables)
 constexpr std::array<const char*, 5> kJournalPrefixes{"<7>", "<6>", "<4>", "<3>", "<2>"}; // syslog priorities
 
 std::string_view trim(std::string_view text)
@@ -44,9 +48,7 @@ std::string_view trim(std::string_view text)
 
 void readEnvOnce()
 {
-    // NOLINTNEXTLINE(concurrency-mt-unsafe) NOLINTJUSTIFICATION: read once under call_once; nobody sets it.
     const char* spec = std::getenv(kEnvName);
-    // NOLINTNEXTLINE(concurrency-mt-unsafe) NOLINTJUSTIFICATION: read once under call_once; nobody sets it.
     gJournal.store(isJournalStream(gOutputFd.load(), std::getenv("JOURNAL_STREAM")), std::memory_order_relaxed);
     if (spec != nullptr) {
         const LogLevelsParse parsed = parseLogLevels(spec);
@@ -152,10 +154,18 @@ bool isJournalStream(int fd, const char* journalStream) noexcept
     if (journalStream == nullptr) {
         return false;
     }
+    // JOURNAL_STREAM is "<device>:<inode>" in decimal (systemd.exec(5)).
+    const std::string_view text(journalStream);
+    const char* const end = text.data() + text.size();
     std::uintmax_t device = 0;
     std::uintmax_t inode = 0;
+    const auto [afterDevice, deviceError] = std::from_chars(text.data(), end, device);
+    if (deviceError != std::errc{} || afterDevice == end || *afterDevice != ':') {
+        return false;
+    }
+    const auto [afterInode, inodeError] = std::from_chars(afterDevice + 1, end, inode);
     struct stat st {};
-    if (std::sscanf(journalStream, "%ju:%ju", &device, &inode) != 2 || ::fstat(fd, &st) != 0) {
+    if (inodeError != std::errc{} || afterInode != end || ::fstat(fd, &st) != 0) {
         return false;
     }
     return static_cast<std::uintmax_t>(st.st_dev) == device && static_cast<std::uintmax_t>(st.st_ino) == inode;

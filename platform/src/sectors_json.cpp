@@ -53,7 +53,7 @@ std::string jsonNumber(double value)
         return "null";
     }
     char text[32];
-    std::snprintf(text, sizeof(text), "%.6g", value);
+    (void)std::snprintf(text, sizeof(text), "%.6g", value);
     return text;
 }
 

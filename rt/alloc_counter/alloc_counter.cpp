@@ -20,23 +20,29 @@
 
 #if !UGV_ALLOC_COUNTER_SANITIZED
 // glibc's own allocator entry points (exported by libc.so.6 for exactly this use).
+// NOLINTBEGIN(readability-identifier-naming): glibc's names, declared as glibc exports
+// them
 extern "C" {
-void* __libc_malloc(std::size_t size);                          // NOLINT(bugprone-reserved-identifier)
-void* __libc_calloc(std::size_t count, std::size_t size);       // NOLINT(bugprone-reserved-identifier)
-void* __libc_realloc(void* ptr, std::size_t size);              // NOLINT(bugprone-reserved-identifier)
-void* __libc_memalign(std::size_t alignment, std::size_t size); // NOLINT(bugprone-reserved-identifier)
-void* __libc_valloc(std::size_t size);                          // NOLINT(bugprone-reserved-identifier)
-void* __libc_pvalloc(std::size_t size);                         // NOLINT(bugprone-reserved-identifier)
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* ptr, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+void* __libc_valloc(std::size_t size);
+void* __libc_pvalloc(std::size_t size);
 }
+// NOLINTEND(readability-identifier-naming)
 #endif
 
 namespace {
 
 // Plain globals with constant initialisation: usable before main and in any thread without allocating.
+// NOLINTBEGIN(cppcoreguidelines-avoid-non-const-global-variables): the counter's state; a function-local static would
+// run its guard inside operator new
 std::atomic<int> gActiveScopes{0};
 std::atomic<std::size_t> gGlobalCount{0};
 thread_local int tActiveScopes = 0;
 thread_local std::size_t tThreadCount = 0;
+// NOLINTEND(cppcoreguidelines-avoid-non-const-global-variables)
 
 void countOne() noexcept
 {
@@ -51,7 +57,7 @@ void countOne() noexcept
 void* rawAlloc(std::size_t size) noexcept
 {
 #if UGV_ALLOC_COUNTER_SANITIZED
-    return std::malloc(size); // NOLINT(cppcoreguidelines-no-malloc)
+    return std::malloc(size); // NOLINT(cppcoreguidelines-no-malloc): the sanitizer's malloc is the raw one here
 #else
     return __libc_malloc(size);
 #endif
@@ -234,10 +240,10 @@ void* pvalloc(std::size_t size)
 
 namespace ugv::rt {
 
-AllocationScope::AllocationScope() noexcept
+AllocationScope::AllocationScope() noexcept : start_(gGlobalCount.load(std::memory_order_relaxed))
 {
+    // Counting starts after the snapshot: what is counted from here on is this scope's (and any other open one's).
     gActiveScopes.fetch_add(1, std::memory_order_relaxed);
-    start_ = gGlobalCount.load(std::memory_order_relaxed);
 }
 
 AllocationScope::~AllocationScope()

@@ -15,6 +15,7 @@ int lockAllReal(int flags)
 }
 int mallocOptionReal(int option, int value)
 {
+    // NOLINTNEXTLINE(concurrency-mt-unsafe): lockMemory's contract: at init, from one thread (ugv/rt/memory.hpp)
     return ::mallopt(option, value) == 1 ? 0 : EINVAL;
 }
 

@@ -11,7 +11,7 @@ namespace {
 
 bool openCvThreadsOffUnderQemu()
 {
-    // NOLINTNEXTLINE(concurrency-mt-unsafe): NOLINTJUSTIFICATION read-only, during static initialisation, no threads
+    // read-only, during static initialisation, no threads
     const char* env = std::getenv("UGV_UNDER_QEMU");
     if (env == nullptr || *env == '\0' || *env == '0') {
         return false;

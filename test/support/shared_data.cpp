@@ -7,8 +7,7 @@ namespace {
 
 std::filesystem::path sharedRoot()
 {
-    if (const char* env = std::getenv("UGV_SHARED_DATA");
-        env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): read-only, before threads
+    if (const char* env = std::getenv("UGV_SHARED_DATA"); env != nullptr && *env != '\0') { // read-only, before threads
         return env;
     }
     return UGV_SHARED_DATA_DEFAULT;

@@ -197,11 +197,11 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
         ok = ok && send(w.corrections, s, 3, "empty source name");
     }
     if (!ok) {
-        return g_stop.load() ? 1
-                             : bus::fail(kCommand, Error{"ugvsense " + std::string(kCommand),
-                                                         "the bus refused a sample for " +
-                                                             std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
-                                                         "check the readers"});
+        return gStop.load() ? 1
+                            : bus::fail(kCommand, Error{"ugvsense " + std::string(kCommand),
+                                                        "the bus refused a sample for " +
+                                                            std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
+                                                        "check the readers"});
     }
     std::printf("hostile samples sent (each breaks one check):\n");
     for (const Kind& k : kinds) {
@@ -233,7 +233,7 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
         const auto until = Clock::now() + bus::kRefusedWriteTimeout;
         bool written = false;
         while (!(written = w.observations.writeStamped(s, stamp0 + static_cast<std::int64_t>(ahead) * 1'000'000'000)) &&
-               !g_stop.load() && Clock::now() < until) {
+               !gStop.load() && Clock::now() < until) {
         }
         if (!written) {
             break;
@@ -246,12 +246,12 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
     }
     std::fflush(stdout);
     if (flooded < flood || ahead < aheadFlood) {
-        return g_stop.load() ? 1
-                             : bus::fail(kCommand, Error{"ugvsense " + std::string(kCommand) + " --flood",
-                                                         "the bus refused the flood after " + std::to_string(flooded) +
-                                                             " sample(s) for " +
-                                                             std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
-                                                         "check the readers"});
+        return gStop.load() ? 1
+                            : bus::fail(kCommand, Error{"ugvsense " + std::string(kCommand) + " --flood",
+                                                        "the bus refused the flood after " + std::to_string(flooded) +
+                                                            " sample(s) for " +
+                                                            std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
+                                                        "check the readers"});
     }
     return bus::finish(w, kCommand, "(" + std::to_string(hostile) + " hostile, then the flood)", lingerS, bus.config());
 }

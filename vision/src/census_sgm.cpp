@@ -116,7 +116,7 @@ std::uint16_t minOutside(const std::uint16_t* sum, int d, int lo, int hi, bool u
 {
 #if (CV_SIMD || CV_SIMD_SCALABLE)
     if (useSimd) {
-        using namespace cv; // NOLINT(google-build-using-namespace)
+        using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
         const int lanes = simd::VTraits<v_uint16>::vlanes();
         alignas(64) static constexpr std::uint16_t kIota[32] = {0,  1,  2,  3,  4,  5,  6,  7,  8,  9,  10,
                                                                 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21,
@@ -151,7 +151,7 @@ int firstIndexOf(const std::uint16_t* sum, int d, std::uint16_t value, bool useS
     int k = 0;
 #if (CV_SIMD || CV_SIMD_SCALABLE)
     if (useSimd) {
-        using namespace cv; // NOLINT(google-build-using-namespace)
+        using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
         const int lanes = simd::VTraits<v_uint16>::vlanes();
         const v_uint16 target = vx_setall_u16(value);
         for (; k + lanes <= d; k += lanes) {

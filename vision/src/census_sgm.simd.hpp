@@ -124,7 +124,7 @@ private:
 inline void costPixelSimd(const std::uint8_t left[5], const std::uint8_t* right, int planeStride, int d, int clip,
                           std::uint8_t* cost) noexcept
 {
-    using namespace cv; // NOLINT(google-build-using-namespace)
+    using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
     forDisparityBlocks(d, [&](auto w, int k) {
         using V = decltype(w);
         const auto c = v_add(v_add(v_popcount(v_xor(V::all(left[0]), V::load(right + k))),
@@ -142,7 +142,7 @@ inline void costPixelSimd(const std::uint8_t left[5], const std::uint8_t* right,
 inline std::uint8_t pathStepSimd(const std::uint8_t* prev, int minPrev, const std::uint8_t* cost, std::uint8_t* out,
                                  int d, int p1, int p2) noexcept
 {
-    using namespace cv; // NOLINT(google-build-using-namespace)
+    using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
     const auto bound = static_cast<std::uint8_t>(std::min(255, minPrev + p2));
     BlockMin<std::uint8_t> result;
     forDisparityBlocks(d, [&](auto w, int k) {
@@ -161,7 +161,7 @@ inline std::uint8_t pathStepSimd(const std::uint8_t* prev, int minPrev, const st
 inline void sumFourSimd(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c, const std::uint8_t* e,
                         std::uint16_t* sum, int d) noexcept
 {
-    using namespace cv; // NOLINT(google-build-using-namespace)
+    using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
     forDisparityBlocks(d, [&](auto w, int k) {
         using V = decltype(w);
         typename V::U16 aLo;
@@ -184,7 +184,7 @@ inline void sumFourSimd(const std::uint8_t* a, const std::uint8_t* b, const std:
 /// sum[k] += a[k]; @return min over k of the new sum.
 inline std::uint16_t addAndMinSimd(const std::uint8_t* a, std::uint16_t* sum, int d) noexcept
 {
-    using namespace cv; // NOLINT(google-build-using-namespace)
+    using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
     BlockMin<std::uint16_t> result;
     forDisparityBlocks(d, [&](auto w, int k) {
         using V = decltype(w);

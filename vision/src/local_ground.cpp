@@ -51,9 +51,10 @@ bool LocalGround::mode(int s, int bin, float& z) const noexcept
     }
     double sum = 0.0;
     double weighted = 0.0;
+    const int centre = heightBins_ / 2; // the bin of height 0
     for (int i = std::max(0, best - 1); i <= std::min(heightBins_ - 1, best + 1); ++i) {
         sum += h[i];
-        weighted += static_cast<double>(h[i]) * (i - heightBins_ / 2) * kHeightBinM;
+        weighted += static_cast<double>(h[i]) * (i - centre) * kHeightBinM;
     }
     z = static_cast<float>(weighted / sum);
     return true;

@@ -33,6 +33,9 @@ int roundNonNegative(double x) noexcept
 /// layout of the universal-intrinsics kernel).
 class LeftWindow {
 public:
+    // l16_'s rows in use are written below before any read; zeroing all of it for every candidate pixel would cost
+    // more than the window.
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-member-init): written before read (above)
     LeftWindow(ConstImageViewU8 left, int x, int v, int hw, int hh) noexcept : x_(x), v_(v), hw_(hw), hh_(hh)
     {
         const int width = 2 * hw + 1;
@@ -176,7 +179,7 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
     const auto minContrastBelow16 =
         static_cast<int>(std::lround(config_.minContrastBelow * kSub * static_cast<float>(n)));
     // cost(d) < ratio * cost(d_g), in integers: cost(d) * 1024 < ratio1024 * cost(d_g).
-    const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
+    const auto ratio1024 = static_cast<std::int64_t>(std::lround(config_.acceptRatio * 1024.0F));
     // A window at disparity d16 reads right columns floor(((x - hw) 16 - d16) / 16) .. that of (x + hw) + 1.
     const int bhw = config_.belowHalfWidth;
     const auto refineMaxGround16 = static_cast<int>(std::lround(config_.refineMaxGroundPx * kSub));
@@ -220,7 +223,7 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
             }
             const int atD = window.costAt(right, d16, config_.simd);
             const int atGround = window.costAt(right, dg16, config_.simd);
-            if (static_cast<long>(atD) * 1024 >= ratio1024 * atGround) {
+            if (static_cast<std::int64_t>(atD) * 1024 >= ratio1024 * atGround) {
                 dst[x] = kInvalid;
                 ++counts_.rejected;
             }
@@ -238,7 +241,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     const int w = config_.width;
     const auto minResidual16 = static_cast<int>(std::lround(config_.minResidualPx * kSub));
     const auto minContrast16 = static_cast<int>(std::lround(config_.minContrastBelow * kSub * static_cast<float>(n)));
-    const auto ratio1024 = static_cast<long>(std::lround(config_.acceptRatio * 1024.0F));
+    const auto ratio1024 = static_cast<std::int64_t>(std::lround(config_.acceptRatio * 1024.0F));
     // [d - 1, d + 3] px, below d_g - 1/2 px: the matcher is off by ~2 px at a far wall, and a bounded search keeps
     // the cost per pixel bounded (a pixel 40 px below the ground would otherwise search 80 steps).
     const int lo = std::max(0, d16 - kSub);
@@ -278,7 +281,7 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
     // minimum of many noisy costs beats a single one by chance on weak texture (a painted floor). Searched only
     // when the drop beats d_g itself (the search can only lower the ground's cost).
     const auto beatsGround = [&](int groundCost) {
-        return static_cast<long>(bestCost) * 1024 < ratio1024 * groundCost;
+        return static_cast<std::int64_t>(bestCost) * 1024 < ratio1024 * groundCost;
     };
     bool accepted = beatsGround(atGround);
     for (int d = dg16 - kSub / 2; accepted && d <= dg16 + kSub / 2; d += 2) {

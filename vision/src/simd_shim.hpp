@@ -17,10 +17,11 @@
 namespace ugv::vision::simd {
 
 #if (CV_VERSION_MAJOR == 4 && CV_VERSION_MINOR < 7)
+// NOLINTBEGIN(readability-identifier-naming): OpenCV 4.7's names, so the kernels read the same on both
 template <class V>
 struct VTraits {
     static constexpr int vlanes() noexcept { return V::nlanes; }
-    static constexpr int max_nlanes = V::nlanes; // NOLINT(readability-identifier-naming): OpenCV's name
+    static constexpr int max_nlanes = V::nlanes;
 };
 template <class V>
 inline V v_add(const V& a, const V& b)
@@ -62,6 +63,7 @@ inline auto v_eq(const V& a, const V& b)
 {
     return a == b;
 }
+// NOLINTEND(readability-identifier-naming)
 #else
 using cv::v_add;
 using cv::v_and;

@@ -31,7 +31,7 @@ struct Detection {
 std::string formatPx(double value)
 {
     char text[32];
-    std::snprintf(text, sizeof(text), "%.3f", value);
+    (void)std::snprintf(text, sizeof(text), "%.3f", value);
     return text;
 }
 

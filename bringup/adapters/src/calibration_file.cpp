@@ -164,25 +164,31 @@ private:
     std::string path_;
 };
 
+// NOLINTBEGIN(bugprone-macro-parentheses): `var` names a declared variable, which parentheses would not allow
 #define UGV_TRY_ASSIGN(var, expr)                                                                                      \
     auto var##Result = (expr);                                                                                         \
     if (!var##Result) {                                                                                                \
         return Unexpected(var##Result.error());                                                                        \
     }                                                                                                                  \
     auto var = std::move(var##Result).value()
+// NOLINTEND(bugprone-macro-parentheses)
 
-const std::string kBaselineFix =
-    "the baseline must be in [" + numberText(kMinBaselineM) + ", " + numberText(kMaxBaselineM) + "] metres";
-const std::string kFocalFix =
-    "a focal length must be in [" + numberText(kMinFocalPx) + ", " + numberText(kMaxFocalPx) + "] pixels";
+std::string baselineFix()
+{
+    return "the baseline must be in [" + numberText(kMinBaselineM) + ", " + numberText(kMaxBaselineM) + "] metres";
+}
+std::string focalFix()
+{
+    return "a focal length must be in [" + numberText(kMinFocalPx) + ", " + numberText(kMaxFocalPx) + "] pixels";
+}
 
 Result<StereoCalibration, Error> readRectified(const Reader& in, cv::Size size)
 {
-    UGV_TRY_ASSIGN(fx, in.numberIn("fx", kMinFocalPx, kMaxFocalPx, false, in.root(), kFocalFix));
-    UGV_TRY_ASSIGN(fy, in.numberIn("fy", kMinFocalPx, kMaxFocalPx, false, in.root(), kFocalFix));
+    UGV_TRY_ASSIGN(fx, in.numberIn("fx", kMinFocalPx, kMaxFocalPx, false, in.root(), focalFix()));
+    UGV_TRY_ASSIGN(fy, in.numberIn("fy", kMinFocalPx, kMaxFocalPx, false, in.root(), focalFix()));
     UGV_TRY_ASSIGN(cx, in.numberIn("cx", 0.0, size.width, false, in.root(), "cx must lie inside the image width"));
     UGV_TRY_ASSIGN(cy, in.numberIn("cy", 0.0, size.height, false, in.root(), "cy must lie inside the image height"));
-    UGV_TRY_ASSIGN(baseline, in.numberIn("baseline_m", kMinBaselineM, kMaxBaselineM, false, in.root(), kBaselineFix));
+    UGV_TRY_ASSIGN(baseline, in.numberIn("baseline_m", kMinBaselineM, kMaxBaselineM, false, in.root(), baselineFix()));
     return vision::makeRectifiedCalibration(size, fx, fy, cx, cy, baseline);
 }
 
@@ -216,7 +222,7 @@ Result<StereoCalibration, Error> readFull(const Reader& in, cv::Size size)
     }
     const double baseline = cv::norm(t);
     if (!(baseline >= kMinBaselineM) || baseline > kMaxBaselineM) {
-        return Unexpected(in.error("T", "baseline |T| = " + numberText(baseline) + " m", kBaselineFix));
+        return Unexpected(in.error("T", "baseline |T| = " + numberText(baseline) + " m", baselineFix()));
     }
     // The rectified pair's baseline: P2(0,3) = -fx * baseline for the right camera of a horizontal pair (what the
     // detector reads). Zero or positive: the cameras are swapped or P2 is not this T's.
@@ -225,7 +231,7 @@ Result<StereoCalibration, Error> readFull(const Reader& in, cv::Size size)
         return Unexpected(in.error("P2",
                                    "rectified baseline -P2(0,3)/P2(0,0) = " + numberText(rectifiedBaseline) +
                                        " m (zero or negative: left and right swapped, or P2 is not this rig's)",
-                                   kBaselineFix + "; " + kRecalibrate));
+                                   baselineFix() + "; " + kRecalibrate));
     }
     c.K1 = k1;
     c.D1 = d1;
@@ -351,12 +357,13 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
 namespace {
 
 /// The first key given twice in `map` or the maps below it ("mount.height_m"), else empty. OpenCV keeps both.
+// NOLINTNEXTLINE(misc-no-recursion): one level per nesting level, which the YAML guard bounds (maxDepth) before parsing
 std::string duplicateKey(const cv::FileNode& map, const std::string& prefix)
 {
     std::set<std::string> seen;
     for (auto it = map.begin(); it != map.end(); ++it) {
         const cv::FileNode node = *it;
-        const std::string name = prefix + node.name();
+        std::string name = prefix + node.name(); // not const: returned by move
         if (!seen.insert(name).second) {
             return name;
         }

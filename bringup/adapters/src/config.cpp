@@ -44,9 +44,7 @@ KeySpec numberKey(std::string path, Kind kind, double min, double max, std::stri
     key.setNumber = [ref](ServiceConfig& c, double v) {
         ref(c) = static_cast<std::remove_reference_t<decltype(ref(c))>>(v);
     };
-    key.getNumber = [ref](const ServiceConfig& c) {
-        return static_cast<double>(ref(const_cast<ServiceConfig&>(c)));
-    }; // NOLINT: read only
+    key.getNumber = [ref](const ServiceConfig& c) { return static_cast<double>(ref(c)); };
     return key;
 }
 
@@ -55,7 +53,7 @@ KeySpec textKey(std::string path, Kind kind, std::string description, Ref ref)
 {
     KeySpec key{std::move(path), std::move(description), kind, 0, 0, {}, {}, {}, {}, {}};
     key.setText = [ref](ServiceConfig& c, const std::string& v) { ref(c) = v; };
-    key.getText = [ref](const ServiceConfig& c) { return ref(const_cast<ServiceConfig&>(c)); }; // NOLINT: read only
+    key.getText = [ref](const ServiceConfig& c) { return ref(c); };
     return key;
 }
 
@@ -75,7 +73,7 @@ KeySpec choiceKey(std::string path, std::string description, std::vector<std::pa
     };
     key.getText = [ref, names](const ServiceConfig& c) {
         for (const auto& [name, value] : names) {
-            if (ref(const_cast<ServiceConfig&>(c)) == value) { // NOLINT: read only
+            if (ref(c) == value) {
                 return name;
             }
         }
@@ -84,11 +82,8 @@ KeySpec choiceKey(std::string path, std::string description, std::vector<std::pa
     return key;
 }
 
-#define UGV_REF(member)                                                                                                \
-    [](ServiceConfig & c) -> auto&                                                                                     \
-    {                                                                                                                  \
-        return c.member;                                                                                               \
-    }
+// The member `member` of a ServiceConfig, const or not (the getters read through the same accessor).
+#define UGV_REF(member) ([](auto& c) -> auto& { return c.member; })
 
 // The vehicle, its calibration and its cameras.
 std::vector<KeySpec> cameraKeys()
@@ -312,17 +307,17 @@ std::vector<KeySpec> taskKeys()
         const std::string prefix = "tasks." + std::string(rt::kDefaultTaskTable[i].name) + ".";
         keys.push_back(choiceKey<rt::SchedPolicy>(
             prefix + "policy", "scheduling policy of this thread",
-            {{"fifo", rt::SchedPolicy::Fifo}, {"other", rt::SchedPolicy::Other}}, [i](ServiceConfig & c) -> auto& {
+            {{"fifo", rt::SchedPolicy::Fifo}, {"other", rt::SchedPolicy::Other}}, [i](auto& c) -> auto& {
                 return c.tasks[i].policy;
             }));
         keys.push_back(numberKey(
             prefix + "priority", Kind::Int, 0, 99,
-            "priority: 1..99 with fifo (higher first), 0 with other", [i](ServiceConfig & c) -> auto& {
+            "priority: 1..99 with fifo (higher first), 0 with other", [i](auto& c) -> auto& {
                 return c.tasks[i].priority;
             }));
         keys.push_back(numberKey(
             prefix + "cpu", Kind::Int, -1, 1023,
-            "CPU to pin the thread to, -1 for any", [i](ServiceConfig & c) -> auto& { return c.tasks[i].cpu; }));
+            "CPU to pin the thread to, -1 for any", [i](auto& c) -> auto& { return c.tasks[i].cpu; }));
     }
     return keys;
 }
@@ -413,12 +408,13 @@ class Parser {
 public:
     Parser(std::string source, std::string baseDir) : source_(std::move(source)), baseDir_(std::move(baseDir)) {}
 
+    // NOLINTNEXTLINE(misc-no-recursion): one level per nesting level, which the YAML guard bounds (maxDepth) first
     void walk(const YAML::Node& map, const std::string& prefix)
     {
         std::map<std::string, int> seen; // name -> line, for duplicates (yaml-cpp keeps both)
         for (const auto& item : map) {
             const std::string name = item.first.as<std::string>();
-            const std::string path = prefix.empty() ? name : prefix + "." + name;
+            const std::string path = prefix.empty() ? name : std::string(prefix).append(".").append(name);
             const YAML::Node& value = item.second;
             if (const auto [first, fresh] = seen.emplace(name, item.first.Mark().line + 1); !fresh) {
                 error(item.first, path, "is given twice (first at line " + std::to_string(first->second) + ")",
@@ -606,7 +602,7 @@ private:
                   "give " + rangeText(key) + ": " + key.description);
             return;
         }
-        const std::string text = value.Scalar();
+        const std::string& text = value.Scalar();
         if (key.kind == Kind::Text || key.kind == Kind::Path) {
             std::string resolved = text;
             if (key.kind == Kind::Path && !text.empty() && std::filesystem::path(text).is_relative()) {
@@ -714,8 +710,7 @@ Result<ServiceConfig, ConfigErrors> parseConfig(const std::string& yamlText, con
         parser.errors().push_back(Error{sourceName + ":" + std::to_string(e.mark.line + 1), "unexpected YAML: " + e.msg,
                                         "keys must be plain strings"});
     }
-    if (const char* env = std::getenv("UGV_CALIBRATION");
-        env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
+    if (const char* env = std::getenv("UGV_CALIBRATION"); env != nullptr && *env != '\0') {
         parser.config().calibrationPath = env;
     }
     applyRosDomainId(root, parser.config(), parser.errors());
@@ -783,8 +778,7 @@ std::string configPath(const char* fromArgs)
     if (fromArgs != nullptr && *fromArgs != '\0') {
         return fromArgs;
     }
-    if (const char* env = std::getenv("UGV_CONFIG");
-        env != nullptr && *env != '\0') { // NOLINT(concurrency-mt-unsafe): init, before threads
+    if (const char* env = std::getenv("UGV_CONFIG"); env != nullptr && *env != '\0') {
         return env;
     }
     return "/etc/ugvsense/config.yaml";

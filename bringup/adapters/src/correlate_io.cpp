@@ -12,11 +12,16 @@
 
 #include <nlohmann/json.hpp>
 
+#include "correlator_names.hpp"
+
 namespace ugv::adapters {
+
+using correlator::PoseCorrection;
+using correlator::toString;
+
 namespace {
 
 using nlohmann::json;
-using namespace correlator;
 
 Error lineError(const std::string& what, const std::string& fix = "")
 {

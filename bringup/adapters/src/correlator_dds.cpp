@@ -2,14 +2,13 @@
 
 #include <algorithm>
 
+#include "correlator_names.hpp"
 #include "ugv/adapters/correlate_io.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 
 namespace ugv::adapters {
 
 namespace {
-
-using namespace correlator;
 
 constexpr const char* kDroppedFix = "fix the sender; the sample was dropped and counted";
 

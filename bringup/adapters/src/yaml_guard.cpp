@@ -76,7 +76,7 @@ public:
     }
 
 private:
-    static constexpr std::size_t npos = std::string_view::npos;
+    static constexpr std::size_t kNpos = std::string_view::npos;
 
     /// Size, NUL, nesting depth and wide integers (every YAML), and quotes that stay open (openCvSubset).
     Result<void, Error> scanLine(std::string_view text)
@@ -100,7 +100,7 @@ private:
             const char c = text[i];
             const bool endsToken = i + 1 == text.size() || isBlank(text[i + 1]);
             const bool startsToken =
-                i == indent || isBlank(text[i - 1]) || std::string_view("[{,").find(text[i - 1]) != npos;
+                i == indent || isBlank(text[i - 1]) || std::string_view("[{,").find(text[i - 1]) != kNpos;
             // A quote opens a quoted scalar only at a token's start ("x'y" is plain text: what follows still counts).
             if ((c == '"' || c == '\'') && startsToken) {
                 const std::size_t open = i;
@@ -129,7 +129,7 @@ private:
                        (startsToken || text[i - 1] == ':')) {
                 std::size_t end = i + 1;
                 while (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) != 0 ||
-                                             std::string_view("._+-").find(text[end]) != npos)) {
+                                             std::string_view("._+-").find(text[end]) != kNpos)) {
                     ++end;
                 }
                 if (isWideInteger(text.substr(i, end - i))) {
@@ -160,7 +160,7 @@ private:
             const auto byte = static_cast<unsigned char>(text[i]);
             if ((byte < 0x20U && byte != '\t' && byte != '\r') || byte >= 0x7FU) {
                 char hex[8];
-                std::snprintf(hex, sizeof(hex), "0x%02X", byte);
+                (void)std::snprintf(hex, sizeof(hex), "0x%02X", byte);
                 return fail(std::string("byte ") + hex + " at column " + std::to_string(i + 1) +
                                 " is not printable ASCII (a calibration is ASCII text)",
                             kDamagedFix);
@@ -171,7 +171,7 @@ private:
             line.remove_suffix(1);
         }
         const std::size_t start = line.find_first_not_of(" \t");
-        if (start == npos) {
+        if (start == kNpos) {
             return {};
         }
         line.remove_prefix(start);
@@ -220,7 +220,7 @@ private:
             const char c = rest[i];
             if (c == ']') {
                 inFlowSequence_ = false;
-                if (rest.find_first_not_of(' ', i + 1) != npos) {
+                if (rest.find_first_not_of(' ', i + 1) != kNpos) {
                     return fail("text after a matrix's closing ']'", kCalibrationShape);
                 }
                 return {};
@@ -234,12 +234,12 @@ private:
 
     static bool isNumberChar(char c)
     {
-        return isDigit(c) || std::string_view("+-.eEinfatINFAT").find(c) != npos; // also .nan and .inf
+        return isDigit(c) || std::string_view("+-.eEinfatINFAT").find(c) != kNpos; // also .nan and .inf
     }
     static bool isPlain(std::string_view v)
     {
         return std::all_of(v.begin(), v.end(), [](char c) {
-            return std::isalnum(static_cast<unsigned char>(c)) != 0 || std::string_view("_.+-").find(c) != npos;
+            return std::isalnum(static_cast<unsigned char>(c)) != 0 || std::string_view("_.+-").find(c) != kNpos;
         });
     }
     static bool isQuoted(std::string_view v)
@@ -259,13 +259,13 @@ private:
             const std::size_t colon = item.find(": ");
             const auto trim = [](std::string_view t) {
                 const std::size_t b = t.find_first_not_of(' ');
-                return b == npos ? std::string_view() : t.substr(b, t.find_last_not_of(' ') - b + 1);
+                return b == kNpos ? std::string_view() : t.substr(b, t.find_last_not_of(' ') - b + 1);
             };
-            if (colon == npos || trim(item.substr(0, colon)).empty() || !isPlain(trim(item.substr(0, colon))) ||
+            if (colon == kNpos || trim(item.substr(0, colon)).empty() || !isPlain(trim(item.substr(0, colon))) ||
                 trim(item.substr(colon + 2)).empty() || !isPlain(trim(item.substr(colon + 2)))) {
                 return false;
             }
-            items = comma == npos ? std::string_view() : items.substr(comma + 1);
+            items = comma == kNpos ? std::string_view() : items.substr(comma + 1);
         }
         return true;
     }

@@ -24,11 +24,11 @@ std::string rosNamespace(const adapters::ServiceConfig& config)
     }
     std::string ns;
     for (const char c : config.vehicleId) {
-        if (std::isalnum(static_cast<unsigned char>(c)) || c == '_') {
+        if (std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_') {
             ns += c;
         }
     }
-    return ns.empty() || std::isdigit(static_cast<unsigned char>(ns.front())) ? "ugv_" + ns : ns;
+    return ns.empty() || std::isdigit(static_cast<unsigned char>(ns.front())) != 0 ? "ugv_" + ns : ns;
 }
 
 ipc::dds::BusConfig busConfig(const adapters::ServiceConfig& config)

@@ -24,9 +24,7 @@ constexpr std::int64_t kRoudiCheckNs = 500'000'000; ///< how often the monitor c
 
 void sleepMs(std::chrono::milliseconds d)
 {
-    timespec t{};
-    t.tv_sec = static_cast<time_t>(d.count() / 1000);
-    t.tv_nsec = static_cast<long>(d.count() % 1000) * 1'000'000;
+    const timespec t = MonotonicClock::toTimespec(std::chrono::nanoseconds(d).count()); // a duration, not a time point
     ::nanosleep(&t, nullptr);
 }
 
@@ -78,10 +76,10 @@ std::string summaryLine(const PublishedFrame& frame)
                            0.5 * static_cast<double>(nearest->bearingMinDeg + nearest->bearingMaxDeg),
                            nearest->kind == ObstacleKind::Negative ? "negative" : "positive");
     }
-    std::snprintf(text + n, sizeof(text) - static_cast<std::size_t>(n), "), %d clear, %d unknown%s; %.1f ms%s", clear,
-                  unknown, s.degraded ? " (degraded)" : "",
-                  static_cast<double>(frame.stageNs[static_cast<std::size_t>(Stage::EndToEnd)]) * 1e-6,
-                  frame.deadlineMissed ? " DEADLINE MISSED" : "");
+    (void)std::snprintf(text + n, sizeof(text) - static_cast<std::size_t>(n), "), %d clear, %d unknown%s; %.1f ms%s",
+                        clear, unknown, s.degraded ? " (degraded)" : "",
+                        static_cast<double>(frame.stageNs[static_cast<std::size_t>(Stage::EndToEnd)]) * 1e-6,
+                        frame.deadlineMissed ? " DEADLINE MISSED" : "");
     return text;
 }
 
@@ -90,7 +88,7 @@ std::string formatBusReport(const RunResult& r)
     std::string out;
     char line[400];
     if (r.bus) {
-        std::snprintf(
+        (void)std::snprintf(
             line, sizeof(line),
             "dds: %llu frame(s) sent (sectors, two LaserScans, PointCloud2), %llu write failure(s); poses %llu "
             "used, %llu of other vehicles, %llu refused, %llu in this vehicle's name by another participant; %llu "
@@ -104,16 +102,17 @@ std::string formatBusReport(const RunResult& r)
     }
     if (r.correlator) {
         const LiveCorrelatorStats& c = *r.correlator;
-        std::snprintf(line, sizeof(line),
-                      "correlator: %llu input(s) received, %llu applied (%llu late, put in place), %llu refused as "
-                      "malformed, %llu duplicate(s), %llu in another sender's name, "
-                      "%llu refused by the flood guard (%llu stamped ahead of this host's clock), %llu refused by the "
-                      "correlator; %llu list(s) published\n",
-                      static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.applied),
-                      static_cast<unsigned long long>(c.resequenced), static_cast<unsigned long long>(c.rejected),
-                      static_cast<unsigned long long>(c.duplicates), static_cast<unsigned long long>(c.impersonated),
-                      static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.aheadOfClock),
-                      static_cast<unsigned long long>(c.refused), static_cast<unsigned long long>(c.published));
+        (void)std::snprintf(
+            line, sizeof(line),
+            "correlator: %llu input(s) received, %llu applied (%llu late, put in place), %llu refused as "
+            "malformed, %llu duplicate(s), %llu in another sender's name, "
+            "%llu refused by the flood guard (%llu stamped ahead of this host's clock), %llu refused by the "
+            "correlator; %llu list(s) published\n",
+            static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.applied),
+            static_cast<unsigned long long>(c.resequenced), static_cast<unsigned long long>(c.rejected),
+            static_cast<unsigned long long>(c.duplicates), static_cast<unsigned long long>(c.impersonated),
+            static_cast<unsigned long long>(c.flooded), static_cast<unsigned long long>(c.aheadOfClock),
+            static_cast<unsigned long long>(c.refused), static_cast<unsigned long long>(c.published));
         out += line;
     }
     return out;
@@ -318,7 +317,7 @@ void monitor(Service& service, const RunOptions& options, const hal::SystemdNoti
             }
             if (options.printEvery > 0 && seen % static_cast<std::uint64_t>(options.printEvery) == 0) {
                 std::printf("%s\n", summaryLine(frame).c_str());
-                std::fflush(stdout);
+                (void)std::fflush(stdout);
             }
         }
         const std::int64_t now = MonotonicClock::nowNs();

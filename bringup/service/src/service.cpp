@@ -42,9 +42,7 @@ double threadCpuSeconds() noexcept
 
 void sleepFor(std::chrono::nanoseconds d) noexcept
 {
-    timespec t{};
-    t.tv_sec = static_cast<time_t>(d.count() / 1'000'000'000);
-    t.tv_nsec = static_cast<long>(d.count() % 1'000'000'000);
+    timespec t = MonotonicClock::toTimespec(d.count()); // a duration here, not a time point
     while (::nanosleep(&t, &t) != 0 && errno == EINTR) {
     }
 }
@@ -412,7 +410,7 @@ void Service::spinUntilFrame(std::int64_t lastRingNs, const std::atomic<bool>& s
     // Sleep (in slices, to see the stop flag) until the spin window opens.
     while (now < dueNs - spinNs && !stop.load(std::memory_order_relaxed)) {
         const std::int64_t sleepNs = std::min<std::int64_t>(dueNs - spinNs - now, kWaitSlice.count() * 1'000'000);
-        const timespec t{static_cast<time_t>(sleepNs / 1'000'000'000), static_cast<long>(sleepNs % 1'000'000'000)};
+        const timespec t = MonotonicClock::toTimespec(sleepNs); // a duration here, not a time point
         ::clock_nanosleep(CLOCK_MONOTONIC, 0, &t, nullptr);
         now = MonotonicClock::nowNs();
     }
@@ -648,7 +646,12 @@ void Service::drainBus()
     // (the bus task's guard restarts the task; the frame that threw is not delivered again).
     struct Release {
         SpscRing<BusFrame, 8>& ring;
+        explicit Release(SpscRing<BusFrame, 8>& slots) : ring(slots) {}
         ~Release() { ring.release(); }
+        Release(const Release&) = delete;
+        Release& operator=(const Release&) = delete;
+        Release(Release&&) = delete;
+        Release& operator=(Release&&) = delete;
     };
     for (const BusFrame* frame = toBus_.front(); frame != nullptr; frame = toBus_.front()) {
         const Release release{toBus_};

@@ -1,5 +1,7 @@
 // ugvsensed: the real-time stereo obstacle service. See runner.hpp for one run and service.hpp for the threads.
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <csignal>
 #include <cstdint>
@@ -8,6 +10,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "ugv/platform/cpu_level.hpp"
 #include "ugv/platform/log.hpp"
@@ -15,16 +18,16 @@
 
 namespace {
 
-std::atomic<bool> g_stop{false};
+std::atomic<bool> gStop{false}; // NOLINT(cppcoreguidelines-avoid-non-const-global-variables): the signal handler's flag
 
 void onSignal(int /*signal*/)
 {
-    g_stop.store(true);
+    gStop.store(true);
 }
 
 void usage(std::FILE* out)
 {
-    std::fprintf(
+    (void)std::fprintf(
         out, "usage: ugvsensed [--config FILE] [--replay REC] [options]\n"
              "  Runs the stereo obstacle service: capture -> iceoryx frame ring -> rectify + detect -> sectors on\n"
              "  iceoryx (ugvsense/obstacles/sectors) and on DDS (ugvsense/sectors, ROS 2 rt/<ns>/obstacle_scan and\n"
@@ -63,28 +66,28 @@ bool parseNumber(const char* text, double min, double max, double& out)
 /// Reads the command line into `options`; the exit code when the process should end here (--help, a bad option).
 std::optional<int> parseArgs(int argc, char** argv, ugv::service::RunOptions& options)
 {
+    constexpr std::array<std::string_view, 7> kTakesValue{"--config", "--replay",      "--calib",     "--rate",
+                                                          "--frames", "--print-every", "--wait-roudi"};
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
-        const auto value = [&](const char* name) -> const char* {
-            if (i + 1 >= argc) {
-                std::fprintf(stderr, "ugvsensed: error: %s needs a value (fix: see ugvsensed --help)\n", name);
-                std::exit(2);
-            }
-            return argv[++i];
-        };
+        if (i + 1 >= argc && std::find(kTakesValue.begin(), kTakesValue.end(), arg) != kTakesValue.end()) {
+            (void)std::fprintf(stderr, "ugvsensed: error: %s needs a value (fix: see ugvsensed --help)\n", arg.c_str());
+            return 2;
+        }
+        const auto value = [&]() -> const char* { return argv[++i]; }; // present: checked above
         double number = 0.0;
         if (arg == "--help" || arg == "-h") {
             usage(stdout);
             return 0;
         } else if (arg == "--config") {
-            options.configPath = value("--config");
+            options.configPath = value();
         } else if (arg == "--replay") {
-            options.replayPath = value("--replay");
+            options.replayPath = value();
         } else if (arg == "--calib") {
-            options.calibrationPath = value("--calib");
+            options.calibrationPath = value();
         } else if (arg == "--rate") {
-            if (!parseNumber(value("--rate"), 0.1, 1000.0, number)) {
-                std::fprintf(stderr, "ugvsensed: error: --rate: '%s' is not a rate in 0.1..1000 fps\n", argv[i]);
+            if (!parseNumber(value(), 0.1, 1000.0, number)) {
+                (void)std::fprintf(stderr, "ugvsensed: error: --rate: '%s' is not a rate in 0.1..1000 fps\n", argv[i]);
                 return 2;
             }
             options.replay.pace = ugv::hal::ReplayPace::Forced;
@@ -94,27 +97,28 @@ std::optional<int> parseArgs(int argc, char** argv, ugv::service::RunOptions& op
         } else if (arg == "--loop") {
             options.replay.loop = true;
         } else if (arg == "--frames") {
-            if (!parseNumber(value("--frames"), 1, 1e12, number)) {
-                std::fprintf(stderr, "ugvsensed: error: --frames: '%s' is not a positive count\n", argv[i]);
+            if (!parseNumber(value(), 1, 1e12, number)) {
+                (void)std::fprintf(stderr, "ugvsensed: error: --frames: '%s' is not a positive count\n", argv[i]);
                 return 2;
             }
             options.service.maxFrames = static_cast<std::uint64_t>(number);
         } else if (arg == "--print-every") {
-            if (!parseNumber(value("--print-every"), 0, 1e9, number)) {
-                std::fprintf(stderr, "ugvsensed: error: --print-every: '%s' is not a count\n", argv[i]);
+            if (!parseNumber(value(), 0, 1e9, number)) {
+                (void)std::fprintf(stderr, "ugvsensed: error: --print-every: '%s' is not a count\n", argv[i]);
                 return 2;
             }
             options.printEvery = static_cast<int>(number);
         } else if (arg == "--wait-roudi") {
-            if (!parseNumber(value("--wait-roudi"), 0, 600, number)) {
-                std::fprintf(stderr, "ugvsensed: error: --wait-roudi: '%s' is not a time in 0..600 s\n", argv[i]);
+            if (!parseNumber(value(), 0, 600, number)) {
+                (void)std::fprintf(stderr, "ugvsensed: error: --wait-roudi: '%s' is not a time in 0..600 s\n", argv[i]);
                 return 2;
             }
             options.roudiWait = std::chrono::milliseconds(static_cast<std::int64_t>(number * 1000.0));
         } else if (arg == "--embedded-roudi") {
             options.roudi = ugv::service::RouDiMode::Embedded;
         } else {
-            std::fprintf(stderr, "ugvsensed: error: unknown option '%s' (fix: see ugvsensed --help)\n", arg.c_str());
+            (void)std::fprintf(stderr, "ugvsensed: error: unknown option '%s' (fix: see ugvsensed --help)\n",
+                               arg.c_str());
             return 2;
         }
     }
@@ -134,13 +138,13 @@ int main(int argc, char** argv)
     action.sa_handler = onSignal;
     ::sigaction(SIGINT, &action, nullptr);
     ::sigaction(SIGTERM, &action, nullptr);
-    options.stop = &g_stop;
+    options.stop = &gStop;
 
     auto run = ugv::service::runService(options);
     if (!run) {
         // Under systemd "<3>" makes it an error-priority journal entry (platform/log.hpp).
-        std::fprintf(stderr, "%sugvsensed: error: %s\n", ugv::journalPrefix(ugv::LogLevel::Error),
-                     run.error().message().c_str());
+        (void)std::fprintf(stderr, "%sugvsensed: error: %s\n", ugv::journalPrefix(ugv::LogLevel::Error),
+                           run.error().message().c_str());
         return 1;
     }
     if (run->visionRan) {
@@ -148,12 +152,13 @@ int main(int argc, char** argv)
     }
     std::printf("%s", ugv::service::formatBusReport(*run).c_str());
     if (run->roudiLost) {
-        std::fprintf(stderr,
-                     "%sugvsensed: error: iceoryx: RouDi went away during the run (nothing answers on /tmp/roudi); "
-                     "the service stopped (fix: restart RouDi, then the service; under systemd the units do "
-                     "both)\n",
-                     ugv::journalPrefix(ugv::LogLevel::Error));
-        std::fflush(nullptr);
+        (void)std::fprintf(
+            stderr,
+            "%sugvsensed: error: iceoryx: RouDi went away during the run (nothing answers on /tmp/roudi); "
+            "the service stopped (fix: restart RouDi, then the service; under systemd the units do "
+            "both)\n",
+            ugv::journalPrefix(ugv::LogLevel::Error));
+        (void)std::fflush(nullptr);
         std::_Exit(1); // iceoryx's runtime would wait for the missing RouDi at exit
     }
     return 0;

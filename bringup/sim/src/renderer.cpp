@@ -216,6 +216,7 @@ public:
     /// Radiance (albedo x shading, before the camera gains) along a ray; fences blend with what lies behind, mirrors
     /// on the ground with what the reflected ray sees. The colour (ray.colour) follows the same blends, so that its
     /// luminance is the grey radiance; the grey arithmetic is the same with or without it.
+    // NOLINTNEXTLINE(misc-no-recursion): a ray tracer's, bounded: each call spends one of ray.bounces or ray.layers
     Radiance radiance(const Vector3d& o, const Vector3d& d, double tMin, const RayContext& ray) const
     {
         const Hit hit = trace(o, d, tMin, ray.px, ray.py, ray.view, ray.cull);
@@ -269,7 +270,9 @@ private:
         for (std::size_t i = 0; i < scene_.obstacles.size(); ++i) {
             const Obstacle& o = scene_.obstacles[i];
             const int id = static_cast<int>(i);
-            const auto [cx, cy] = obstacleCentre(o);
+            const auto centre = obstacleCentre(o);
+            const double cx = centre.first; // named, not bound: the lambdas below capture them
+            const double cy = centre.second;
             const double c = std::cos(o.yawDeg * kDegToRad);
             const double s = std::sin(o.yawDeg * kDegToRad);
             ObjectInfo info;
@@ -793,7 +796,7 @@ private:
             double lx = 0.0;
             double ly = 0.0;
             toLocal(p.x(), p.y(), b.cx, b.cy, b.cosYaw, b.sinYaw, lx, ly);
-            const bool light = static_cast<long>(std::floor((ly + p.z()) / kStripeM)) % 2 == 0;
+            const bool light = static_cast<std::int64_t>(std::floor((ly + p.z()) / kStripeM)) % 2 == 0;
             return tinted(std::clamp((light ? 0.8 : 0.25) + 0.3 * n, kMinAlbedo, 1.0),
                           light ? Vector3d(1.0, 1.0, 1.0) : info.chroma);
         }
@@ -1006,6 +1009,7 @@ void compressJpeg(cv::Mat& image, int quality)
 }
 
 /// BT.601 luminance weights of B, G, R (OpenCV's BGR2GRAY).
+// NOLINTNEXTLINE(cert-err58-cpp): a fixed-size Eigen vector neither allocates nor throws
 const Vector3d kLuma(0.114, 0.587, 0.299);
 
 /// Images: samplesPerAxis^2 stratified, jittered rays per pixel, then gains, gradient, vignetting, noise, JPEG.
@@ -1045,10 +1049,12 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
                 double sum = 0.0;
                 Vector3d sumColour = Vector3d::Zero();
                 for (int k = 0; k < n * n; ++k) {
+                    const int stratumColumn = k % n; // the sample's stratum in the n x n grid of the pixel
+                    const int stratumRow = k / n;
                     const double jx = detail::lattice(x, y, 2 * k, jitterSeed);
                     const double jy = detail::lattice(x, y, 2 * k + 1, jitterSeed);
-                    const double u = x - 0.5 + ((k % n) + jx) / n;
-                    const double v = y - 0.5 + ((k / n) + jy) / n;
+                    const double u = x - 0.5 + (stratumColumn + jx) / n;
+                    const double v = y - 0.5 + (stratumRow + jy) / n;
                     RayContext ray{x, y, view};
                     ray.colour = colour;
                     const Radiance r = tracer.radiance(o, tracer.direction(u, v), 0.0, ray);

@@ -9,7 +9,6 @@
 namespace ugv::sim {
 namespace {
 
-constexpr double kTableTopM = 0.75;         // [m]
 constexpr double kBarrierDepthM = 0.2;      // [m]
 constexpr double kAcrossLengthM = 40.0;     // [m] curb and trench length across the view
 constexpr double kWallLengthM = 6.0;        // [m]

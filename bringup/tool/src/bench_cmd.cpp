@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -120,7 +121,12 @@ Result<BenchRun, Error> benchOnce(const std::string& recording, const std::strin
 double jsonValue(const std::string& json, const std::string& key, std::size_t from = 0)
 {
     const std::size_t at = json.find("\"" + key + "\": ", from);
-    return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + key.size() + 4);
+    double value = -1.0;
+    if (at != std::string::npos) {
+        const char* first = json.data() + at + key.size() + 4;
+        (void)std::from_chars(first, json.data() + json.size(), value); // stays -1 when no number follows
+    }
+    return value;
 }
 
 /// --sweep: one child process per rate (iceoryx's runtime is one per process), each writing its JSON report.
@@ -149,7 +155,7 @@ int sweep(const Args& args, std::uint64_t frames, bool oneCore)
         if (std::system(command.c_str()) != 0) { // NOLINT(cert-env33-c): our own binary, quoted arguments
             std::ifstream failed(log);
             const std::string output{std::istreambuf_iterator<char>(failed), std::istreambuf_iterator<char>()};
-            std::fprintf(stderr, "%s", output.substr(output.size() > 4000 ? output.size() - 4000 : 0).c_str());
+            (void)std::fprintf(stderr, "%s", output.substr(output.size() > 4000 ? output.size() - 4000 : 0).c_str());
             return fail(Error{"ugvsense bench --sweep",
                               "the run at " + std::to_string(r) + " fps failed (its output above)",
                               "run it alone: ugvsense bench --recording REC --rate " + std::to_string(r)});

@@ -149,7 +149,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
     InputWriters& w = *writers;
     bus::waitForReaders(w.observations, wait, dds::topicName(dds::TopicId::Observation, bus.config()), kCommand);
     std::printf("sending %zu message(s) to %d reader(s)\n", lines->size(), w.observations.matched());
-    std::fflush(stdout);
+    (void)std::fflush(stdout);
     const auto start = Clock::now();
     msg::OoiObservation observation;
     msg::UavObservation uav;
@@ -178,7 +178,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
             written = writeOne(w.corrections, correction);
         }
         if (!written) {
-            if (g_stop.load()) {
+            if (gStop.load()) {
                 break;
             }
             return fail(Error{path + ":" + std::to_string(line.number),
@@ -188,7 +188,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
         }
         ++w.sent[topic];
     }
-    if (g_stop.load()) {
+    if (gStop.load()) {
         std::printf("interrupted: sent %llu of %zu message(s)\n", static_cast<unsigned long long>(w.total()),
                     lines->size());
         return 1;
@@ -198,8 +198,8 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     char what[512];
-    std::snprintf(what, sizeof(what), "from %s%s in %.2f s", path.c_str(),
-                  onlyUgv.empty() ? "" : (" (only ugv " + onlyUgv + ")").c_str(), seconds);
+    (void)std::snprintf(what, sizeof(what), "from %s%s in %.2f s", path.c_str(),
+                        onlyUgv.empty() ? "" : (" (only ugv " + onlyUgv + ")").c_str(), seconds);
     return bus::finish(w, kCommand, what, lingerS, bus.config());
 }
 
@@ -253,12 +253,12 @@ int sendPoses(dds::Bus& bus, const std::string& vehicle, double rateHz, double d
                 "reader(s)%s\n",
                 static_cast<unsigned long long>(sent), vehicle.c_str(), kCircleRadiusM, kCircleCentreLat,
                 kCircleCentreLon, kCircleSpeedMps, rateHz, bus::describe(bus.config()).c_str(), writer->matched(),
-                g_stop.load() ? " (stopped by a signal)" : "");
+                gStop.load() ? " (stopped by a signal)" : "");
     if (refused > 0) {
         std::printf("%llu pose(s) refused by the writer\n", static_cast<unsigned long long>(refused));
     }
-    std::fflush(stdout);
-    if (lingerS > 0.0 && !g_stop.load()) {
+    (void)std::fflush(stdout);
+    if (lingerS > 0.0 && !gStop.load()) {
         sleepUntil(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(lingerS)));
     }
     return refused > 0 ? 1 : 0;

@@ -21,7 +21,7 @@ int fail(const std::string& command, const Error& error)
 
 bool sleepUntil(Clock::time_point until)
 {
-    while (!g_stop.load()) {
+    while (!gStop.load()) {
         const auto now = Clock::now();
         if (now >= until) {
             return true;
@@ -88,7 +88,7 @@ int finish(InputWriters& w, const std::string& command, const std::string& what,
                 static_cast<unsigned long long>(w.sent[1]), static_cast<unsigned long long>(w.sent[2]),
                 static_cast<unsigned long long>(w.sent[3]), what.c_str(), describe(config).c_str(),
                 acked ? "acknowledged" : "NOT all acknowledged", readers);
-    std::fflush(stdout);
+    (void)std::fflush(stdout);
     if (!acked) {
         return fail(
             command,
@@ -98,7 +98,7 @@ int finish(InputWriters& w, const std::string& command, const std::string& what,
     }
     if (lingerS > 0.0) {
         std::printf("lingering %g s (Ctrl-C to end)\n", lingerS);
-        std::fflush(stdout);
+        (void)std::fflush(stdout);
         sleepUntil(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(lingerS)));
     }
     return 0;

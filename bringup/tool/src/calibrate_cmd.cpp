@@ -55,7 +55,7 @@ std::string jsonString(const std::string& text)
         default:
             if (static_cast<unsigned char>(c) < 0x20) {
                 char escaped[8];
-                std::snprintf(escaped, sizeof(escaped), "\\u%04x", static_cast<unsigned>(c));
+                (void)std::snprintf(escaped, sizeof(escaped), "\\u%04x", static_cast<unsigned>(c));
                 out += escaped;
             } else {
                 out += c;
@@ -201,7 +201,7 @@ Result<int, Error> capturePairs(const Args& args, cv::Size board)
             continue;
         }
         char name[32];
-        std::snprintf(name, sizeof(name), "_%02zu.png", kept.size() + 1);
+        (void)std::snprintf(name, sizeof(name), "_%02zu.png", kept.size() + 1);
         if (!cv::imwrite((dir / (std::string("left") + name)).string(), left) ||
             !cv::imwrite((dir / (std::string("right") + name)).string(), right)) {
             return Unexpected(Error{dir.string(), "cannot write the captured images", "check the free space"});

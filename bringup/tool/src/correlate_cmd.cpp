@@ -32,11 +32,15 @@
 
 namespace ugv::tool {
 using adapters::parseMessageLine;
-using adapters::parseSnapshotLine;
 using adapters::toJsonLine;
 namespace {
 
-using namespace correlator;
+using correlator::Confirmation;
+using correlator::LocalFrame;
+using correlator::ObjectEstimate;
+using correlator::OoiClass;
+using correlator::project;
+using correlator::Snapshot;
 
 constexpr const char* kCommand = "correlate";
 constexpr int kMapSize = 900;
@@ -103,7 +107,8 @@ Result<void, Error> drawMap(const std::string& path, const Snapshot& s,
     };
     cv::Mat map(kMapSize, kMapSize, CV_8UC3, cv::Scalar(245, 245, 245));
     const double grid = extent > 100.0 ? 50.0 : 10.0;
-    for (double g = -std::floor(extent / grid) * grid; g <= extent; g += grid) {
+    for (int gridLine = -static_cast<int>(std::floor(extent / grid)); gridLine * grid <= extent; ++gridLine) {
+        const double g = gridLine * grid;
         cv::line(map, toPx({g, -extent}), toPx({g, extent}), cv::Scalar(225, 225, 225));
         cv::line(map, toPx({-extent, g}), toPx({extent, g}), cv::Scalar(225, 225, 225));
     }
@@ -185,9 +190,9 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     installStopHandler();
     std::printf("correlating live inputs on DDS domain %d%s (Ctrl-C to stop)\n", bc.domainId,
                 *duration > 0.0 ? (", for " + std::to_string(static_cast<int>(*duration)) + " s").c_str() : "");
-    std::fflush(stdout);
+    (void)std::fflush(stdout);
     const auto start = std::chrono::steady_clock::now();
-    while (!g_stop.load() &&
+    while (!gStop.load() &&
            (*duration <= 0.0 ||
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < *duration)) {
         (*live)->waitForInput(std::chrono::milliseconds(50));

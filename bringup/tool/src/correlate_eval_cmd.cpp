@@ -32,9 +32,7 @@
 #include "ugv/tool/correlate_sweep.hpp"
 
 namespace ugv::tool {
-using adapters::parseMessageLine;
 using adapters::parseSnapshotLine;
-using adapters::toJsonLine;
 namespace {
 
 using correlator::GospaResult;
@@ -265,7 +263,7 @@ void printTable(const Figures& f, const Truth& truth)
               << "   counts\n";
     const GospaResult& s = f.staticLast;
     char staticName[64];
-    std::snprintf(staticName, sizeof(staticName), "static at t = %.1f s", f.lastT);
+    (void)std::snprintf(staticName, sizeof(staticName), "static at t = %.1f s", f.lastT);
     printRow(staticName, s.total, s.localisationPart, s.missedPart, s.falsePart);
     std::cout << "   " << s.assigned << " assigned, " << s.missed << " missed, " << s.falseCount << " false (of "
               << f.staticEstimates << ")\n";

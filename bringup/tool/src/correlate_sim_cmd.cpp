@@ -22,8 +22,6 @@
 #include "ugv/tool/commands.hpp"
 
 namespace ugv::tool {
-using adapters::parseMessageLine;
-using adapters::parseSnapshotLine;
 using adapters::toJsonLine;
 namespace {
 

@@ -27,7 +27,6 @@ using correlator::OffsetModel;
 using correlator::ScenarioConfig;
 using nlohmann::ordered_json;
 
-constexpr double kQuickDurationS = 600.0;
 constexpr double kSecondsPerHour = 3600.0;
 constexpr double kSnapshotPeriodS = 1.0;
 // Issue 21's targets.
@@ -59,18 +58,18 @@ ScenarioConfig simCentre()
 ScenarioConfig harshCentre()
 {
     ScenarioConfig c = simCentre();
-    c.areaSizeM = 250.0;             // NOLINT(readability-magic-numbers) the issue's figures, named by the fields
-    c.staticCount = 30;              // NOLINT(readability-magic-numbers)
-    c.closePairCount = 5;            // NOLINT(readability-magic-numbers)
-    c.mobileCount = 3;               // NOLINT(readability-magic-numbers)
-    c.bearingSigmaDeg = 2.0;         // NOLINT(readability-magic-numbers)
-    c.rangeSigmaM = 0.2;             // NOLINT(readability-magic-numbers)
-    c.rangeSigmaFraction = 0.04;     // NOLINT(readability-magic-numbers)
-    c.fieldOfViewHalfDeg = 35.0;     // NOLINT(readability-magic-numbers)
-    c.missProbability = 0.15;        // NOLINT(readability-magic-numbers)
-    c.trackSwitchProbability = 0.02; // NOLINT(readability-magic-numbers)
-    c.clutterRateHz = 1.0 / 60.0;    // NOLINT(readability-magic-numbers)
-    c.maxHeadingBiasDeg = 8.0;       // NOLINT(readability-magic-numbers)
+    c.areaSizeM = 250.0; // the issue's figures, named by the fields
+    c.staticCount = 30;
+    c.closePairCount = 5;
+    c.mobileCount = 3;
+    c.bearingSigmaDeg = 2.0;
+    c.rangeSigmaM = 0.2;
+    c.rangeSigmaFraction = 0.04;
+    c.fieldOfViewHalfDeg = 35.0;
+    c.missProbability = 0.15;
+    c.trackSwitchProbability = 0.02;
+    c.clutterRateHz = 1.0 / 60.0;
+    c.maxHeadingBiasDeg = 8.0;
     c.offsetModel = OffsetModel::Gaussian;
     c.offsetSigmaM = 1.0;
     return c;
@@ -84,7 +83,7 @@ struct Variant {
 
 std::vector<Variant> variants()
 {
-    // NOLINTBEGIN(readability-magic-numbers) NOLINTJUSTIFICATION: the grid's values, named by the variant
+    // The grid's values, named by the variant.
     return {
         {"bearing=0.5", [](ScenarioConfig& c) { c.bearingSigmaDeg = 0.5; }},
         {"bearing=3", [](ScenarioConfig& c) { c.bearingSigmaDeg = 3.0; }},
@@ -113,7 +112,6 @@ std::vector<Variant> variants()
         {"drift=0.02", [](ScenarioConfig& c) { c.driftSigmaMPerSqrtS = 0.02; }},
         {"drift=0.08", [](ScenarioConfig& c) { c.driftSigmaMPerSqrtS = 0.08; }},
     };
-    // NOLINTEND(readability-magic-numbers)
 }
 
 /// The knobs the variants move, to tell a variant that changes nothing from one that does.
@@ -139,7 +137,7 @@ std::vector<SweepPoint> grid(const SweepOptions& options)
         }
     };
     ScenarioConfig drift = harshCentre();
-    drift.driftSigmaMPerSqrtS = 0.05; // NOLINT(readability-magic-numbers) issue 21's second scenario
+    drift.driftSigmaMPerSqrtS = 0.05; // issue 21's second scenario
     if (options.quick) {
         ScenarioConfig simBias = correlator::scenarioPreset(correlator::ScenarioSetting::Bias);
         add("sim", simCentre());
@@ -332,28 +330,28 @@ void printRow(const PointResult& r)
 {
     const auto pair = [](const Series& s) {
         char text[32];
-        std::snprintf(text, sizeof(text), "%5.2f / %5.2f", s.med(), s.max());
+        (void)std::snprintf(text, sizeof(text), "%5.2f / %5.2f", s.med(), s.max());
         return std::string(text);
     };
     const auto counts = [](const Series& s) {
         char text[32];
-        std::snprintf(text, sizeof(text), "%3.1f / %-3.0f", s.med(), s.max());
+        (void)std::snprintf(text, sizeof(text), "%3.1f / %-3.0f", s.med(), s.max());
         return std::string(text);
     };
     const Targets& t = r.targets;
     char flags[8] = {};
     if (t.poseErrors) {
-        std::snprintf(flags, sizeof(flags), "%c%c%c%c", t.staticMedian ? 'S' : 's', t.mobileMedian ? 'M' : 'm',
-                      t.idChanges ? 'I' : 'i', t.worstSeed ? 'W' : 'w');
+        (void)std::snprintf(flags, sizeof(flags), "%c%c%c%c", t.staticMedian ? 'S' : 's', t.mobileMedian ? 'M' : 'm',
+                            t.idChanges ? 'I' : 'i', t.worstSeed ? 'W' : 'w');
     } else {
-        std::snprintf(flags, sizeof(flags), "%c", t.staticMedian ? 'C' : 'c');
+        (void)std::snprintf(flags, sizeof(flags), "%c", t.staticMedian ? 'C' : 'c');
     }
     std::printf("%-26s %4s | %-13s %-13s | %-13s %-13s | %-9s %-9s | %s\n", r.point.name.c_str(),
                 t.poseErrors ? "yes" : "no", pair(r.original.staticGospa).c_str(),
                 pair(r.poseCorrected.staticGospa).c_str(), pair(r.original.mobileGospa).c_str(),
                 pair(r.poseCorrected.mobileGospa).c_str(), counts(r.original.idChanges).c_str(),
                 counts(r.poseCorrected.idChanges).c_str(), flags);
-    std::fflush(stdout);
+    (void)std::fflush(stdout);
 }
 
 /// What the sweep adds up over every run of the grid.

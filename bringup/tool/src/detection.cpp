@@ -142,10 +142,10 @@ Result<GroundFit, Error> fitGround(const cv::Mat& disparity16, Rect roi, const v
     if (!(fit.plane.b > 0.0) || !(fit.ground.heightM > kMinCameraHeightM && fit.ground.heightM <= kMaxCameraHeightM) ||
         std::abs(pitch) > kMaxPitchDeg || std::abs(roll) > kMaxRollDeg) {
         char text[160];
-        std::snprintf(text, sizeof(text),
-                      "the fitted plane is not a plausible ground (height %.3g m, pitch %.3g deg, "
-                      "roll %.3g deg)",
-                      fit.ground.heightM, pitch, roll);
+        (void)std::snprintf(text, sizeof(text),
+                            "the fitted plane is not a plausible ground (height %.3g m, pitch %.3g deg, "
+                            "roll %.3g deg)",
+                            fit.ground.heightM, pitch, roll);
         return Unexpected(
             Error{where, text, "give the mount in the calibration file (mount: height_m, pitch_deg, roll_deg)"});
     }
@@ -273,6 +273,7 @@ cv::Mat makeOverlay(const cv::Mat& colourLeft, vision::Rectifier& fullRectifier,
     }
     const ObstacleSectors& sectors = det.sectors();
     std::vector<cv::Scalar> colours;
+    colours.reserve(static_cast<std::size_t>(std::max(sectors.count, 0)));
     for (int i = 0; i < sectors.count; ++i) {
         colours.push_back(dangerColour(sectors.sectors[static_cast<std::size_t>(i)].danger));
     }

@@ -62,8 +62,11 @@ struct BandStats {
     int withinTolerance = 0;
     int spill = 0;      ///< sectors reported Obstacle whose GT is not Obstacle (fattening, artefacts)
     int falseClear = 0; ///< sectors reported Clear whose GT has an obstacle within 10 m
-    [[nodiscard]] double rate() const { return gtFrames > 0 ? double(detected) / gtFrames : 0.0; }
-    [[nodiscard]] double withinRate() const { return detected > 0 ? double(withinTolerance) / detected : 0.0; }
+    [[nodiscard]] double rate() const { return gtFrames > 0 ? static_cast<double>(detected) / gtFrames : 0.0; }
+    [[nodiscard]] double withinRate() const
+    {
+        return detected > 0 ? static_cast<double>(withinTolerance) / detected : 0.0;
+    }
 };
 
 struct SimOptions {
@@ -315,16 +318,16 @@ BandStats printTypeRows(const std::string& type, const std::string& ground, cons
             continue; // the grounds run a few ranges only
         }
         char band[40];
-        std::snprintf(band, sizeof(band), "%g-%g m", kBands[b].lo, kBands[b].hi);
+        (void)std::snprintf(band, sizeof(band), "%g-%g m", kBands[b].lo, kBands[b].hi);
         const double p95 = quantile(s.errors, 0.95);
         char p95Text[24] = "-";
         if (!s.errors.empty()) {
-            std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
+            (void)std::snprintf(p95Text, sizeof(p95Text), "%.3f", p95);
         }
         std::printf("%-*s %-8s %6d %6d %8.1f %10s %9.1f %11.2f %11.2f\n", width, label.c_str(), band, s.frames,
                     s.gtFrames, 100.0 * s.rate(), p95Text, 100.0 * s.withinRate(),
-                    s.frames > 0 ? double(s.spill) / s.frames : 0.0,
-                    s.frames > 0 ? double(s.falseClear) / s.frames : 0.0);
+                    s.frames > 0 ? static_cast<double>(s.spill) / s.frames : 0.0,
+                    s.frames > 0 ? static_cast<double>(s.falseClear) / s.frames : 0.0);
         json << (firstRow ? "\n" : ",\n") << "      {"
              << (ground.empty() ? std::string() : "\"ground\": \"" + ground + "\", ") << "\"type\": \"" << type
              << "\", \"band\": \"" << band << "\", \"frames\": " << s.frames << ", \"gt_frames\": " << s.gtFrames
@@ -496,13 +499,13 @@ std::optional<bool> runColourRow(const SimOptions& o, SimDetector& det, sim::Gro
     const bool pass = all.gtFrames > 0 && all.rate() >= kColourTargetDetection;
     char p95Text[24] = "-";
     if (!all.errors.empty()) {
-        std::snprintf(p95Text, sizeof(p95Text), "%.3f", quantile(all.errors, 0.95));
+        (void)std::snprintf(p95Text, sizeof(p95Text), "%.3f", quantile(all.errors, 0.95));
     }
     std::printf("%-*s %-8s %6d %6d %7.1f %7.1f %7.1f %10s %7d %11.2f %11.2f %s\n", kColourLabelColumn,
                 row.label.c_str(), textureName(texture), all.frames, all.gtFrames, 100.0 * stats[0].rate(),
                 100.0 * stats[1].rate(), 100.0 * all.rate(), p95Text, refBad,
-                all.frames > 0 ? double(all.spill) / all.frames : 0.0,
-                all.frames > 0 ? double(all.falseClear) / all.frames : 0.0,
+                all.frames > 0 ? static_cast<double>(all.spill) / all.frames : 0.0,
+                all.frames > 0 ? static_cast<double>(all.falseClear) / all.frames : 0.0,
                 target ? (pass ? "PASS" : "FAIL") : "(negative: no target)");
     json << (firstRow ? "\n" : ",\n") << "      {\"type\": \"" << row.label << "\", \"ground\": \""
          << textureName(texture) << "\", \"frames\": " << all.frames << ", \"gt_frames\": " << all.gtFrames
@@ -544,7 +547,7 @@ std::optional<bool> runColourEmpty(const SimOptions& o, SimDetector& det, sim::G
         }
     }
     const int refBad = det.notGroundLikeFrames() - refBefore;
-    const double falseRate = sectors > 0 ? double(falseObstacle) / sectors : 0.0;
+    const double falseRate = sectors > 0 ? static_cast<double>(falseObstacle) / sectors : 0.0;
     const bool ok = falseRate <= kColourTargetFalseSectors;
     std::printf("%-8s %6d %8d %9d %8.2f %8.1f %8.1f %7d %s\n", textureName(texture), frames, sectors, falseObstacle,
                 100.0 * falseRate, sectors > 0 ? 100.0 * unknown / sectors : 0.0,
@@ -646,7 +649,7 @@ struct EmptyScore {
     int falseFrames = 0;
     int falseSectors = 0;
     int obstacleSectors = 0; ///< any range: a spurious far obstacle is not red/blue but still wrong
-    [[nodiscard]] double falseRate() const { return frames > 0 ? double(falseFrames) / frames : 0.0; }
+    [[nodiscard]] double falseRate() const { return frames > 0 ? static_cast<double>(falseFrames) / frames : 0.0; }
 };
 
 /// Every empty texture, the painted floor too (the weakest texture, where matching noise is worst), whichever
@@ -774,8 +777,8 @@ int runSimSuite(const SimOptions& o, std::ostringstream& json)
     std::printf("empty ground: %d frames, %d with a false red/blue sector (%.2f%%), %.3f false red/blue sectors and "
                 "%.3f obstacle sectors at any range per frame\n",
                 empty.frames, empty.falseFrames, 100.0 * empty.falseRate(),
-                empty.frames > 0 ? double(empty.falseSectors) / empty.frames : 0.0,
-                empty.frames > 0 ? double(empty.obstacleSectors) / empty.frames : 0.0);
+                empty.frames > 0 ? static_cast<double>(empty.falseSectors) / empty.frames : 0.0,
+                empty.frames > 0 ? static_cast<double>(empty.obstacleSectors) / empty.frames : 0.0);
     std::printf("overhang (underside 1.5 m): %d frames, %d with a red/blue sector -> %s\n", overhangFrames,
                 overhangFalseFrames, overhangFalseFrames == 0 ? "PASS" : "FAIL");
     const bool doorwayOk = reportDoorways(doorway, json);

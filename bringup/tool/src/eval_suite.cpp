@@ -147,12 +147,12 @@ DisparityScore scoreDisparity(const cv::Mat& predicted, const cv::Mat& gt)
         }
     }
     if (score.gtPixels > 0) {
-        score.bad1All = double(bad1All) / score.gtPixels;
-        score.bad2All = double(bad2All) / score.gtPixels;
+        score.bad1All = static_cast<double>(bad1All) / score.gtPixels;
+        score.bad2All = static_cast<double>(bad2All) / score.gtPixels;
     }
     if (score.predictedValid > 0) {
-        score.bad1Valid = double(bad1Valid) / score.predictedValid;
-        score.bad2Valid = double(bad2Valid) / score.predictedValid;
+        score.bad1Valid = static_cast<double>(bad1Valid) / score.predictedValid;
+        score.bad2Valid = static_cast<double>(bad2Valid) / score.predictedValid;
     }
     return score;
 }
@@ -191,7 +191,7 @@ bool sampleRow(const std::uint8_t* r, int cols, double x, float& value)
         return false;
     }
     const auto f = static_cast<float>(x - x0);
-    value = (1.0F - f) * r[x0] + f * r[x0 + 1];
+    value = (1.0F - f) * static_cast<float>(r[x0]) + f * static_cast<float>(r[x0 + 1]);
     return true;
 }
 
@@ -206,6 +206,10 @@ cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::Di
     constexpr double kStepPx = 0.25;
     constexpr double kGroundSearchPx = 0.375;
     constexpr double kGroundStepPx = 0.125;
+    constexpr int kGroundSteps = 7; // -kGroundSearchPx .. +kGroundSearchPx
+    constexpr int kBelowSteps = 11; // kFarthestBelowPx .. kNearestBelowPx below the ground
+    static_assert((2 * kGroundSearchPx) / kGroundStepPx + 1 == kGroundSteps);
+    static_assert((kFarthestBelowPx - kNearestBelowPx) / kStepPx + 1 == kBelowSteps);
     cv::Mat evidence(left.size(), CV_32F, cv::Scalar(0));
     const int n = 2 * halfWidth + 1;
     std::vector<float> l(static_cast<std::size_t>(n));
@@ -241,7 +245,8 @@ cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::Di
             // a single ground cost by chance wherever the images disagree for another reason (the noise of a strong
             // edge: the simulator's jittered samples, a real rig's small vertical misalignment).
             float onGround = std::numeric_limits<float>::infinity();
-            for (double shift = -kGroundSearchPx; shift <= kGroundSearchPx + 1e-9; shift += kGroundStepPx) {
+            for (int step = 0; step < kGroundSteps; ++step) {
+                const double shift = -kGroundSearchPx + step * kGroundStepPx;
                 float c = 0.0F;
                 if (cost(
                         y, x, [&](int xi) { return ground.at(xi, y) + shift; }, c)) {
@@ -253,7 +258,8 @@ cv::Mat dropEvidence(const cv::Mat& left, const cv::Mat& right, const vision::Di
             }
             float best = std::numeric_limits<float>::infinity();
             const double dg = ground.at(x, y);
-            for (double d = dg - kFarthestBelowPx; d <= dg - kNearestBelowPx + 1e-9; d += kStepPx) {
+            for (int step = 0; step < kBelowSteps; ++step) {
+                const double d = dg - kFarthestBelowPx + step * kStepPx;
                 float c = 0.0F;
                 if (d > 0.0 && cost(
                                    y, x, [d](int) { return d; }, c)) {

@@ -74,7 +74,7 @@ ordered_json num(float v)
 std::string seconds(double s)
 {
     char text[32];
-    std::snprintf(text, sizeof(text), "%g s", s);
+    (void)std::snprintf(text, sizeof(text), "%g s", s);
     return text;
 }
 
@@ -359,7 +359,7 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
     T sample;
     eprosima::fastdds::dds::SampleInfo info;
     const bool secured = bus.config().security.enabled;
-    while (!g_stop.load() && (o.count == 0 || printed < o.count)) {
+    while (!gStop.load() && (o.count == 0 || printed < o.count)) {
         auto slice = kPollSlice;
         if (o.timeoutS > 0.0) {
             const auto now = std::chrono::steady_clock::now();
@@ -393,9 +393,9 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
         }
     }
     const double elapsedS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "ugvsense %s: %llu sample(s) printed, %llu refused, in %.1f s%s\n", kCommand,
-                 static_cast<unsigned long long>(printed), static_cast<unsigned long long>(refused), elapsedS,
-                 g_stop.load() ? " (stopped by a signal)" : "");
+    (void)std::fprintf(stderr, "ugvsense %s: %llu sample(s) printed, %llu refused, in %.1f s%s\n", kCommand,
+                       static_cast<unsigned long long>(printed), static_cast<unsigned long long>(refused), elapsedS,
+                       gStop.load() ? " (stopped by a signal)" : "");
     if (timedOut && printed == 0) {
         const int writers = reader->matched();
         return fail(Error{topic + " on " + bus::describe(bus.config()),

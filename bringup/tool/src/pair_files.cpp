@@ -27,7 +27,7 @@ std::uint32_t bigEndian(const unsigned char* p, int bytes)
 {
     std::uint32_t v = 0;
     for (int i = 0; i < bytes; ++i) {
-        v = (v << 8U) | p[i]; // NOLINT: pointer arithmetic over a checked buffer
+        v = (v << 8U) | p[i]; // pointer arithmetic over a checked buffer
     }
     return v;
 }
@@ -35,9 +35,9 @@ std::uint32_t bigEndian(const unsigned char* p, int bytes)
 /// The PGM/PPM header's "W H" after the magic, skipping comments.
 std::optional<cv::Size> pnmSize(const unsigned char* h, std::size_t n)
 {
-    std::string text(reinterpret_cast<const char*>(h) + 2, std::min<std::size_t>(n - 2, 4096)); // NOLINT: bytes
+    std::string text(reinterpret_cast<const char*>(h) + 2, std::min<std::size_t>(n - 2, 4096));
     std::istringstream in(text);
-    std::vector<long long> numbers;
+    std::vector<std::int64_t> numbers;
     std::string token;
     while (numbers.size() < 2 && in >> token) {
         if (token.front() == '#') {
@@ -53,7 +53,7 @@ std::optional<cv::Size> pnmSize(const unsigned char* h, std::size_t n)
     if (numbers.size() < 2) {
         return cv::Size(0, 0);
     }
-    const auto side = [](long long v) { return static_cast<int>(std::clamp<long long>(v, -1, INT32_MAX)); };
+    const auto side = [](std::int64_t v) { return static_cast<int>(std::clamp<std::int64_t>(v, -1, INT32_MAX)); };
     return cv::Size(side(numbers[0]), side(numbers[1]));
 }
 
@@ -62,30 +62,29 @@ std::optional<cv::Size> declaredSize(const unsigned char* h, std::size_t n)
 {
     const auto side = [](std::uint32_t v) { return static_cast<int>(std::min<std::uint32_t>(v, INT32_MAX)); };
     if (n >= 8 && std::memcmp(h, "\x89PNG\r\n\x1a\n", 8) == 0) {
-        if (n < 24 || std::memcmp(h + 12, "IHDR", 4) != 0) { // NOLINT: pointer arithmetic
+        if (n < 24 || std::memcmp(h + 12, "IHDR", 4) != 0) {
             return cv::Size(0, 0);
         }
-        return cv::Size(side(bigEndian(h + 16, 4)), side(bigEndian(h + 20, 4))); // NOLINT
+        return cv::Size(side(bigEndian(h + 16, 4)), side(bigEndian(h + 20, 4)));
     }
     if (n >= 2 && h[0] == 0xFF && h[1] == 0xD8) { // JPEG: the first start-of-frame segment
         for (std::size_t i = 2; i + 9 < n;) {
-            if (h[i] != 0xFF) { // NOLINT
+            if (h[i] != 0xFF) {
                 return cv::Size(0, 0);
             }
-            const unsigned marker = h[i + 1]; // NOLINT
+            const unsigned marker = h[i + 1];
             const bool frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
             if (frame) {
-                return cv::Size(side(bigEndian(h + i + 7, 2)), side(bigEndian(h + i + 5, 2))); // NOLINT
+                return cv::Size(side(bigEndian(h + i + 7, 2)), side(bigEndian(h + i + 5, 2)));
             }
-            i += 2 + bigEndian(h + i + 2, 2); // NOLINT
+            i += 2 + bigEndian(h + i + 2, 2);
         }
         return std::nullopt; // beyond what was read: OpenCV's own limit applies
     }
     if (n >= 26 && h[0] == 'B' && h[1] == 'M') { // BITMAPINFOHEADER: int32 LE width and height (negative: top-down)
         const auto le = [&h](std::size_t at) {
-            return static_cast<std::int32_t>(
-                static_cast<std::uint32_t>(h[at]) | (std::uint32_t{h[at + 1]} << 8U) |  // NOLINT
-                (std::uint32_t{h[at + 2]} << 16U) | (std::uint32_t{h[at + 3]} << 24U)); // NOLINT
+            return static_cast<std::int32_t>(static_cast<std::uint32_t>(h[at]) | (std::uint32_t{h[at + 1]} << 8U) |
+                                             (std::uint32_t{h[at + 2]} << 16U) | (std::uint32_t{h[at + 3]} << 24U));
         };
         const auto magnitude = [](std::int32_t v) { return v == INT32_MIN ? INT32_MAX : std::abs(v); };
         return cv::Size(magnitude(le(18)), magnitude(le(22)));
@@ -155,7 +154,7 @@ Result<void, Error> checkImageHeader(const std::filesystem::path& path)
 {
     std::ifstream in(path, std::ios::binary);
     std::array<unsigned char, kHeaderBytes> h{};
-    in.read(reinterpret_cast<char*>(h.data()), static_cast<std::streamsize>(h.size())); // NOLINT: bytes
+    in.read(reinterpret_cast<char*>(h.data()), static_cast<std::streamsize>(h.size()));
     const auto n = static_cast<std::size_t>(in.gcount());
     const std::optional<cv::Size> size = declaredSize(h.data(), n);
     if (!size) {

@@ -1,6 +1,8 @@
 #include "ugv/tool/real_eval.hpp"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -289,13 +291,32 @@ Result<vision::GroundPlane, Error> roadPlane(const cv::Mat& disparity, const vis
     return vision::GroundPlane{n[0], n[1], n[2], n.dot(mean)};
 }
 
+/// "A,B,C": three numbers (spaces before each allowed), nothing else.
+bool parseThreeNumbers(const std::string& text, double& a, double& b, double& c)
+{
+    const char* at = text.data();
+    const char* const end = text.data() + text.size();
+    std::array<double*, 3> out{&a, &b, &c};
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        while (at != end && *at == ' ') {
+            ++at;
+        }
+        const auto [stop, error] = std::from_chars(at, end, *out[i]);
+        if (error != std::errc{} || (i + 1 < out.size() ? (stop == end || *stop != ',') : stop != end)) {
+            return false;
+        }
+        at = stop + 1;
+    }
+    return true;
+}
+
 } // namespace
 
 Result<vision::Mount, Error> parseMount(const std::string& text)
 {
     vision::Mount m;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &m.heightM, &m.pitchDeg, &m.rollDeg) != 3 ||
-        !(m.heightM > 0.0 && m.heightM < 10.0) || !(std::abs(m.pitchDeg) < 45.0) || !(std::abs(m.rollDeg) < 45.0)) {
+    if (!parseThreeNumbers(text, m.heightM, m.pitchDeg, m.rollDeg) || !(m.heightM > 0.0 && m.heightM < 10.0) ||
+        !(std::abs(m.pitchDeg) < 45.0) || !(std::abs(m.rollDeg) < 45.0)) {
         return Unexpected(Error{"ugvsense eval --mount", "'" + text + "' is not HEIGHT_M,PITCH_DEG,ROLL_DEG",
                                 "for example --mount 1.65,0,0 (height 0-10 m, pitch and roll within 45 deg)"});
     }
@@ -344,7 +365,7 @@ std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, con
     }
     for (std::size_t k = 0; k < n; ++k) {
         SectorTruth& t = out[k];
-        t.coverage = analysed[k] > 0 ? double(withGt[k]) / analysed[k] : 0.0;
+        t.coverage = analysed[k] > 0 ? static_cast<double>(withGt[k]) / analysed[k] : 0.0;
         t.scored = t.coverage >= rules.minCoverage;
         t.obstaclePoints = static_cast<int>(obstacle[k].size());
         t.obstacleRangeM = nthNearest(obstacle[k], rules.minPoints);

@@ -98,11 +98,11 @@ std::optional<int> recordFrame(ipc::FrameSubscriber& subscriber, ipc::TakenFrame
     const auto appended = writer->append(h.sequence, h.leftStampNs, h.rightStampNs, frame.views);
     subscriber.release(frame);
     if (!appended) {
-        std::fprintf(stderr,
-                     "ugvsense record: error: %s: cannot append: %s (%s); the %llu frames before are kept "
-                     "(fix: free space on the device)\n",
-                     args.get("out").c_str(), appended.error().text(), appended.error().name(),
-                     static_cast<unsigned long long>(tally.written));
+        (void)std::fprintf(stderr,
+                           "ugvsense record: error: %s: cannot append: %s (%s); the %llu frames before are kept "
+                           "(fix: free space on the device)\n",
+                           args.get("out").c_str(), appended.error().text(), appended.error().name(),
+                           static_cast<unsigned long long>(tally.written));
         return 1;
     }
     ++tally.written;
@@ -153,9 +153,9 @@ int runRecord(int argc, char** argv)
     const auto timeUp = [&] {
         return args.has("seconds") && static_cast<double>(MonotonicClock::nowNs() - startNs) * 1e-9 >= *seconds;
     };
-    std::fprintf(stderr, "ugvsense record: waiting for frames on ugvsense/stereo/frames ...\n");
+    (void)std::fprintf(stderr, "ugvsense record: waiting for frames on ugvsense/stereo/frames ...\n");
     ipc::TakenFrame frame;
-    while (!g_stop.load() && !(args.has("frames") && static_cast<double>(tally.written) >= *frames) && !timeUp()) {
+    while (!gStop.load() && !(args.has("frames") && static_cast<double>(tally.written) >= *frames) && !timeUp()) {
         // Oldest first: a recorder keeps every pair its queue holds.
         if (subscriber->takeOldest(frame, std::chrono::milliseconds(100)) != ipc::TakeStatus::Frame) {
             continue;
@@ -165,7 +165,7 @@ int runRecord(int argc, char** argv)
         }
     }
     if (!writer) {
-        std::fprintf(stderr, "ugvsense record: no frame arrived; nothing written (is ugvsensed running?)\n");
+        (void)std::fprintf(stderr, "ugvsense record: no frame arrived; nothing written (is ugvsensed running?)\n");
         return 1;
     }
     if (auto closed = writer->close(); !closed) {

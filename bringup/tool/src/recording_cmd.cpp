@@ -108,8 +108,8 @@ Result<std::map<std::size_t, std::int64_t>, Error> readTimestamps(const std::str
             continue; // comment, blank or header
         }
         std::istringstream fields(line);
-        long long frame = -1;
-        long long stamp = 0;
+        std::int64_t frame = -1;
+        std::int64_t stamp = 0;
         char comma = 0;
         if (!(fields >> frame >> comma >> stamp) || comma != ',' || frame < 0) {
             return Unexpected(Error{path + ":" + std::to_string(lineNo),
@@ -271,7 +271,7 @@ int runExport(const Args& args)
         ++written;
         const StereoViews v = reader->views();
         char stem[32];
-        std::snprintf(stem, sizeof(stem), "frame_%06zu", k);
+        (void)std::snprintf(stem, sizeof(stem), "frame_%06zu", k);
         for (const bool right : {false, true}) {
             const cv::Mat m = matOver(v, right); // grey or colour, as recorded
             if (m.empty()) {

@@ -245,7 +245,7 @@ int runChessboard(const Args& args)
         cv::Mat right;
         renderer.render(poses[i], *noise, rng, left, right);
         char suffix[32];
-        std::snprintf(suffix, sizeof(suffix), "_%02zu.png", i + 1);
+        (void)std::snprintf(suffix, sizeof(suffix), "_%02zu.png", i + 1);
         const std::string leftPath = (out / ("left" + std::string(suffix))).string();
         const std::string rightPath = (out / ("right" + std::string(suffix))).string();
         bool written = false;
@@ -440,7 +440,7 @@ int runCourse(const Args& args)
             return reportFailure(frame.error());
         }
         char stem[32];
-        std::snprintf(stem, sizeof(stem), "frame_%04zu", k);
+        (void)std::snprintf(stem, sizeof(stem), "frame_%04zu", k);
         if (auto written = sim::writeSample(*frame, course->scene.rig, out, stem); !written) {
             return reportFailure(written.error());
         }

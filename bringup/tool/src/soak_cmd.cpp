@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cinttypes>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -19,13 +21,15 @@
 #include <string>
 #include <vector>
 
+#include "ugv/hal/sys_call.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/rt/memory.hpp"
 #include "ugv/service/runner.hpp"
 #include "ugv/tool/args.hpp"
 #include "ugv/tool/commands.hpp"
 
-extern char** environ; // NOLINT(readability-redundant-declaration): posix_spawnp's environment
+// NOLINTNEXTLINE(readability-redundant-declaration,cppcoreguidelines-avoid-non-const-global-variables): POSIX's
+extern char** environ; // posix_spawnp's environment
 
 namespace ugv::tool {
 namespace {
@@ -61,10 +65,11 @@ public:
     Result<void, Error> start(int cpu, double seconds)
     {
         const std::string cpuText = std::to_string(cpu);
-        const std::string timeout = std::to_string(static_cast<long>(seconds) + 60) + "s";
+        const std::string timeout = std::to_string(static_cast<std::int64_t>(seconds) + 60) + "s";
         std::vector<std::string> words{"stress-ng", "--cpu",     "1",     "--taskset",
                                        cpuText,     "--timeout", timeout, "--quiet"};
         std::vector<char*> argv;
+        argv.reserve(words.size() + 1);
         for (std::string& word : words) {
             argv.push_back(word.data());
         }
@@ -72,7 +77,7 @@ public:
         const int rc = ::posix_spawnp(&pid_, "stress-ng", nullptr, nullptr, argv.data(), environ);
         if (rc != 0) {
             pid_ = 0;
-            return Unexpected(Error{"stress-ng", std::string("cannot start it: ") + std::strerror(rc),
+            return Unexpected(Error{"stress-ng", std::string("cannot start it: ") + hal::SysError{rc}.text(),
                                     "install it (apt-get install stress-ng; toolchain/host.sh deps does), or leave "
                                     "out --load-other-core"});
         }
@@ -155,7 +160,7 @@ private:
                     static_cast<unsigned long long>(current_.frames), static_cast<unsigned long long>(current_.misses),
                     static_cast<unsigned long long>(current_.degraded), current_.p50Ms, current_.p99Ms, current_.maxMs,
                     current_.rssBytes / 1024);
-        std::fflush(stdout);
+        (void)std::fflush(stdout);
         windows_.push_back(current_);
         current_ = Window{};
         endToEndMs_.clear();
@@ -176,7 +181,7 @@ struct SoakFigures {
     std::size_t baselineRss = 0; ///< at the end of the first (warm-up) window
     std::size_t peakRss = 0;     ///< the largest of the later windows
     std::size_t finalRss = 0;
-    long long growthKb = 0; ///< peak - baseline
+    std::int64_t growthKb = 0; ///< peak - baseline
 };
 
 SoakFigures memoryFigures(const std::vector<Window>& windows)
@@ -190,7 +195,7 @@ SoakFigures memoryFigures(const std::vector<Window>& windows)
         f.peakRss = std::max(f.peakRss, windows[i].rssBytes);
     }
     f.finalRss = windows.back().rssBytes;
-    f.growthKb = (static_cast<long long>(f.peakRss) - static_cast<long long>(f.baselineRss)) / 1024;
+    f.growthKb = (static_cast<std::int64_t>(f.peakRss) - static_cast<std::int64_t>(f.baselineRss)) / 1024;
     return f;
 }
 
@@ -204,12 +209,12 @@ std::string soakJson(const service::RunResult& run, const std::vector<Window>& w
     char line[256];
     for (std::size_t i = 0; i < windows.size(); ++i) {
         const Window& w = windows[i];
-        std::snprintf(line, sizeof(line),
-                      "%s\n    {\"end_s\": %.1f, \"frames\": %llu, \"misses\": %llu, \"degraded\": %llu, "
-                      "\"e2e_p50_ms\": %.3f, \"e2e_p99_ms\": %.3f, \"e2e_max_ms\": %.3f, \"rss_kb\": %zu}",
-                      i == 0 ? "" : ",", w.endS, static_cast<unsigned long long>(w.frames),
-                      static_cast<unsigned long long>(w.misses), static_cast<unsigned long long>(w.degraded), w.p50Ms,
-                      w.p99Ms, w.maxMs, w.rssBytes / 1024);
+        (void)std::snprintf(line, sizeof(line),
+                            "%s\n    {\"end_s\": %.1f, \"frames\": %llu, \"misses\": %llu, \"degraded\": %llu, "
+                            "\"e2e_p50_ms\": %.3f, \"e2e_p99_ms\": %.3f, \"e2e_max_ms\": %.3f, \"rss_kb\": %zu}",
+                            i == 0 ? "" : ",", w.endS, static_cast<unsigned long long>(w.frames),
+                            static_cast<unsigned long long>(w.misses), static_cast<unsigned long long>(w.degraded),
+                            w.p50Ms, w.p99Ms, w.maxMs, w.rssBytes / 1024);
         json += line;
     }
     return json + "\n  ],\n  \"service\": " + service::reportJson(run.report, run.extras) + "\n}\n";
@@ -264,7 +269,7 @@ int report(const Args& args, const SoakPlan& plan, const service::RunResult& run
     std::printf("%s%s", service::formatReport(run.report, run.extras).c_str(), service::formatBusReport(run).c_str());
     const SoakFigures memory = memoryFigures(windows);
     std::printf("soak: %.1f min at %.0f fps, tasks on CPU %d, other core %s: RSS %zu kB after warm-up (end of the "
-                "first window), peak later %zu kB, at the end %zu kB: growth %lld kB\n",
+                "first window), peak later %zu kB, at the end %zu kB: growth %" PRId64 " kB\n",
                 plan.minutes, plan.rate, kServiceCpu, plan.load ? "loaded (stress-ng --cpu 1)" : "not loaded",
                 memory.baselineRss / 1024, memory.peakRss / 1024, memory.finalRss / 1024, memory.growthKb);
     if (args.has("json")) {
@@ -275,15 +280,16 @@ int report(const Args& args, const SoakPlan& plan, const service::RunResult& run
         }
     }
     if (windows.size() < 2) {
-        std::fprintf(stderr,
-                     "ugvsense soak: only %zu window(s): no RSS growth can be measured (make --minutes "
-                     "longer than two --sample-s)\n",
-                     windows.size());
+        (void)std::fprintf(stderr,
+                           "ugvsense soak: only %zu window(s): no RSS growth can be measured (make --minutes "
+                           "longer than two --sample-s)\n",
+                           windows.size());
         return kExitTargetMissed;
     }
     if (plan.maxRssGrowthKb >= 0.0 && static_cast<double>(memory.growthKb) > plan.maxRssGrowthKb) {
-        std::fprintf(stderr, "ugvsense soak: RSS grew %lld kB after warm-up, above --max-rss-growth-kb %.0f\n",
-                     memory.growthKb, plan.maxRssGrowthKb);
+        (void)std::fprintf(stderr,
+                           "ugvsense soak: RSS grew %" PRId64 " kB after warm-up, above --max-rss-growth-kb %.0f\n",
+                           memory.growthKb, plan.maxRssGrowthKb);
         return kExitTargetMissed;
     }
     return 0;

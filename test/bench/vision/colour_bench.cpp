@@ -47,8 +47,7 @@ cv::Mat makeImage(int width, int height)
 
 ugv::ConstBgrView view(const cv::Mat& m)
 {
-    return {reinterpret_cast<const ugv::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
-            static_cast<std::ptrdiff_t>(m.step)};
+    return {reinterpret_cast<const ugv::BgrPixel*>(m.data), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
 }
 
 ColourFreeSpaceConfig configFor(int width)

@@ -563,20 +563,20 @@ TEST(Config, UnknownTaskIsAnUnknownKey)
 TEST(Config, ConfigPathPrecedence)
 {
     EXPECT_EQ(configPath("/a.yaml"), "/a.yaml");
-    ::setenv("UGV_CONFIG", "/env.yaml", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test
+    ::setenv("UGV_CONFIG", "/env.yaml", 1); // single-threaded test
     EXPECT_EQ(configPath(nullptr), "/env.yaml");
-    ::unsetenv("UGV_CONFIG"); // NOLINT(concurrency-mt-unsafe)
+    ::unsetenv("UGV_CONFIG");
     EXPECT_EQ(configPath(nullptr), "/etc/ugvsense/config.yaml");
 }
 
 TEST(Config, RosDomainIdIsTheDomainWhenTheFileGivesNone)
 {
-    ::setenv("ROS_DOMAIN_ID", "37", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test
+    ::setenv("ROS_DOMAIN_ID", "37", 1); // single-threaded test
     const auto fromRos = parseConfig(kValidMinimal, "t.yaml", "/d");
     const auto fromFile = parseConfig(std::string(kValidMinimal) + "dds:\n  domain_id: 5\n", "t.yaml", "/d");
-    ::setenv("ROS_DOMAIN_ID", "233", 1); // NOLINT(concurrency-mt-unsafe)
+    ::setenv("ROS_DOMAIN_ID", "233", 1);
     const auto bad = parseConfig(kValidMinimal, "t.yaml", "/d");
-    ::unsetenv("ROS_DOMAIN_ID"); // NOLINT(concurrency-mt-unsafe)
+    ::unsetenv("ROS_DOMAIN_ID");
     const auto unset = parseConfig(kValidMinimal, "t.yaml", "/d");
 
     ASSERT_TRUE(fromRos.has_value()) << joined(fromRos.error());
@@ -592,9 +592,9 @@ TEST(Config, RosDomainIdIsTheDomainWhenTheFileGivesNone)
 
 TEST(Config, CalibrationEnvironmentOverride)
 {
-    ::setenv("UGV_CALIBRATION", "/override.yaml", 1); // NOLINT(concurrency-mt-unsafe): single-threaded test
+    ::setenv("UGV_CALIBRATION", "/override.yaml", 1); // single-threaded test
     const auto sut = parseConfig(kValidMinimal, "t.yaml", "/d");
-    ::unsetenv("UGV_CALIBRATION"); // NOLINT(concurrency-mt-unsafe)
+    ::unsetenv("UGV_CALIBRATION");
 
     ASSERT_TRUE(sut.has_value());
     EXPECT_EQ(sut->calibrationPath, "/override.yaml");

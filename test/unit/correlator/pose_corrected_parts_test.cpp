@@ -579,7 +579,7 @@ struct TwoUgvScene {
         : poses(config), map(config), anchors(config), one(poses.index("ugv-1")), two(poses.index("ugv-2"))
     {
         const RangeBearingNoise noise = config.noise();
-        std::mt19937 rng(7); // NOLINT(cert-msc32-c,cert-msc51-cpp) NOLINTJUSTIFICATION: a repeatable test
+        std::mt19937 rng(7); // a repeatable test
         std::normal_distribution<double> gauss;
         const Eigen::Vector2d posOne(-10, 0);
         const Eigen::Vector2d posTwo(10, 0);

@@ -25,7 +25,7 @@
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/ipc/dds_convert.hpp"
 
-extern char** environ; // NOLINT(readability-redundant-declaration) NOLINTJUSTIFICATION: POSIX, for posix_spawn
+extern char** environ; // POSIX, for posix_spawn
 
 namespace ugv::ipc::dds {
 namespace {

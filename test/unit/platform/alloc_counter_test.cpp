@@ -62,16 +62,16 @@ TEST(AllocationScope, SeesMallocFamilyWhenNotSanitized)
         GTEST_SKIP() << "built with ASan/TSan: only operator new is counted";
     }
     const AllocationScope sut;
-    void* a = escape(std::malloc(16));            // NOLINT(cppcoreguidelines-no-malloc)
-    void* b = escape(std::calloc(2, 8));          // NOLINT(cppcoreguidelines-no-malloc)
-    a = escape(std::realloc(a, 64));              // NOLINT(cppcoreguidelines-no-malloc)
-    void* c = escape(std::aligned_alloc(64, 64)); // NOLINT(cppcoreguidelines-no-malloc)
+    void* a = escape(std::malloc(16));
+    void* b = escape(std::calloc(2, 8));
+    a = escape(std::realloc(a, 64));
+    void* c = escape(std::aligned_alloc(64, 64));
     void* d = nullptr;
     ASSERT_EQ(::posix_memalign(&d, 64, 64), 0);
-    std::free(a); // NOLINT(cppcoreguidelines-no-malloc)
-    std::free(b); // NOLINT(cppcoreguidelines-no-malloc)
-    std::free(c); // NOLINT(cppcoreguidelines-no-malloc)
-    std::free(d); // NOLINT(cppcoreguidelines-no-malloc)
+    std::free(a);
+    std::free(b);
+    std::free(c);
+    std::free(d);
     EXPECT_EQ(sut.count(), 5U);
 }
 

@@ -101,12 +101,12 @@ TEST(LogLevelsEnvDeathTest, EnvIsAppliedAndBadItemsReportedOnce)
     GTEST_FLAG_SET(death_test_style, "threadsafe"); // fresh process: the env has not been read yet
     EXPECT_EXIT(
         {
-            ::setenv("UGV_LOG_LEVELS", "hal:debug,bogus", 1); // NOLINT(concurrency-mt-unsafe): single thread
+            ::setenv("UGV_LOG_LEVELS", "hal:debug,bogus", 1); // single thread
             ugv::initLogLevelsFromEnv();
             ugv::initLogLevelsFromEnv(); // second call: nothing read or reported again
             const bool applied = ugv::logThreshold(LogCategory::Hal) == LogLevel::Debug &&
                                  ugv::logThreshold(LogCategory::Vision) == LogLevel::Info;
-            std::exit(applied ? 0 : 1); // NOLINT(concurrency-mt-unsafe)
+            std::exit(applied ? 0 : 1);
         },
         testing::ExitedWithCode(0), "\\[platform\\] warn: UGV_LOG_LEVELS item 'bogus' has no ':'");
 }
@@ -409,6 +409,10 @@ TEST(Journal, StreamIsRecognisedByDeviceAndInode)
     EXPECT_FALSE(ugv::isJournalStream(fd, other.c_str()));
     EXPECT_FALSE(ugv::isJournalStream(fd, nullptr));
     EXPECT_FALSE(ugv::isJournalStream(fd, "not a stream"));
+    EXPECT_FALSE(ugv::isJournalStream(fd, (mine + "x").c_str()));                      // trailing text
+    EXPECT_FALSE(ugv::isJournalStream(fd, std::to_string(st.st_dev).c_str()));         // no inode
+    EXPECT_FALSE(ugv::isJournalStream(fd, (std::to_string(st.st_dev) + ":").c_str())); // empty inode
+    EXPECT_FALSE(ugv::isJournalStream(fd, ("-" + mine).c_str()));                      // a sign
     EXPECT_FALSE(ugv::isJournalStream(-1, mine.c_str()));
     ::close(fd);
 }

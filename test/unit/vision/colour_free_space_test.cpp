@@ -79,8 +79,7 @@ ugv::sim::Scene catalogue(const char* name, double rangeM, double bearingDeg)
 
 ugv::ConstBgrView bgrView(const cv::Mat& m)
 {
-    return {reinterpret_cast<const ugv::BgrPixel*>(m.data), m.cols, m.rows, // NOLINT(*-reinterpret-cast)
-            static_cast<std::ptrdiff_t>(m.step)};
+    return {reinterpret_cast<const ugv::BgrPixel*>(m.data), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
 }
 
 ColourFreeSpace makeSut(const ugv::sim::Rig& rig, const ColourFreeSpaceConfig& config = {})

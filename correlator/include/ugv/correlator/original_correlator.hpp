@@ -21,6 +21,7 @@
 /// Thread-safety: thread-bound. RT-safe: no (the correlator is the lowest-priority task).
 
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <string>
 #include <unordered_map>
@@ -120,6 +121,8 @@ private:
     int createStatic(OoiClass cls);
     int createMobile(OoiClass cls);
     void mergeStatic(int object);
+    /// One merge of `object` with a static object close to it: the one kept, or nothing when none is close.
+    std::optional<int> mergeStaticOnce(int object);
     void mergeMobile(int object);
     void expire(double t);
     [[nodiscard]] bool sameStatic(const Gaussian2& a, const Gaussian2& b) const;

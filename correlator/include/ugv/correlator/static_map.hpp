@@ -158,7 +158,7 @@ private:
     [[nodiscard]] TrackEstimate groupEstimate(const std::vector<int>& group) const;
     [[nodiscard]] bool groupsApart(const std::vector<int>& a, const std::vector<int>& b) const;
     void splitAll(const UgvPoseErrors& poses, ObjectIds& ids);
-    void split(std::size_t object, const UgvPoseErrors& poses, ObjectIds& ids);
+    void split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids);
     /// The object most of `tracks`' observations first joined, if a merge folded it into the object at `into`
     /// (its id can come back); else -1.
     [[nodiscard]] int absorbedOrigin(const std::vector<int>& tracks, std::size_t into, const ObjectIds& ids) const;

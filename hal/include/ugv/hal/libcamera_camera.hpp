@@ -49,6 +49,10 @@ public:
     /// few cameras, an id not found, a size or format the camera cannot deliver, a camera in use.
     static Result<std::unique_ptr<LibcameraStereoCamera>, Error> open(const LibcameraOptions& options);
     ~LibcameraStereoCamera() override;
+    LibcameraStereoCamera(const LibcameraStereoCamera&) = delete;
+    LibcameraStereoCamera& operator=(const LibcameraStereoCamera&) = delete;
+    LibcameraStereoCamera(LibcameraStereoCamera&&) = delete;
+    LibcameraStereoCamera& operator=(LibcameraStereoCamera&&) = delete;
 
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;

@@ -27,6 +27,8 @@
 /// not allocate (file reads into a buffer sized at open); they do block on file I/O, so the service reads a
 /// recording on its capture thread, never on the vision thread. The writer is for low-priority threads.
 
+#include <sys/types.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -172,7 +174,7 @@ public:
 private:
     RecordingReader(int fd, RecordingInfo info, std::uint64_t firstRecord, std::uint64_t fileBytes);
     /// Reads exactly `size` bytes at the current offset; returns the bytes read (short at end of file) or -1.
-    long readFully(std::byte* out, std::size_t size) noexcept;
+    ssize_t readFully(std::byte* out, std::size_t size) noexcept;
     /// After a damaged prefix at offset_: moves offset_ to the next record magic; false at the end of the file.
     bool resync() noexcept;
 

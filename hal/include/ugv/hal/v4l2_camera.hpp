@@ -41,6 +41,7 @@ namespace ugv::hal {
 struct V4l2Ops {
     int (*open)(void* context, const char* path, int flags) = nullptr;
     int (*close)(void* context, int fd) = nullptr;
+    // NOLINTNEXTLINE(google-runtime-int): ioctl(2)'s request type
     int (*ioctl)(void* context, int fd, unsigned long request, void* arg) = nullptr;
     void* (*mmap)(void* context, std::size_t length, int fd, std::int64_t offset) = nullptr; ///< MAP_FAILED on error
     int (*munmap)(void* context, void* address, std::size_t length) = nullptr;
@@ -73,6 +74,10 @@ public:
     static Result<std::unique_ptr<V4l2StereoCamera>, Error> open(const V4l2Options& options,
                                                                  V4l2Ops ops = realV4l2Ops());
     ~V4l2StereoCamera() override;
+    V4l2StereoCamera(const V4l2StereoCamera&) = delete;
+    V4l2StereoCamera& operator=(const V4l2StereoCamera&) = delete;
+    V4l2StereoCamera(V4l2StereoCamera&&) = delete;
+    V4l2StereoCamera& operator=(V4l2StereoCamera&&) = delete;
 
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;

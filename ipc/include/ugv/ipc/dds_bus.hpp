@@ -186,6 +186,7 @@ class Writer {
 public:
     Writer() = default;
     explicit Writer(eprosima::fastdds::dds::DataWriter* writer) : writer_(writer) {}
+    // NOLINTBEGIN(cppcoreguidelines-pro-type-const-cast): Fast DDS 2.9's DataWriter::write takes a void* it only reads
     /// False when Fast DDS refused the sample (a full keep-all history past its blocking time, or no writer).
     bool write(const T& sample) { return writer_ != nullptr && writer_->write(const_cast<T*>(&sample)); }
     /// write() with the given source timestamp instead of this host's clock [ns since the epoch] (tests: a sender
@@ -198,6 +199,7 @@ public:
                writer_->write_w_timestamp(const_cast<T*>(&sample), eprosima::fastdds::dds::HANDLE_NIL, stamp) ==
                    eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
     }
+    // NOLINTEND(cppcoreguidelines-pro-type-const-cast)
     /// Readers matched now.
     [[nodiscard]] int matched() const;
     /// The writer's RTPS GUID (its ROS 2 GID: rosGid()); unknown (zero) without a writer.

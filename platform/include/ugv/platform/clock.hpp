@@ -43,7 +43,7 @@ public:
         constexpr std::int64_t kNsPerSecond = 1'000'000'000;
         timespec ts{};
         ts.tv_sec = static_cast<time_t>(ns / kNsPerSecond);
-        ts.tv_nsec = static_cast<long>(ns % kNsPerSecond);
+        ts.tv_nsec = static_cast<decltype(ts.tv_nsec)>(ns % kNsPerSecond);
         return ts;
     }
 

@@ -28,7 +28,7 @@ public:
     /// @brief Append a copy of `value`.
     /// @return false (and no change) when the vector already holds N elements.
     /// Thread-safety: not thread-safe. RT-safe: yes.
-    [[nodiscard]] bool push_back(const T& value) noexcept // NOLINT(readability-identifier-naming): std naming
+    [[nodiscard]] bool push_back(const T& value) noexcept
     {
         if (size_ == N) {
             return false;
@@ -41,7 +41,7 @@ public:
     /// @return false (and no change) when full.
     /// Thread-safety: not thread-safe. RT-safe: yes, if T's constructor is.
     template <class... Args>
-    [[nodiscard]] bool emplace_back(Args&&... args) noexcept // NOLINT(readability-identifier-naming): std naming
+    [[nodiscard]] bool emplace_back(Args&&... args) noexcept
     {
         if (size_ == N) {
             return false;

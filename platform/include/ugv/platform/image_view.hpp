@@ -52,8 +52,9 @@ public:
     }
     /// A mutable view converts to a const one.
     template <class U>
-    requires(std::is_const_v<T>&& std::is_same_v<std::remove_const_t<T>, U>) constexpr ImageView(
-        const ImageView<U>& other) noexcept // NOLINT(google-explicit-constructor)
+    requires(std::is_const_v<T>&& std::is_same_v<std::remove_const_t<T>, U>)
+        // NOLINTNEXTLINE(google-explicit-constructor): implicit, as T* converts to const T*
+        constexpr ImageView(const ImageView<U>& other) noexcept
         : data_(other.data()), width_(other.width()), height_(other.height()), strideBytes_(other.strideBytes())
     {
     }
@@ -68,7 +69,7 @@ public:
     {
         UGV_EXPECTS(y >= 0 && y < height_);
         using Byte = std::conditional_t<std::is_const_v<T>, const std::byte, std::byte>;
-        return reinterpret_cast<T*>(reinterpret_cast<Byte*>(data_) + y * strideBytes_); // NOLINT
+        return reinterpret_cast<T*>(reinterpret_cast<Byte*>(data_) + y * strideBytes_);
     }
     [[nodiscard]] T& at(int x, int y) const noexcept
     {

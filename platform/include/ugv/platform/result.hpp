@@ -41,19 +41,17 @@ public:
     using value_type = T;
     using error_type = E;
 
-    constexpr Result(const T& value) : storage_(std::in_place_index<0>, value) {} // NOLINT(google-explicit-constructor)
-    constexpr Result(T&& value)
-        : storage_(std::in_place_index<0>, std::move(value)) {} // NOLINT(google-explicit-constructor)
+    // A Result is made implicitly from its value or its Unexpected error, as std::expected is ("return value;").
+    // NOLINTBEGIN(google-explicit-constructor): std::expected's implicit conversions, on purpose
+    constexpr Result(const T& value) : storage_(std::in_place_index<0>, value) {}
+    constexpr Result(T&& value) : storage_(std::in_place_index<0>, std::move(value)) {}
     template <class G>
-    constexpr Result(Unexpected<G> error) // NOLINT(google-explicit-constructor)
-        : storage_(std::in_place_index<1>, E(std::move(error).error()))
+    constexpr Result(Unexpected<G> error) : storage_(std::in_place_index<1>, static_cast<E>(std::move(error).error()))
     {
     }
+    // NOLINTEND(google-explicit-constructor)
 
-    [[nodiscard]] constexpr bool has_value() const noexcept
-    {
-        return storage_.index() == 0;
-    } // NOLINT(readability-identifier-naming)
+    [[nodiscard]] constexpr bool has_value() const noexcept { return storage_.index() == 0; }
     constexpr explicit operator bool() const noexcept { return has_value(); }
 
     constexpr T& value() &
@@ -93,27 +91,27 @@ public:
     constexpr const T* operator->() const { return &value(); }
 
     template <class U>
-    constexpr T value_or(U&& fallback) const& // NOLINT(readability-identifier-naming)
+    constexpr T value_or(U&& fallback) const&
     {
         return has_value() ? value() : static_cast<T>(std::forward<U>(fallback));
     }
 
     /// f(T) -> Result<U, E>; called only with a value, the error passes through.
     template <class F>
-    constexpr auto and_then(F&& f) & // NOLINT(readability-identifier-naming)
+    constexpr auto and_then(F&& f) &
     {
         using R = std::remove_cvref_t<std::invoke_result_t<F, T&>>;
         return has_value() ? std::forward<F>(f)(value()) : R(Unexpected<E>(error()));
     }
     template <class F>
-    constexpr auto and_then(F&& f) && // NOLINT(readability-identifier-naming)
+    constexpr auto and_then(F&& f) &&
     {
         using R = std::remove_cvref_t<std::invoke_result_t<F, T&&>>;
         return has_value() ? std::forward<F>(f)(std::move(*this).value()) : R(Unexpected<E>(std::move(*this).error()));
     }
     /// f(E) -> Result<T, G>; called only with an error, the value passes through.
     template <class F>
-    constexpr auto or_else(F&& f) && // NOLINT(readability-identifier-naming)
+    constexpr auto or_else(F&& f) &&
     {
         using R = std::remove_cvref_t<std::invoke_result_t<F, E&&>>;
         return has_value() ? R(std::move(*this).value()) : std::forward<F>(f)(std::move(*this).error());
@@ -132,14 +130,12 @@ public:
 
     constexpr Result() = default;
     template <class G>
-    constexpr Result(Unexpected<G> error) : error_(E(std::move(error).error())) // NOLINT(google-explicit-constructor)
+    // NOLINTNEXTLINE(google-explicit-constructor): std::expected's implicit conversion from its error, on purpose
+    constexpr Result(Unexpected<G> error) : error_(static_cast<E>(std::move(error).error()))
     {
     }
 
-    [[nodiscard]] constexpr bool has_value() const noexcept
-    {
-        return !error_.has_value();
-    } // NOLINT(readability-identifier-naming)
+    [[nodiscard]] constexpr bool has_value() const noexcept { return !error_.has_value(); }
     constexpr explicit operator bool() const noexcept { return has_value(); }
     constexpr void value() const { UGV_ASSERT(has_value()); }
     constexpr const E& error() const&
@@ -154,13 +150,13 @@ public:
     }
 
     template <class F>
-    constexpr auto and_then(F&& f) const // NOLINT(readability-identifier-naming)
+    constexpr auto and_then(F&& f) const
     {
         using R = std::remove_cvref_t<std::invoke_result_t<F>>;
         return has_value() ? std::forward<F>(f)() : R(Unexpected<E>(*error_));
     }
     template <class F>
-    constexpr auto or_else(F&& f) const // NOLINT(readability-identifier-naming)
+    constexpr auto or_else(F&& f) const
     {
         using R = std::remove_cvref_t<std::invoke_result_t<F, const E&>>;
         return has_value() ? R() : std::forward<F>(f)(*error_);

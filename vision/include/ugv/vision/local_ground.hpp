@@ -53,8 +53,10 @@ public:
         if (bin < 0 || bin >= bins_) {
             return;
         }
-        // Nearest height bin: z / kHeightBinM + heightBins_ / 2 + 0.5 is positive here, so truncation rounds.
-        const int h = static_cast<int>(z / kHeightBinM + static_cast<float>(heightBins_ / 2) + 0.5F);
+        // Nearest height bin: z / kHeightBinM + centre + 0.5 is positive here (|z| < bandM), so truncation rounds.
+        const int centre = heightBins_ / 2;
+        // NOLINTNEXTLINE(bugprone-incorrect-roundings): the value is positive (above), where this rounds correctly
+        const int h = static_cast<int>(z / kHeightBinM + static_cast<float>(centre) + 0.5F);
         std::uint16_t& count =
             histogram_[(static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_) + static_cast<std::size_t>(bin)) *
                            static_cast<std::size_t>(heightBins_) +

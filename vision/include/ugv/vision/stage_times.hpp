@@ -61,7 +61,8 @@ struct VisionStageTimes {
 class StageLap {
 public:
     explicit StageLap(VisionStageTimes* times) noexcept
-        : times_(times != nullptr && times->clock != nullptr ? times : nullptr), lastNs_(times_ ? times_->clock() : 0)
+        : times_(times != nullptr && times->clock != nullptr ? times : nullptr),
+          lastNs_(times_ != nullptr ? times_->clock() : 0)
     {
     }
     void to(VisionStage stage) noexcept

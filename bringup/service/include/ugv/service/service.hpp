@@ -89,7 +89,12 @@ struct BusFrame {
 /// restarts or disables the bus task while the frame path goes on (a test throws from it).
 class BusSink {
 public:
+    BusSink() = default;
     virtual ~BusSink() = default;
+    BusSink(const BusSink&) = delete;
+    BusSink& operator=(const BusSink&) = delete;
+    BusSink(BusSink&&) = delete;
+    BusSink& operator=(BusSink&&) = delete;
     virtual void onFrame(const BusFrame& frame) = 0;
     /// Between frames, at least every 20 ms: read inputs (poses), publish periodic records (health).
     virtual void idle() = 0;

@@ -55,9 +55,12 @@ public:
 
 private:
     struct Region {
-        double x0, x1, y0, y1; // [m] bounds
+        double x0 = 0.0; // [m] bounds
+        double x1 = 0.0;
+        double y0 = 0.0;
+        double y1 = 0.0;
         GroundPlane plane;
-        GroundPart part;
+        GroundPart part = GroundPart::Road;
     };
     [[nodiscard]] bool onPavement(double y) const noexcept;
 

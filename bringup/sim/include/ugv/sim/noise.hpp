@@ -83,7 +83,7 @@ inline double valueNoise3(double x, double y, double z, std::uint32_t seed) noex
         const double c = lattice(ix, iy + 1, iz + k, seed);
         const double d = lattice(ix + 1, iy + 1, iz + k, seed);
         const double ab = a + (b - a) * tx;
-        plane[k] = ab + ((c + (d - c) * tx) - ab) * ty; // NOLINT(cppcoreguidelines-pro-bounds-constant-array-index)
+        plane[k] = ab + ((c + (d - c) * tx) - ab) * ty;
     }
     return plane[0] + (plane[1] - plane[0]) * tz;
 }

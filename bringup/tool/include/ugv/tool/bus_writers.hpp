@@ -3,7 +3,7 @@
 /// @file
 /// Sending on the DDS bus from a command-line sender (`ugvsense bus-send`, and the test tool `bus-hostile`): the
 /// four writers of the correlator's inputs, waits for readers and acknowledgements, writes that retry while a
-/// keep-all history is full, and the summary line. Every wait ends on SIGINT/SIGTERM (g_stop). Init-time
+/// keep-all history is full, and the summary line. Every wait ends on SIGINT/SIGTERM (gStop). Init-time
 /// and tool code only (allocates, blocks).
 
 #include <array>
@@ -51,10 +51,10 @@ void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, c
     }
     const auto until =
         Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait.timeoutS));
-    while (writer.matched() < wait.readers && Clock::now() < until && !g_stop.load()) {
+    while (writer.matched() < wait.readers && Clock::now() < until && !gStop.load()) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
-    if (writer.matched() < wait.readers && !g_stop.load()) {
+    if (writer.matched() < wait.readers && !gStop.load()) {
         std::cerr << "ugvsense " << command << ": warning: " << writer.matched() << " of " << wait.readers
                   << " reader(s) of " << topic << " after " << wait.timeoutS
                   << " s; sending anyway (late reliable readers get the history while this process lives)\n";
@@ -68,7 +68,7 @@ bool writeOne(ipc::dds::Writer<T>& writer, const T& sample)
 {
     const auto until = Clock::now() + kRefusedWriteTimeout;
     while (!writer.write(sample)) {
-        if (g_stop.load() || Clock::now() >= until) {
+        if (gStop.load() || Clock::now() >= until) {
             return false;
         }
     }

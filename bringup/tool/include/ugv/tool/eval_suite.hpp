@@ -74,7 +74,7 @@ struct DisparityScore {
     double bad2All = 0.0;   ///< fraction with |d - gt| > 2 or no prediction
     double bad1Valid = 0.0; ///< fraction with |d - gt| > 1 among predicted-valid pixels
     double bad2Valid = 0.0; ///< fraction with |d - gt| > 2 among predicted-valid pixels
-    [[nodiscard]] double density() const { return gtPixels > 0 ? double(predictedValid) / gtPixels : 0.0; }
+    [[nodiscard]] double density() const { return gtPixels > 0 ? static_cast<double>(predictedValid) / gtPixels : 0.0; }
 };
 
 /// @param[in] predicted  CV_32F disparity [px], invalid < 0

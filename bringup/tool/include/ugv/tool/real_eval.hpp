@@ -94,8 +94,14 @@ struct RealTally {
     std::vector<double> rangeErrorsM; ///< |reported - truth| of the correct sectors
     void add(RealOutcome outcome, const SectorTruth& truth, const Sector& reported);
     void merge(const RealTally& other);
-    [[nodiscard]] double correctRate() const { return gtObstacle > 0 ? double(correct) / gtObstacle : 0.0; }
-    [[nodiscard]] double wrongRate() const { return scored > 0 ? double(tooNear + falseSectors) / scored : 0.0; }
+    [[nodiscard]] double correctRate() const
+    {
+        return gtObstacle > 0 ? static_cast<double>(correct) / gtObstacle : 0.0;
+    }
+    [[nodiscard]] double wrongRate() const
+    {
+        return scored > 0 ? static_cast<double>(tooNear + falseSectors) / scored : 0.0;
+    }
 };
 
 struct RealEvalOptions {

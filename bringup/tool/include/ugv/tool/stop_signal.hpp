@@ -12,14 +12,14 @@
 namespace ugv::tool {
 
 /// Set by SIGINT/SIGTERM once installStopHandler() ran.
-inline std::atomic<bool> g_stop{false};
+inline std::atomic<bool> gStop{false}; // NOLINT(cppcoreguidelines-avoid-non-const-global-variables): the handler's flag
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
 inline void installStopHandler()
 {
     struct sigaction action {};
     action.sa_handler = [](int /*signal*/) {
-        if (g_stop.exchange(true)) {
+        if (gStop.exchange(true)) {
             std::_Exit(130);
         }
     };
