@@ -95,8 +95,10 @@ inline double octaveWeight(double wavelengthM, double footprintM) noexcept
     return std::clamp(wavelengthM / footprintM - 1.0, 0.0, 1.0);
 }
 
-/// Zero-mean 2-D fBm: sum of amplitude * (noise - 0.5) over the octaves, band-limited to the footprint.
-inline double fbm2(double x, double y, std::span<const Octave> octaves, double footprintM, std::uint32_t seed) noexcept
+/// Zero-mean fBm: sum of amplitude * (noise(wavelength, seed) - 0.5) over the octaves, band-limited to the
+/// footprint; each octave has its own seed (seed + 1, seed + 2, ...).
+template <class Noise>
+inline double fbm(std::span<const Octave> octaves, double footprintM, std::uint32_t seed, Noise noise) noexcept
 {
     double sum = 0.0;
     std::uint32_t octaveSeed = seed;
@@ -104,27 +106,28 @@ inline double fbm2(double x, double y, std::span<const Octave> octaves, double f
         ++octaveSeed;
         const double w = octaveWeight(o.wavelengthM, footprintM);
         if (w > 0.0) {
-            sum += w * o.amplitude * (valueNoise2(x / o.wavelengthM, y / o.wavelengthM, octaveSeed) - 0.5);
+            sum += w * o.amplitude * (noise(o.wavelengthM, octaveSeed) - 0.5);
         }
     }
     return sum;
+}
+
+/// Zero-mean 2-D fBm, band-limited to the footprint.
+inline double fbm2(double x, double y, std::span<const Octave> octaves, double footprintM, std::uint32_t seed) noexcept
+{
+    return fbm(octaves, footprintM, seed, [&](double wavelengthM, std::uint32_t octaveSeed) {
+        return valueNoise2(x / wavelengthM, y / wavelengthM, octaveSeed);
+    });
 }
 
 /// Zero-mean 3-D fBm, band-limited to the footprint.
 inline double fbm3(double x, double y, double z, std::span<const Octave> octaves, double footprintM,
                    std::uint32_t seed) noexcept
 {
-    double sum = 0.0;
-    std::uint32_t octaveSeed = seed;
-    for (const Octave& o : octaves) {
-        ++octaveSeed;
-        const double w = octaveWeight(o.wavelengthM, footprintM);
-        if (w > 0.0) {
-            const double s = 1.0 / o.wavelengthM;
-            sum += w * o.amplitude * (valueNoise3(x * s, y * s, z * s, octaveSeed) - 0.5);
-        }
-    }
-    return sum;
+    return fbm(octaves, footprintM, seed, [&](double wavelengthM, std::uint32_t octaveSeed) {
+        const double s = 1.0 / wavelengthM;
+        return valueNoise3(x * s, y * s, z * s, octaveSeed);
+    });
 }
 
 } // namespace ugv::sim::detail
