@@ -27,6 +27,7 @@ packages=(
     openssl                # DDS Security: bringup/deploy/security/make_security.sh (CA, certificates, signed XML)
     libgtest-dev libgmock-dev libbenchmark-dev   # tests and benchmarks
     clang-tidy             # static analysis: the lint-tidy.* tests (.clang-tidy, README "Static analysis")
+    clang libclang-rt-14-dev   # the asan preset's compiler (half GCC's CPU time for that build) and the fuzz preset
     stress-ng              # the soak: a load on the other core (ugvsense soak --load-other-core)
     procps python3         # pgrep (run command, service tests), python3 (the fake systemd notify socket in a test)
     qemu-user              # an older x86-64 CPU for the CPU-level check's test (and aarch64 for cross.sh)

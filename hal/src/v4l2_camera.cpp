@@ -29,7 +29,7 @@ int realClose(void* /*context*/, int fd)
 {
     return ::close(fd);
 }
-// NOLINTNEXTLINE(google-runtime-int): ioctl(2)'s request type
+// ioctl(2)'s request type is unsigned long
 int realIoctl(void* /*context*/, int fd, unsigned long request, void* arg)
 {
     return ::ioctl(fd, request, arg);

@@ -28,7 +28,7 @@
 #include "ugv/tool/args.hpp"
 #include "ugv/tool/commands.hpp"
 
-// NOLINTNEXTLINE(readability-redundant-declaration,cppcoreguidelines-avoid-non-const-global-variables): POSIX's
+// NOLINTNEXTLINE(cppcoreguidelines-avoid-non-const-global-variables): POSIX's
 extern char** environ; // posix_spawnp's environment
 
 namespace ugv::tool {

@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -428,12 +429,20 @@ TEST(DdsTwoProcess, EveryTypeRoundTripsWithAllFields)
     bool all = false;
     while (!all && std::chrono::steady_clock::now() < until) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        all = poll(*rSectors, gotSectors, got[0]) & poll(*rHealth, gotHealth, got[1]) & poll(*rPose, gotPose, got[2]) &
-              poll(*rObservation, gotObservation, got[3]) & poll(*rUav, gotUav, got[4]) &
-              poll(*rConfirmation, gotConfirmation, got[5]) & poll(*rCorrection, gotCorrection, got[6]) &
-              poll(*rCorrelated, gotCorrelated, got[7]) & poll(*rScan, gotScan, got[8]) &
-              poll(*rCloud, gotCloud, got[9]) & poll(*rGraph, gotGraph, got[10]) &
-              poll(*rClearScan, gotClearScan, got[11]);
+        // Every reader is polled in each round (a braced list is evaluated in order, without short-circuit).
+        const bool polled[] = {poll(*rSectors, gotSectors, got[0]),
+                               poll(*rHealth, gotHealth, got[1]),
+                               poll(*rPose, gotPose, got[2]),
+                               poll(*rObservation, gotObservation, got[3]),
+                               poll(*rUav, gotUav, got[4]),
+                               poll(*rConfirmation, gotConfirmation, got[5]),
+                               poll(*rCorrection, gotCorrection, got[6]),
+                               poll(*rCorrelated, gotCorrelated, got[7]),
+                               poll(*rScan, gotScan, got[8]),
+                               poll(*rCloud, gotCloud, got[9]),
+                               poll(*rGraph, gotGraph, got[10]),
+                               poll(*rClearScan, gotClearScan, got[11])};
+        all = std::all_of(std::begin(polled), std::end(polled), [](bool p) { return p; });
     }
     ::kill(child, SIGTERM);
     int status = 0;

@@ -11,6 +11,18 @@
 
 #include "alloc_counter.hpp"
 
+// GCC names a sanitizer build by a macro, clang by __has_feature.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define UGV_TEST_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define UGV_TEST_SANITIZED 1
+#endif
+#endif
+#ifndef UGV_TEST_SANITIZED
+#define UGV_TEST_SANITIZED 0
+#endif
+
 namespace {
 
 int gLockFlags = 0;
@@ -71,7 +83,7 @@ TEST(LockMemory, RefusedMalloptDegradesToOneWarning)
 
 TEST(LockMemory, RealCallsLockOrDegrade)
 {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if UGV_TEST_SANITIZED
     GTEST_SKIP() << "mlockall(MCL_CURRENT) would try to lock the sanitizer's terabytes of shadow memory";
 #else
     const auto sut = ugv::rt::lockMemory();
@@ -178,7 +190,7 @@ void* faultThread(void* arg)
 
 TEST(PrefaultStack, TouchedStackTakesNoFaultsLater)
 {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if UGV_TEST_SANITIZED
     GTEST_SKIP() << "sanitizers move stack frames to their own fake stacks and shadow memory";
 #else
     const long withoutPrefault = faultsOnFreshStack(false);

@@ -41,7 +41,7 @@ namespace ugv::hal {
 struct V4l2Ops {
     int (*open)(void* context, const char* path, int flags) = nullptr;
     int (*close)(void* context, int fd) = nullptr;
-    // NOLINTNEXTLINE(google-runtime-int): ioctl(2)'s request type
+    // ioctl(2)'s request type is unsigned long
     int (*ioctl)(void* context, int fd, unsigned long request, void* arg) = nullptr;
     void* (*mmap)(void* context, std::size_t length, int fd, std::int64_t offset) = nullptr; ///< MAP_FAILED on error
     int (*munmap)(void* context, void* address, std::size_t length) = nullptr;
