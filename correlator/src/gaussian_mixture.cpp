@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -84,6 +85,34 @@ std::array<Gaussian2, K> weightedFit(std::span<const Eigen::Vector2d> points,
     return g;
 }
 
+/// The start of EM: the responsibilities of a split at the median along the major axis of `one`, by rank: the
+/// first half of the points in that order (ties by index) against the rest. A split by value would put every point
+/// equal to the median on one side, and a track whose fixes repeat one position would start with an empty
+/// component and never split. `r0` and `r1` have one entry per point.
+void splitAtMedian(std::span<const Eigen::Vector2d> points, const Gaussian2& one, std::vector<double>& r0,
+                   std::vector<double>& r1)
+{
+    const std::size_t n = points.size();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(one.cov);
+    const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+    std::vector<double> along(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        along[i] = axis.dot(points[i] - one.mean);
+    }
+    std::vector<std::size_t> order(n);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    const auto half = static_cast<std::ptrdiff_t>(n / 2);
+    std::nth_element(order.begin(), order.begin() + half, order.end(), [&along](std::size_t a, std::size_t b) {
+        return along[a] < along[b] || (along[a] == along[b] && a < b);
+    });
+    std::fill(r0.begin(), r0.end(), 0.0);
+    std::fill(r1.begin(), r1.end(), 1.0);
+    for (auto it = order.begin(); it != order.begin() + half; ++it) {
+        r0[*it] = 1.0;
+        r1[*it] = 0.0;
+    }
+}
+
 } // namespace
 
 Gaussian2 fitOne(std::span<const Eigen::Vector2d> points, double minSigmaM)
@@ -106,22 +135,9 @@ MixtureFit fitMixture(std::span<const Eigen::Vector2d> points, const MixtureConf
     if (n < static_cast<std::size_t>(std::max(config.minPointsToSplit, 2 * config.minComponentPoints))) {
         return fit;
     }
-    // Start: split at the median along the major axis.
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(fit.g[0].cov);
-    const Eigen::Vector2d axis = eig.eigenvectors().col(1);
-    std::vector<double> along(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        along[i] = axis.dot(points[i] - fit.g[0].mean);
-    }
-    std::vector<double> sorted = along;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(n / 2), sorted.end());
-    const double median = sorted[n / 2];
     std::vector<double> r0(n);
     std::vector<double> r1(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        r0[i] = along[i] < median ? 1.0 : 0.0;
-        r1[i] = 1.0 - r0[i];
-    }
+    splitAtMedian(points, fit.g[0], r0, r1);
     std::array<Gaussian2, 2> g = weightedFit<2>(points, {r0, r1}, config.minSigmaM);
     double logLikTwo = 0.0;
     for (int it = 0; it < config.maxIterations; ++it) {
@@ -161,8 +177,14 @@ MixtureFit fitMixture(std::span<const Eigen::Vector2d> points, const MixtureConf
     const Eigen::Matrix2d pooled = 0.5 * (g[0].cov + g[1].cov);
     const Eigen::Vector2d d = g[1].mean - g[0].mean;
     const double separation = std::sqrt(d.dot(pooled.inverse() * d));
-    if (bicTwo < bicOne && g[0].count >= config.minComponentPoints && g[1].count >= config.minComponentPoints &&
-        separation >= config.minSeparationSigmas) {
+    // The points each component explains, counted whole (responsibility at least one half): a soft count of
+    // exactly minComponentPoints points is that number give or take a rounding error, which would decide the
+    // split differently on another compiler.
+    const auto explainedByFirst =
+        static_cast<int>(std::count_if(r0.begin(), r0.end(), [](double r) { return r >= 0.5; }));
+    const int explainedBySecond = static_cast<int>(n) - explainedByFirst;
+    if (bicTwo < bicOne && explainedByFirst >= config.minComponentPoints &&
+        explainedBySecond >= config.minComponentPoints && separation >= config.minSeparationSigmas) {
         fit.components = 2;
         g[0].weight = g[0].count / static_cast<double>(n);
         g[1].weight = g[1].count / static_cast<double>(n);

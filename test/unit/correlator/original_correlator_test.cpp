@@ -170,8 +170,8 @@ TEST(OriginalCorrelator, ConfirmationStartsFromTheClassAndFollowsConfirms)
 TEST(OriginalCorrelator, MergedObjectsInheritTheConfirmationAndMergedIdsStillConfirm)
 {
     const Scene scene;
-    // ugv-2's three early fixes must stay below the size of a track's second component: at exactly
-    // minComponentPoints (3) their soft count (3 minus a rounding error, or not) would decide it by the compiler.
+    // ugv-2's three early fixes must stay below the size of a track's second component, or its track would keep
+    // them apart as a component of their own (GaussianMixture.AComponentOfExactlyTheMinimumPointsIsKept).
     OriginalConfig config;
     config.mixture.minComponentPoints = 4;
     OriginalCorrelator sut(config);

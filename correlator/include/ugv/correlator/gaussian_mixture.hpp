@@ -35,7 +35,8 @@ struct MixtureConfig {
 };
 
 /// Fits `points` with one component, and with two when there are enough points; keeps two only when the BIC
-/// prefers them, each explains at least minComponentPoints points, and their means are well separated.
+/// prefers them, each explains at least minComponentPoints points (points whose responsibility for it is at least
+/// one half), and their means are well separated.
 [[nodiscard]] MixtureFit fitMixture(std::span<const Eigen::Vector2d> points, const MixtureConfig& config = {});
 
 /// One Gaussian by moments of the points (the covariance regularised by minSigmaM).
