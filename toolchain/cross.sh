@@ -44,30 +44,15 @@ sysroot_packages=(
     libgtest-dev libgmock-dev libbenchmark-dev
 )
 
-as_root() {
-    if [ "$(id -u)" -eq 0 ]; then "$@"
-    elif command -v sudo >/dev/null; then sudo "$@"
-    else echo "cross.sh: need root to install packages: run as root or install sudo" >&2; exit 1; fi
-}
+script=cross.sh
+# shellcheck source=toolchain/apt.sh
+source toolchain/apt.sh
 
 phase_start=0
 phase() { echo "== $*"; phase_start=$(date +%s); }
 phase_done() { echo "== $1: $(( $(date +%s) - phase_start )) s wall"; }
 
-deps() {
-    local missing=()
-    for p in "${host_packages[@]}"; do
-        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-    done
-    if [ ${#missing[@]} -eq 0 ]; then
-        echo "cross.sh: all ${#host_packages[@]} host packages present"
-        return
-    fi
-    echo "cross.sh: installing ${missing[*]}"
-    as_root apt-get update -q
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
-        -o DPkg::Lock::Timeout=600 "${missing[@]}"
-}
+deps() { install_missing "${host_packages[@]}"; }
 
 # Absolute symlinks inside the sysroot (libfoo.so -> /lib/aarch64-linux-gnu/libfoo.so.1) would point at the host's
 # files: make them relative, inside the sysroot.

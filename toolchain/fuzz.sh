@@ -27,12 +27,13 @@ while [ $# -gt 0 ]; do
 done
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 
-for p in clang libclang-rt-14-dev; do
-    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
-        echo "fuzz.sh: $p is missing: apt-get install clang libclang-rt-14-dev (or run toolchain/host.sh deps)" >&2
-        exit 1
-    fi
-done
+script=fuzz.sh
+# shellcheck source=toolchain/apt.sh
+source toolchain/apt.sh
+if [ -n "$(missing_packages clang libclang-rt-14-dev)" ]; then
+    echo "fuzz.sh: clang or libclang-rt-14-dev is missing: apt-get install clang libclang-rt-14-dev (or run toolchain/host.sh deps)" >&2
+    exit 1
+fi
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 cmake --preset fuzz "${launcher[@]}" >/dev/null

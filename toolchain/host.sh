@@ -34,26 +34,11 @@ packages=(
     systemd dpkg-dev file adduser util-linux   # systemd-analyze (unit tests), the .deb (CPack: dpkg-shlibdeps, file), its test
 )
 
-as_root() {
-    if [ "$(id -u)" -eq 0 ]; then "$@"
-    elif command -v sudo >/dev/null; then sudo "$@"
-    else echo "host.sh: need root to install packages: run as root or install sudo" >&2; exit 1; fi
-}
+script=host.sh
+# shellcheck source=toolchain/apt.sh
+source toolchain/apt.sh
 
-deps() {
-    local missing=()
-    for p in "${packages[@]}"; do
-        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-    done
-    if [ ${#missing[@]} -eq 0 ]; then
-        echo "host.sh: all ${#packages[@]} Debian packages present"
-        return
-    fi
-    echo "host.sh: installing ${missing[*]}"
-    as_root apt-get update -q
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
-        -o DPkg::Lock::Timeout=600 "${missing[@]}"
-}
+deps() { install_missing "${packages[@]}"; }
 
 build() {
     local preset=$1

@@ -283,10 +283,7 @@ int MobileTracker::create(OoiClass cls, const Eigen::Vector2d& z, const Eigen::M
     const int index = static_cast<int>(mobiles_.size());
     Mobile created;
     ObjectIds::Issued issued = ids.issue(false, index);
-    created.id = std::move(issued.id);
-    created.order = issued.order;
-    created.cls = cls;
-    created.state = rules::initialState(cls);
+    rules::identify(created, std::move(issued.id), issued.order, cls);
     created.x << z, 0.0, 0.0;
     created.p.setZero();
     created.p.topLeftCorner<2, 2>() = r;

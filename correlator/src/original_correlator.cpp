@@ -156,10 +156,7 @@ bool OriginalCorrelator::sameStatic(const Gaussian2& a, const Gaussian2& b) cons
 int OriginalCorrelator::createStatic(OoiClass cls)
 {
     StaticObject created;
-    created.id = newId();
-    created.order = nextId_;
-    created.cls = cls;
-    created.state = rules::initialState(cls);
+    rules::identify(created, newId(), nextId_, cls);
     const int index = static_cast<int>(staticObjects_.size());
     idIndex_[created.id] = {true, index};
     staticObjects_.push_back(std::move(created));
@@ -349,10 +346,7 @@ void OriginalCorrelator::addMobile(const Observation& o, const Eigen::Vector2d& 
 int OriginalCorrelator::createMobile(OoiClass cls)
 {
     MobileObject created;
-    created.id = newId();
-    created.order = nextId_;
-    created.cls = cls;
-    created.state = rules::initialState(cls);
+    rules::identify(created, newId(), nextId_, cls);
     const int index = static_cast<int>(mobileObjects_.size());
     idIndex_[created.id] = {false, index};
     mobileObjects_.push_back(std::move(created));

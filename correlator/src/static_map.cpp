@@ -252,10 +252,7 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
             best = static_cast<int>(objects_.size());
             StaticObject created;
             ObjectIds::Issued issued = ids.issue(true, best);
-            created.id = std::move(issued.id);
-            created.order = issued.order;
-            created.cls = o.cls;
-            created.state = rules::initialState(o.cls);
+            rules::identify(created, std::move(issued.id), issued.order, o.cls);
             created.firstT = o.t;
             objects_.push_back(std::move(created));
         }
@@ -486,10 +483,7 @@ void StaticMap::split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids)
         newIndex = static_cast<int>(objects_.size());
         StaticObject created;
         ObjectIds::Issued issued = ids.issue(true, newIndex);
-        created.id = std::move(issued.id);
-        created.order = issued.order;
-        created.cls = objects_[j].cls;
-        created.state = objects_[j].state;
+        rules::identify(created, std::move(issued.id), issued.order, objects_[j].cls, objects_[j].state);
         objects_.push_back(std::move(created));
     }
     StaticObject& moved = objects_[static_cast<std::size_t>(newIndex)];

@@ -202,17 +202,22 @@ Result<void, Error> startSide(Side& side, const std::string& name, double fps)
     return {};
 }
 
+std::string describe(const LibcameraOptions& options)
+{
+    const std::string first = "libcamera " + (options.leftId.empty() ? "first camera" : options.leftId);
+    return options.oneCamera    ? first + " (one camera)"
+           : options.sideBySide ? first + " (side by side)"
+                                : "libcamera " + (options.leftId.empty() ? "camera 0" : options.leftId) + " + " +
+                                      (options.rightId.empty() ? "camera 1" : options.rightId);
+}
+
 } // namespace
 
-LibcameraStereoCamera::LibcameraStereoCamera(const LibcameraOptions& options) : options_(options)
+LibcameraStereoCamera::LibcameraStereoCamera(const LibcameraOptions& options)
+    : DeviceStereoCamera(options.colour, options.width, options.height, options.fps, describe(options)),
+      options_(options)
 {
     options_.sideBySide = options.sideBySide && !options.oneCamera;
-    period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
-    const std::string first = "libcamera " + (options.leftId.empty() ? "first camera" : options.leftId);
-    description_ = options.oneCamera    ? first + " (one camera)"
-                   : options.sideBySide ? first + " (side by side)"
-                                        : "libcamera " + (options.leftId.empty() ? "camera 0" : options.leftId) +
-                                              " + " + (options.rightId.empty() ? "camera 1" : options.rightId);
 }
 
 LibcameraStereoCamera::~LibcameraStereoCamera()
@@ -415,7 +420,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     const auto skewNs = static_cast<std::int64_t>(options_.maxPairSkewMs * 1e6);
     for (;;) {
         if (im.left.failed.load() || (stereo && im.right.failed.load())) {
-            ++stats_.disconnects;
+            ++counters().disconnects;
             return GrabStatus::Disconnected;
         }
         if (im.left.pending == nullptr) {
@@ -447,7 +452,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     const libcamera::FrameBuffer* leftBuffer = im.left.pending->findBuffer(im.left.stream);
     const unsigned sequence = leftBuffer != nullptr ? leftBuffer->metadata().sequence : 0U;
     if (im.left.haveSequence && sequence > im.left.lastSequence + 1) {
-        stats_.sequenceGaps += sequence - im.left.lastSequence - 1;
+        counters().sequenceGaps += sequence - im.left.lastSequence - 1;
     }
     im.left.haveSequence = true;
     im.left.lastSequence = sequence;
@@ -460,7 +465,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
         out.rightStampNs = sensorStamp(im.left, im.left.pending);
     } else {
         out.rightStampNs = 0; // one camera: a left-only frame
-        ++stats_.leftOnlyFrames;
+        ++counters().leftOnlyFrames;
     }
     out.leftStampNs = sensorStamp(im.left, im.left.pending);
     out.sequence = sequence;
@@ -469,7 +474,7 @@ GrabStatus LibcameraStereoCamera::grab(CameraFrame& out, std::chrono::nanosecond
     im.left.pending = nullptr;
     im.right.delivered = im.right.pending;
     im.right.pending = nullptr;
-    ++stats_.frames;
+    ++counters().frames;
     return GrabStatus::Frame;
 }
 

@@ -68,30 +68,6 @@ RecordingWriter::RecordingWriter(int fd, std::string path, PixelFormat format, s
 {
 }
 
-RecordingWriter::RecordingWriter(RecordingWriter&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), path_(std::move(other.path_)), format_(other.format_), width_(other.width_),
-      height_(other.height_), sync_(other.sync_), frames_(other.frames_), endBytes_(other.endBytes_),
-      record_(std::move(other.record_))
-{
-}
-
-RecordingWriter& RecordingWriter::operator=(RecordingWriter&& other) noexcept
-{
-    if (this != &other) {
-        (void)close();
-        fd_ = std::exchange(other.fd_, -1);
-        path_ = std::move(other.path_);
-        format_ = other.format_;
-        width_ = other.width_;
-        height_ = other.height_;
-        sync_ = other.sync_;
-        frames_ = other.frames_;
-        endBytes_ = other.endBytes_;
-        record_ = std::move(other.record_);
-    }
-    return *this;
-}
-
 RecordingWriter::~RecordingWriter()
 {
     (void)close();
@@ -151,7 +127,7 @@ Result<RecordingWriter, Error> RecordingWriter::create(const std::string& path, 
 Result<void, SysError> RecordingWriter::append(std::uint64_t sequence, std::int64_t leftStampNs,
                                                std::int64_t rightStampNs, const StereoViews& images) noexcept
 {
-    if (fd_ < 0) {
+    if (!fd_.valid()) {
         return Unexpected(SysError{EBADF});
     }
     std::byte* out = record_.data() + sizeof(RecordPrefix);
@@ -162,17 +138,17 @@ Result<void, SysError> RecordingWriter::append(std::uint64_t sequence, std::int6
     prefix.frameBytes = static_cast<std::uint32_t>(record_.size() - sizeof(RecordPrefix));
     prefix.crc = crc32(0, out, prefix.frameBytes);
     std::memcpy(record_.data(), &prefix, sizeof(prefix));
-    if (auto written = writeAll(fd_, record_.data(), record_.size()); !written) {
+    if (auto written = writeAll(fd_.get(), record_.data(), record_.size()); !written) {
         // Part of the record may be on disk (a full disk takes what fits): cut the file back to the last complete
         // record, so that it stays readable to its end and a later append starts on a record boundary.
         const auto end = static_cast<off_t>(endBytes_);
-        (void)sysCall(::ftruncate, fd_, end);
-        (void)::lseek(fd_, end, SEEK_SET);
+        (void)sysCall(::ftruncate, fd_.get(), end);
+        (void)::lseek(fd_.get(), end, SEEK_SET);
         return written;
     }
     endBytes_ += record_.size(); // complete in the file (a failed sync below does not tear it)
     if (sync_) {
-        if (auto synced = sysCall(::fdatasync, fd_); !synced) {
+        if (auto synced = sysCall(::fdatasync, fd_.get()); !synced) {
             return Unexpected(synced.error());
         }
     }
@@ -182,10 +158,10 @@ Result<void, SysError> RecordingWriter::append(std::uint64_t sequence, std::int6
 
 Result<void, SysError> RecordingWriter::close() noexcept
 {
-    if (fd_ < 0) {
+    if (!fd_.valid()) {
         return {};
     }
-    const int fd = std::exchange(fd_, -1);
+    const int fd = fd_.release();
     auto synced = sysCall(::fdatasync, fd);
     const int closed = ::close(fd); // never retried: the descriptor is gone either way
     if (!synced) {
@@ -203,44 +179,6 @@ RecordingReader::RecordingReader(int fd, RecordingInfo info, std::uint64_t first
     : fd_(fd), info_(std::move(info)), firstRecord_(firstRecord), fileBytes_(fileBytes), offset_(firstRecord),
       frameBytes_(packedFrameBytes(info_.format, info_.width, info_.height)), frame_(frameBytes_)
 {
-}
-
-RecordingReader::RecordingReader(RecordingReader&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), info_(std::move(other.info_)), firstRecord_(other.firstRecord_),
-      fileBytes_(other.fileBytes_), offset_(other.offset_), frameBytes_(other.frameBytes_),
-      frame_(std::move(other.frame_)), current_(other.current_), peeked_(other.peeked_), framesRead_(other.framesRead_),
-      corrupt_(other.corrupt_), trailing_(other.trailing_), lastError_(other.lastError_)
-{
-}
-
-RecordingReader& RecordingReader::operator=(RecordingReader&& other) noexcept
-{
-    if (this != &other) {
-        if (fd_ >= 0) {
-            ::close(fd_);
-        }
-        fd_ = std::exchange(other.fd_, -1);
-        info_ = std::move(other.info_);
-        firstRecord_ = other.firstRecord_;
-        fileBytes_ = other.fileBytes_;
-        offset_ = other.offset_;
-        frameBytes_ = other.frameBytes_;
-        frame_ = std::move(other.frame_);
-        current_ = other.current_;
-        peeked_ = other.peeked_;
-        framesRead_ = other.framesRead_;
-        corrupt_ = other.corrupt_;
-        trailing_ = other.trailing_;
-        lastError_ = other.lastError_;
-    }
-    return *this;
-}
-
-RecordingReader::~RecordingReader()
-{
-    if (fd_ >= 0) {
-        ::close(fd_);
-    }
 }
 
 Result<RecordingReader, Error> RecordingReader::open(const std::string& path)
@@ -306,7 +244,7 @@ ssize_t RecordingReader::readFully(std::byte* out, std::size_t size) noexcept
 {
     std::size_t got = 0;
     while (got < size) {
-        auto n = sysCall(::pread, fd_, out + got, size - got, static_cast<off_t>(offset_ + got));
+        auto n = sysCall(::pread, fd_.get(), out + got, size - got, static_cast<off_t>(offset_ + got));
         if (!n) {
             lastError_ = n.error();
             return -1;

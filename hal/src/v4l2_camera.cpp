@@ -72,6 +72,14 @@ bool disconnectError(int code)
     return code == ENODEV || code == EIO || code == ENXIO || code == EBADF;
 }
 
+std::string describe(const V4l2Options& options)
+{
+    const bool sideBySide = !options.oneCamera && options.rightDevice.empty();
+    return options.oneCamera ? "v4l2 " + options.leftDevice + " (one camera)"
+           : sideBySide      ? "v4l2 " + options.leftDevice + " (side by side)"
+                             : "v4l2 " + options.leftDevice + " + " + options.rightDevice;
+}
+
 } // namespace
 
 V4l2Ops realV4l2Ops() noexcept
@@ -79,7 +87,9 @@ V4l2Ops realV4l2Ops() noexcept
     return V4l2Ops{realOpen, realClose, realIoctl, realMmap, realMunmap, realPoll, nullptr};
 }
 
-V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops) : options_(options), ops_(ops)
+V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops)
+    : DeviceStereoCamera(options.colour, options.width, options.height, options.fps, describe(options)),
+      options_(options), ops_(ops)
 {
     if (options.colour) {
         leftBgr_ = Image<BgrPixel>(options.width, options.height);
@@ -88,11 +98,7 @@ V4l2StereoCamera::V4l2StereoCamera(const V4l2Options& options, V4l2Ops ops) : op
         leftGrey_ = Image<std::uint8_t>(options.width, options.height);
         rightGrey_ = Image<std::uint8_t>(options.width, options.height);
     }
-    period_ = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / options.fps)));
     sideBySide_ = !options.oneCamera && options.rightDevice.empty();
-    description_ = options.oneCamera ? "v4l2 " + options.leftDevice + " (one camera)"
-                   : sideBySide_     ? "v4l2 " + options.leftDevice + " (side by side)"
-                                     : "v4l2 " + options.leftDevice + " + " + options.rightDevice;
 }
 
 V4l2StereoCamera::~V4l2StereoCamera()
@@ -314,7 +320,7 @@ GrabStatus V4l2StereoCamera::dequeue(Device& device, int timeoutMs) noexcept
     }
     device.held = static_cast<int>(buf.index);
     if (device.haveSequence && buf.sequence > device.lastSequence + 1) {
-        stats_.sequenceGaps += buf.sequence - device.lastSequence - 1;
+        counters().sequenceGaps += buf.sequence - device.lastSequence - 1;
     }
     device.haveSequence = true;
     device.lastSequence = buf.sequence;
@@ -322,7 +328,7 @@ GrabStatus V4l2StereoCamera::dequeue(Device& device, int timeoutMs) noexcept
     const std::size_t needed = static_cast<std::size_t>(device.stride) * static_cast<std::size_t>(options_.height);
     if ((buf.flags & V4L2_BUF_FLAG_ERROR) != 0 || buf.bytesused < needed) {
         requeue(device);
-        ++stats_.badFrames;
+        ++counters().badFrames;
         return GrabStatus::BadFrame;
     }
     return GrabStatus::Frame;
@@ -392,7 +398,7 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
     if (const GrabStatus s = dequeue(left_, timeoutMs); s != GrabStatus::Frame) {
         if (s == GrabStatus::Disconnected) {
             connected_ = false;
-            ++stats_.disconnects;
+            ++counters().disconnects;
         }
         return s;
     }
@@ -402,7 +408,7 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
         out.rightStampNs = stampNs(left_.last);
     } else if (!leftOnly) {
         // The right frame is due within a period (and the skew) of the left one.
-        const auto periodMs = static_cast<int>(period_.count() / 1'000'000);
+        const auto periodMs = static_cast<int>(period().count() / 1'000'000);
         const int pairWaitMs = std::min(timeoutMs, periodMs + static_cast<int>(std::ceil(options_.maxPairSkewMs)));
         const GrabStatus s = pairRight(pairWaitMs);
         if (s == GrabStatus::BadFrame || left_.held < 0) {
@@ -423,9 +429,9 @@ GrabStatus V4l2StereoCamera::grab(CameraFrame& out, std::chrono::nanoseconds tim
     out.images = images(leftOnly);
     if (leftOnly) {
         out.rightStampNs = 0;
-        ++stats_.leftOnlyFrames;
+        ++counters().leftOnlyFrames;
     }
-    ++stats_.frames;
+    ++counters().frames;
     return GrabStatus::Frame;
 }
 
@@ -451,14 +457,14 @@ GrabStatus V4l2StereoCamera::pairRight(int timeoutMs) noexcept
                 requeue(right_);
                 if (s == GrabStatus::Disconnected) {
                     connected_ = false;
-                    ++stats_.disconnects;
+                    ++counters().disconnects;
                 }
             }
             return s; // the left camera's failure leaves left_.held < 0
         }
     }
     if (std::llabs(stampNs(left_.last) - stampNs(right_.last)) > skewNs) {
-        ++stats_.badFrames;
+        ++counters().badFrames;
         return GrabStatus::BadFrame;
     }
     return GrabStatus::Frame;

@@ -414,31 +414,39 @@ std::string Bus::writerIdentity(const fdds::SampleInfo& info) const
     return identities_ == nullptr ? std::string() : identities_->identity(info.sample_identity.writer_guid());
 }
 
-Error Bus::wrongType(TopicId id) const
+Error Bus::topicError(TopicId id, std::string what, std::string securedFix) const
 {
-    return Error{"dds topic " + topicName(id, config_), "a writer or reader of another type", "a bug"};
+    return Error{"dds topic " + topicName(id, config_), std::move(what),
+                 config_.security.enabled ? std::move(securedFix) : std::string("a bug")};
 }
 
-fdds::Topic* Bus::topic(TopicId id, MakeType make)
+Error Bus::wrongType(TopicId id) const
+{
+    return topicError(id, "a writer or reader of another type", "a bug");
+}
+
+Result<fdds::Topic*, Error> Bus::topic(TopicId id, MakeType make)
 {
     fdds::Topic*& t = topics_[static_cast<std::size_t>(id)];
     if (t == nullptr) {
         fdds::TypeSupport type(make());
-        if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
-            return nullptr;
+        if (type.register_type(participant_) == ReturnCode_t::RETCODE_OK) {
+            t = participant_->create_topic(topicName(id, config_), type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
         }
-        t = participant_->create_topic(topicName(id, config_), type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    }
+    if (t == nullptr) {
+        return Unexpected(topicError(id, "cannot create the topic", "a bug"));
     }
     return t;
 }
 
 Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
 {
-    const TopicSpec& s = spec(id);
-    fdds::Topic* t = topic(id, make);
-    if (t == nullptr) {
-        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the topic", "a bug"});
+    const auto t = topic(id, make);
+    if (!t) {
+        return Unexpected(t.error());
     }
+    const TopicSpec& s = spec(id);
     fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
     TopicSpec chosen = s;
     chosen.reliable = s.ros && !s.graph ? config_.rosReliable : s.reliable;
@@ -447,31 +455,28 @@ Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
         q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100'000'000);
         q.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0, 100'000'000);
     }
-    fdds::DataWriter* w = (s.ros ? rosPublisher_ : publisher_)->create_datawriter(t, q);
+    fdds::DataWriter* w = (s.ros ? rosPublisher_ : publisher_)->create_datawriter(*t, q);
     if (w == nullptr) {
-        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the writer",
-                                config_.security.enabled ? "does the signed permissions document allow this "
-                                                           "participant to write it in its own partition?"
-                                                         : "a bug"});
+        return Unexpected(topicError(id, "cannot create the writer",
+                                     "does the signed permissions document allow this participant to write it in "
+                                     "its own partition?"));
     }
     return w;
 }
 
 Result<fdds::DataReader*, Error> Bus::makeReader(TopicId id, MakeType make)
 {
-    const TopicSpec& s = spec(id);
-    fdds::Topic* t = topic(id, make);
-    if (t == nullptr) {
-        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the topic", "a bug"});
+    const auto t = topic(id, make);
+    if (!t) {
+        return Unexpected(t.error());
     }
     fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
-    applyCommon(q, s);
-    fdds::DataReader* r = (s.ros ? rosSubscriber_ : subscriber_)->create_datareader(t, q);
+    applyCommon(q, spec(id));
+    fdds::DataReader* r = (spec(id).ros ? rosSubscriber_ : subscriber_)->create_datareader(*t, q);
     if (r == nullptr) {
-        return Unexpected(Error{"dds topic " + topicName(id, config_), "cannot create the reader",
-                                config_.security.enabled ? "does the signed permissions document allow this "
-                                                           "participant to read it?"
-                                                         : "a bug"});
+        return Unexpected(topicError(id, "cannot create the reader",
+                                     "does the signed permissions document allow this participant "
+                                     "to read it?"));
     }
     return r;
 }

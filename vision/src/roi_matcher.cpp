@@ -154,25 +154,26 @@ HalfPlane toHalf(double a, double b, double c, int top) noexcept
 
 } // namespace
 
+void RoiMatcher::givePlane(PlaneSetter set, double a, double b, double c) noexcept
+{
+    ((*census_).*set)(a, b, c - a * pad_); // padded column x_p = x + pad_
+    if (halfCensus_) {
+        const HalfPlane h = toHalf(a, b, c, halfTop_);
+        ((*halfCensus_).*set)(h.a, h.b, h.c);
+    }
+}
+
 void RoiMatcher::setGroundPrior(double a, double b, double c) noexcept
 {
     if (census_ && config_.groundPrior) {
-        census_->setGroundPrior(a, b, c - a * pad_); // padded column x_p = x + pad_
-        if (halfCensus_) {
-            const HalfPlane h = toHalf(a, b, c, halfTop_);
-            halfCensus_->setGroundPrior(h.a, h.b, h.c);
-        }
+        givePlane(&CensusSgm::setGroundPrior, a, b, c);
     }
 }
 
 void RoiMatcher::setSearchFloor(double a, double b, double c) noexcept
 {
     if (census_ && config_.groundRange) {
-        census_->setSearchFloor(a, b, c - a * pad_); // padded column x_p = x + pad_
-        if (halfCensus_) {
-            const HalfPlane h = toHalf(a, b, c, halfTop_);
-            halfCensus_->setSearchFloor(h.a, h.b, h.c);
-        }
+        givePlane(&CensusSgm::setSearchFloor, a, b, c);
     }
 }
 

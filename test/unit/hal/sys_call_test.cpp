@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstring>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -72,6 +73,37 @@ TEST(SysCall, UnknownErrnoHasFallbackStrings)
 
     EXPECT_STREQ(kOdd.name(), "errno");
     EXPECT_STREQ(kOdd.text(), "unknown error");
+}
+
+bool isOpen(int fd)
+{
+    return ::fcntl(fd, F_GETFD) != -1;
+}
+
+TEST(UniqueFd, ClosesWhenDestroyedOrAssignedOverAndAMoveLeavesTheSourceEmpty)
+{
+    int ends[2] = {-1, -1};
+    ASSERT_EQ(::pipe(ends), 0);
+    {
+        UniqueFd a(ends[0]);
+        UniqueFd b(ends[1]);
+        UniqueFd moved(std::move(a));
+        EXPECT_FALSE(a.valid()); // the moved-from state
+        EXPECT_EQ(moved.get(), ends[0]);
+        moved = std::move(b); // closes ends[0]
+        EXPECT_FALSE(isOpen(ends[0]));
+        EXPECT_TRUE(isOpen(ends[1]));
+        EXPECT_EQ(moved.get(), ends[1]);
+    }
+    EXPECT_FALSE(isOpen(ends[1])); // closed by the destructor
+
+    ASSERT_EQ(::pipe(ends), 0);
+    UniqueFd kept(ends[0]);
+    const int released = kept.release();
+    EXPECT_FALSE(kept.valid());
+    EXPECT_TRUE(isOpen(released)); // release() gives it up unclosed
+    EXPECT_EQ(::close(released), 0);
+    EXPECT_EQ(::close(ends[1]), 0);
 }
 
 } // namespace

@@ -39,12 +39,7 @@ public:
         double speedSigma = 0.0;                      ///< [m/s]
         double width = 0.0;                           ///< [m] rms distance of the history from the line
     };
-    struct Mobile {
-        std::string id;
-        std::uint64_t order = 0;
-        OoiClass cls = OoiClass::Mobile;
-        Confirmation state = Confirmation::Unknown;
-        bool alive = true;
+    struct Mobile : rules::Identity {
         Eigen::Vector4d x = Eigen::Vector4d::Zero(); ///< east, north, v_east, v_north
         Eigen::Matrix4d p = Eigen::Matrix4d::Identity();
         double t = 0.0;

@@ -32,6 +32,7 @@
 #include "ugv/correlator/gaussian_mixture.hpp"
 #include "ugv/correlator/geodesy.hpp"
 #include "ugv/correlator/messages.hpp"
+#include "ugv/correlator/rules.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 
@@ -81,12 +82,7 @@ private:
         std::array<int, 2> object{-1, -1}; ///< object index of each component
         bool retired = false;
     };
-    struct StaticObject {
-        std::string id;
-        std::uint64_t order = 0;
-        OoiClass cls = OoiClass::Static;
-        Confirmation state = Confirmation::Unknown;
-        bool alive = true;
+    struct StaticObject : rules::Identity {
         Gaussian2 estimate;
         std::vector<std::pair<int, int>> members; ///< (track index, component)
     };
@@ -96,12 +92,7 @@ private:
         int object = -1;
         double lastT = 0.0;
     };
-    struct MobileObject {
-        std::string id;
-        std::uint64_t order = 0;
-        OoiClass cls = OoiClass::Mobile;
-        Confirmation state = Confirmation::Unknown;
-        bool alive = true;
+    struct MobileObject : rules::Identity {
         Eigen::Vector2d pos = Eigen::Vector2d::Zero();
         double lastT = 0.0;
         int observations = 0;

@@ -1,8 +1,10 @@
 #pragma once
 
 // Rules both correlator modes share (internal): which classes move, the initial confirmation, its inheritance on
-// merges, track keys, a published object's common fields, and the non-combatant alerts of a snapshot.
+// merges, an object's identity, track keys, a published object's common fields, and the non-combatant alerts of a
+// snapshot.
 
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,6 +35,27 @@ inline Confirmation initialState(OoiClass c) noexcept
 inline Confirmation inherit(Confirmation kept, Confirmation absorbed) noexcept
 {
     return kept == Confirmation::Unknown ? absorbed : kept;
+}
+
+/// What every correlated object carries, in both modes and of both kinds: its published id, its creation order (a
+/// merge keeps the earlier), class, confirmation, and whether it is still an object of its own (false once merged).
+struct Identity {
+    std::string id;
+    std::uint64_t order = 0;
+    OoiClass cls = OoiClass::Static;
+    Confirmation state = Confirmation::Unknown;
+    bool alive = true;
+};
+
+/// Gives a new object its identity: the id and order as issued, its class, and `state` (by default the class's
+/// initial confirmation).
+inline void identify(Identity& object, std::string id, std::uint64_t order, OoiClass cls)
+{
+    object = Identity{std::move(id), order, cls, initialState(cls), true};
+}
+inline void identify(Identity& object, std::string id, std::uint64_t order, OoiClass cls, Confirmation state)
+{
+    object = Identity{std::move(id), order, cls, state, true};
 }
 
 inline std::string trackKey(const std::string& ugv, const std::string& track)

@@ -80,12 +80,7 @@ public:
         /// splits off again, it gets that object's id back (the merge is undone, not a new object made).
         int origin = -1;
     };
-    struct StaticObject {
-        std::string id;
-        std::uint64_t order = 0;
-        OoiClass cls = OoiClass::Static;
-        Confirmation state = Confirmation::Unknown;
-        bool alive = true;
+    struct StaticObject : rules::Identity {
         Eigen::Vector2d mean = Eigen::Vector2d::Zero();
         Eigen::Matrix2d info = Eigen::Matrix2d::Zero(); ///< sum of inverse covariances
         Eigen::Vector2d infoMean = Eigen::Vector2d::Zero();

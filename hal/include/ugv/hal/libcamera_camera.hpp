@@ -43,7 +43,7 @@ struct LibcameraOptions {
     double maxPairSkewMs = 5.0;
 };
 
-class LibcameraStereoCamera final : public StereoCamera {
+class LibcameraStereoCamera final : public DeviceStereoCamera {
 public:
     /// Starts a CameraManager, acquires and configures the camera(s) and starts streaming. Errors: no camera, too
     /// few cameras, an id not found, a size or format the camera cannot deliver, a camera in use.
@@ -56,15 +56,6 @@ public:
 
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;
-    [[nodiscard]] PixelFormat format() const noexcept override
-    {
-        return options_.colour ? PixelFormat::Bgr8 : PixelFormat::Grey8;
-    }
-    [[nodiscard]] int width() const noexcept override { return options_.width; }
-    [[nodiscard]] int height() const noexcept override { return options_.height; }
-    [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
-    [[nodiscard]] CameraStats stats() const noexcept override { return stats_; }
-    [[nodiscard]] const char* description() const noexcept override { return description_.c_str(); }
 
     struct Impl;
 
@@ -74,9 +65,6 @@ private:
     void stop() noexcept;
 
     LibcameraOptions options_;
-    std::chrono::nanoseconds period_{};
-    std::string description_;
-    CameraStats stats_{};
     std::unique_ptr<Impl> impl_;
 };
 

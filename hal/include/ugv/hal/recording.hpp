@@ -87,8 +87,9 @@ public:
     static Result<RecordingWriter, Error> create(const std::string& path, std::uint32_t width, std::uint32_t height,
                                                  const std::string& calibrationText,
                                                  const RecordingWriterOptions& options = {});
-    RecordingWriter(RecordingWriter&& other) noexcept;
-    RecordingWriter& operator=(RecordingWriter&& other) noexcept;
+    RecordingWriter(RecordingWriter&& other) noexcept = default;
+    /// Not assignable: assigning over a writer would close its file unsynced; close() it and create another.
+    RecordingWriter& operator=(RecordingWriter&& other) = delete;
     RecordingWriter(const RecordingWriter&) = delete;
     RecordingWriter& operator=(const RecordingWriter&) = delete;
     ~RecordingWriter();
@@ -111,7 +112,7 @@ public:
 private:
     RecordingWriter(int fd, std::string path, PixelFormat format, std::uint32_t width, std::uint32_t height, bool sync);
 
-    int fd_ = -1;
+    UniqueFd fd_;
     std::string path_;
     PixelFormat format_ = PixelFormat::Grey8;
     std::uint32_t width_ = 0;
@@ -143,11 +144,11 @@ public:
     /// @return the reader, or an error naming the file, what is wrong (not a recording, unknown version, corrupt
     /// header, truncated header) and the fix.
     static Result<RecordingReader, Error> open(const std::string& path);
-    RecordingReader(RecordingReader&& other) noexcept;
-    RecordingReader& operator=(RecordingReader&& other) noexcept;
+    RecordingReader(RecordingReader&& other) noexcept = default;
+    RecordingReader& operator=(RecordingReader&& other) noexcept = default;
     RecordingReader(const RecordingReader&) = delete;
     RecordingReader& operator=(const RecordingReader&) = delete;
-    ~RecordingReader();
+    ~RecordingReader() = default;
 
     [[nodiscard]] const RecordingInfo& info() const noexcept { return info_; }
 
@@ -178,7 +179,7 @@ private:
     /// After a damaged prefix at offset_: moves offset_ to the next record magic; false at the end of the file.
     bool resync() noexcept;
 
-    int fd_ = -1;
+    UniqueFd fd_;
     RecordingInfo info_;
     std::uint64_t firstRecord_ = 0;
     std::uint64_t fileBytes_ = 0;

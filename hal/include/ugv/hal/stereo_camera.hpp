@@ -13,7 +13,10 @@
 /// wait for the next frame, bounded by its timeout.
 
 #include <chrono>
+#include <cmath>
 #include <cstdint>
+#include <string>
+#include <utility>
 
 #include "ugv/platform/frame_header.hpp"
 #include "ugv/platform/image_view.hpp"
@@ -73,6 +76,36 @@ public:
     [[nodiscard]] virtual CameraStats stats() const noexcept = 0;
     /// "replay /path/rec.ugvrec", "v4l2 /dev/video0+/dev/video1", ...
     [[nodiscard]] virtual const char* description() const noexcept = 0;
+};
+
+/// What the device backends (V4L2, libcamera) share: the format and size they were configured with, the nominal
+/// period of the requested rate, their counters and description.
+class DeviceStereoCamera : public StereoCamera {
+public:
+    [[nodiscard]] PixelFormat format() const noexcept final { return format_; }
+    [[nodiscard]] int width() const noexcept final { return width_; }
+    [[nodiscard]] int height() const noexcept final { return height_; }
+    [[nodiscard]] std::chrono::nanoseconds period() const noexcept final { return period_; }
+    [[nodiscard]] CameraStats stats() const noexcept final { return stats_; }
+    [[nodiscard]] const char* description() const noexcept final { return description_.c_str(); }
+
+protected:
+    /// BGR frames with `colour`, else grey; `fps` > 0 (the backends' options are checked before).
+    DeviceStereoCamera(bool colour, int width, int height, double fps, std::string description)
+        : format_(colour ? PixelFormat::Bgr8 : PixelFormat::Grey8), width_(width), height_(height),
+          period_(static_cast<std::int64_t>(std::llround(1e9 / fps))), description_(std::move(description))
+    {
+    }
+    /// The counters the backend keeps up to date.
+    [[nodiscard]] CameraStats& counters() noexcept { return stats_; }
+
+private:
+    PixelFormat format_;
+    int width_;
+    int height_;
+    std::chrono::nanoseconds period_;
+    std::string description_;
+    CameraStats stats_{};
 };
 
 } // namespace ugv::hal

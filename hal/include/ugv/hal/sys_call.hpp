@@ -12,6 +12,8 @@
 #include <cstdint>
 #include <utility>
 
+#include <unistd.h>
+
 #include "ugv/platform/result.hpp"
 
 namespace ugv::hal {
@@ -43,5 +45,41 @@ auto sysCall(F&& f, Args&&... args) noexcept -> Result<decltype(f(std::forward<A
         }
     }
 }
+
+/// An owned file descriptor: closed when destroyed or assigned over, moved (the source left empty), not copied.
+/// Close errors are not reported: a file whose data must be on disk is synced and closed by its owner first
+/// (RecordingWriter::close).
+class UniqueFd {
+public:
+    UniqueFd() noexcept = default;
+    explicit UniqueFd(int fd) noexcept : fd_(fd) {}
+    UniqueFd(UniqueFd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
+    UniqueFd& operator=(UniqueFd&& other) noexcept
+    {
+        if (this != &other) {
+            reset();
+            fd_ = std::exchange(other.fd_, -1);
+        }
+        return *this;
+    }
+    UniqueFd(const UniqueFd&) = delete;
+    UniqueFd& operator=(const UniqueFd&) = delete;
+    ~UniqueFd() { reset(); }
+
+    [[nodiscard]] int get() const noexcept { return fd_; }
+    [[nodiscard]] bool valid() const noexcept { return fd_ >= 0; }
+    /// Gives the descriptor up without closing it.
+    [[nodiscard]] int release() noexcept { return std::exchange(fd_, -1); }
+    /// Closes the descriptor, if any.
+    void reset() noexcept
+    {
+        if (fd_ >= 0) {
+            ::close(std::exchange(fd_, -1)); // never retried: the descriptor is gone either way
+        }
+    }
+
+private:
+    int fd_ = -1;
+};
 
 } // namespace ugv::hal

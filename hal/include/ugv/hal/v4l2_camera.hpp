@@ -68,7 +68,7 @@ struct V4l2Options {
     double maxPairSkewMs = 5; ///< left/right stamps further apart are not a pair
 };
 
-class V4l2StereoCamera final : public StereoCamera {
+class V4l2StereoCamera final : public DeviceStereoCamera {
 public:
     /// Opens and starts the device(s). Errors name the device, the failed step and errno, and the fix.
     static Result<std::unique_ptr<V4l2StereoCamera>, Error> open(const V4l2Options& options,
@@ -82,15 +82,6 @@ public:
     GrabStatus grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept override;
     bool reconnect() noexcept override;
     [[nodiscard]] bool rightLost() const noexcept override { return rightLost_; }
-    [[nodiscard]] PixelFormat format() const noexcept override
-    {
-        return options_.colour ? PixelFormat::Bgr8 : PixelFormat::Grey8;
-    }
-    [[nodiscard]] int width() const noexcept override { return options_.width; }
-    [[nodiscard]] int height() const noexcept override { return options_.height; }
-    [[nodiscard]] std::chrono::nanoseconds period() const noexcept override { return period_; }
-    [[nodiscard]] CameraStats stats() const noexcept override { return stats_; }
-    [[nodiscard]] const char* description() const noexcept override { return description_.c_str(); }
     /// Frames dequeued but not paired (the other camera's frame was too far away in time).
     [[nodiscard]] std::uint64_t unpaired() const noexcept { return unpaired_; }
 
@@ -137,8 +128,6 @@ private:
 
     V4l2Options options_;
     V4l2Ops ops_;
-    std::chrono::nanoseconds period_{};
-    std::string description_;
     Device left_;
     Device right_;
     bool sideBySide_ = false;
@@ -148,7 +137,6 @@ private:
     Image<std::uint8_t> rightGrey_;
     Image<BgrPixel> leftBgr_; ///< empty without `colour`
     Image<BgrPixel> rightBgr_;
-    CameraStats stats_{};
     std::uint64_t unpaired_ = 0;
     bool connected_ = false;
 };

@@ -297,8 +297,11 @@ private:
     {
         return id == home || (home == TopicId::RosScan && id == TopicId::RosClearScan);
     }
+    /// An error of topic `id`: the fix is `securedFix` on a secured bus (the permissions), else "a bug".
+    [[nodiscard]] Error topicError(TopicId id, std::string what, std::string securedFix) const;
     [[nodiscard]] Error wrongType(TopicId id) const;
-    eprosima::fastdds::dds::Topic* topic(TopicId id, MakeType make);
+    /// The topic of `id`, created with its type on first use.
+    Result<eprosima::fastdds::dds::Topic*, Error> topic(TopicId id, MakeType make);
     Result<eprosima::fastdds::dds::DataWriter*, Error> makeWriter(TopicId id, MakeType make);
     Result<eprosima::fastdds::dds::DataReader*, Error> makeReader(TopicId id, MakeType make);
 

@@ -147,6 +147,10 @@ public:
 
 private:
     RoiMatcher() = default;
+    using PlaneSetter = void (CensusSgm::*)(double, double, double) noexcept;
+    /// Calls `set` of the census matchers with the plane a x + b y + c of ROI coordinates in each one's own: padded
+    /// columns at full resolution, the half-resolution rows' pixels. Needs census_.
+    void givePlane(PlaneSetter set, double a, double b, double c) noexcept;
 
     RoiMatcherConfig config_;
     cv::Size roiSize_;
