@@ -5,9 +5,6 @@
 // RSS growth after warm-up (the first window is the warm-up: the baseline is the RSS at its end), with
 // --max-rss-growth-kb as a check (exit 3 when exceeded).
 
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,15 +18,12 @@
 #include <string>
 #include <vector>
 
-#include "ugv/hal/sys_call.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/rt/memory.hpp"
 #include "ugv/service/runner.hpp"
 #include "ugv/tool/args.hpp"
 #include "ugv/tool/commands.hpp"
-
-// NOLINTNEXTLINE(cppcoreguidelines-avoid-non-const-global-variables): POSIX's
-extern char** environ; // posix_spawnp's environment
+#include "ugv/tool/other_core_load.hpp"
 
 namespace ugv::tool {
 namespace {
@@ -44,56 +38,6 @@ int fail(const Error& error)
     std::cerr << "ugvsense soak: error: " << error.message() << '\n';
     return 1;
 }
-
-/// `stress-ng --cpu 1 --taskset CPU` for the length of the soak: started by start(), ended by the destructor.
-class OtherCoreLoad {
-public:
-    OtherCoreLoad() = default;
-    OtherCoreLoad(const OtherCoreLoad&) = delete;
-    OtherCoreLoad& operator=(const OtherCoreLoad&) = delete;
-    OtherCoreLoad(OtherCoreLoad&&) = delete;
-    OtherCoreLoad& operator=(OtherCoreLoad&&) = delete;
-    ~OtherCoreLoad()
-    {
-        if (pid_ > 0) {
-            ::kill(pid_, SIGTERM);
-            int status = 0;
-            ::waitpid(pid_, &status, 0);
-        }
-    }
-
-    Result<void, Error> start(int cpu, double seconds)
-    {
-        const std::string cpuText = std::to_string(cpu);
-        const std::string timeout = std::to_string(static_cast<std::int64_t>(seconds) + 60) + "s";
-        std::vector<std::string> words{"stress-ng", "--cpu",     "1",     "--taskset",
-                                       cpuText,     "--timeout", timeout, "--quiet"};
-        std::vector<char*> argv;
-        argv.reserve(words.size() + 1);
-        for (std::string& word : words) {
-            argv.push_back(word.data());
-        }
-        argv.push_back(nullptr);
-        const int rc = ::posix_spawnp(&pid_, "stress-ng", nullptr, nullptr, argv.data(), environ);
-        if (rc != 0) {
-            pid_ = 0;
-            return Unexpected(Error{"stress-ng", std::string("cannot start it: ") + hal::SysError{rc}.text(),
-                                    "install it (apt-get install stress-ng; toolchain/host.sh deps does), or leave "
-                                    "out --load-other-core"});
-        }
-        return {};
-    }
-
-    /// True while the load still runs (it must last the whole soak).
-    bool running()
-    {
-        int status = 0;
-        return pid_ > 0 && ::waitpid(pid_, &status, WNOHANG) == 0;
-    }
-
-private:
-    pid_t pid_ = 0;
-};
 
 struct Window {
     double endS = 0.0;
