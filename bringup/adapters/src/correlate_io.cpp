@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -124,33 +125,33 @@ Result<std::string, Error> text(const json& j, const char* key)
     return it->get<std::string>();
 }
 
+/// The one of `values` whose name (toString, the output's spelling) is `s`: names are written once.
+template <class E, std::size_t N>
+std::optional<E> byName(const std::string& s, const std::array<E, N>& values)
+{
+    for (const E v : values) {
+        if (s == toString(v)) {
+            return v;
+        }
+    }
+    return std::nullopt;
+}
+
 Result<OoiClass, Error> ooiClass(const std::string& s)
 {
-    if (s == "static") {
-        return OoiClass::Static;
-    }
-    if (s == "mobile") {
-        return OoiClass::Mobile;
-    }
-    if (s == "noncombatant") {
-        return OoiClass::NonCombatant;
-    }
-    if (s == "unknown") {
-        return OoiClass::Unknown;
+    constexpr std::array kClasses{OoiClass::Static, OoiClass::Mobile, OoiClass::NonCombatant, OoiClass::Unknown};
+    if (const auto c = byName(s, kClasses)) {
+        return *c;
     }
     return Unexpected(lineError("unknown class '" + s + "'", "use static, mobile, noncombatant or unknown"));
 }
 
 Result<Confirmation, Error> confirmation(const std::string& s)
 {
-    if (s == "unknown") {
-        return Confirmation::Unknown;
-    }
-    if (s == "confirmed_positive") {
-        return Confirmation::ConfirmedPositive;
-    }
-    if (s == "confirmed_negative") {
-        return Confirmation::ConfirmedNegative;
+    constexpr std::array kStates{Confirmation::Unknown, Confirmation::ConfirmedPositive,
+                                 Confirmation::ConfirmedNegative};
+    if (const auto c = byName(s, kStates)) {
+        return *c;
     }
     return Unexpected(lineError("unknown state '" + s + "'", "use unknown, confirmed_positive or confirmed_negative"));
 }
@@ -221,6 +222,16 @@ public:
         }
         return *v;
     }
+    /// `text` as an object class or a confirmation state; a bad one is kept as the error.
+    OoiClass classOf(const std::string& text) { return kept(ooiClass(text), OoiClass::Static); }
+    Confirmation stateOf(const std::string& text) { return kept(confirmation(text), Confirmation::Unknown); }
+    /// Keeps the error of a position outside the globe's ranges.
+    void checkLatLon(double lat, double lon, const char* what)
+    {
+        if (auto ok = latLon(lat, lon, what); !ok) {
+            keep(ok.error());
+        }
+    }
     void keep(Error e)
     {
         if (!error_) {
@@ -228,8 +239,27 @@ public:
         }
     }
     [[nodiscard]] const std::optional<Error>& error() const { return error_; }
+    /// `m` as a message, or the first error of the reads and checks.
+    template <class M>
+    Result<Message, Error> message(M m) const
+    {
+        if (error_) {
+            return Unexpected(*error_);
+        }
+        return Message{std::move(m)};
+    }
 
 private:
+    template <class T>
+    T kept(Result<T, Error> v, T fallback)
+    {
+        if (!v) {
+            keep(v.error());
+            return fallback;
+        }
+        return *v;
+    }
+
     const json& j_;
     std::optional<Error> error_;
 };
@@ -247,18 +277,9 @@ Result<Message, Error> observation(const json& j)
     o.ugvHeadingDeg = f.num("ugv_heading_deg");
     o.rangeM = f.num("range_m");
     o.bearingDeg = f.num("bearing_deg");
-    if (f.error()) {
-        return Unexpected(*f.error());
-    }
-    auto c = ooiClass(cls);
-    if (!c) {
-        return Unexpected(c.error());
-    }
-    o.cls = *c;
-    if (auto ok = latLon(o.ugvLat, o.ugvLon, "ugv"); !ok) {
-        return Unexpected(ok.error());
-    }
-    return Message{o};
+    o.cls = f.classOf(cls);
+    f.checkLatLon(o.ugvLat, o.ugvLon, "ugv");
+    return f.message(o);
 }
 
 Result<Message, Error> uav(const json& j)
@@ -269,18 +290,9 @@ Result<Message, Error> uav(const json& j)
     const std::string cls = f.str("class");
     u.lat = f.num("lat");
     u.lon = f.num("lon");
-    if (f.error()) {
-        return Unexpected(*f.error());
-    }
-    auto c = ooiClass(cls);
-    if (!c) {
-        return Unexpected(c.error());
-    }
-    u.cls = *c;
-    if (auto ok = latLon(u.lat, u.lon, "uav"); !ok) {
-        return Unexpected(ok.error());
-    }
-    return Message{u};
+    u.cls = f.classOf(cls);
+    f.checkLatLon(u.lat, u.lon, "uav");
+    return f.message(u);
 }
 
 Result<Message, Error> confirm(const json& j)
@@ -289,16 +301,8 @@ Result<Message, Error> confirm(const json& j)
     Confirm c;
     c.t = f.num("t");
     c.id = f.str("id");
-    const std::string state = f.str("state");
-    if (f.error()) {
-        return Unexpected(*f.error());
-    }
-    auto s = confirmation(state);
-    if (!s) {
-        return Unexpected(s.error());
-    }
-    c.state = *s;
-    return Message{c};
+    c.state = f.stateOf(f.str("state"));
+    return f.message(c);
 }
 
 Result<Message, Error> poseCorrection(const json& j)
@@ -312,13 +316,10 @@ Result<Message, Error> poseCorrection(const json& j)
     p.dEastM = f.num("d_east_m");
     p.dNorthM = f.num("d_north_m");
     p.dHeadingDeg = f.num("d_heading_deg");
-    if (f.error()) {
-        return Unexpected(*f.error());
-    }
     if (p.untilT < p.sinceT) {
-        return Unexpected(lineError("until_t is before since_t"));
+        f.keep(lineError("until_t is before since_t"));
     }
-    return Message{p};
+    return f.message(p);
 }
 
 json objectJson(const ObjectEstimate& o)
