@@ -18,8 +18,10 @@ setsid fastdds discovery -i 0 -l 127.0.0.1 -p "$port" >"$work/server.log" 2>&1 &
 server=$!
 sleep 1
 kill -0 "$server" 2>/dev/null || fail "the discovery server did not start"
-"$tool" correlate-sim --ugvs 2 --duration 30 --out "$work/obs.jsonl" >/dev/null || fail "correlate-sim"
-n=$(grep -c '"kind":"observation"' "$work/obs.jsonl")
+"$tool" correlate-sim --ugvs 2 --duration 30 --out "$work/scenario.jsonl" >/dev/null || fail "correlate-sim"
+# The observations only: bus-send waits for a reader of each topic it sends, and the listener reads this one.
+grep '"kind":"observation"' "$work/scenario.jsonl" >"$work/obs.jsonl"
+n=$(wc -l <"$work/obs.jsonl")
 opts=(--domain "$domain" --discovery-server "127.0.0.1:$port")
 "$tool" listen observations "${opts[@]}" --count "$n" --timeout 60 >"$work/listen.out" 2>"$work/listen.log" &
 listener=$!

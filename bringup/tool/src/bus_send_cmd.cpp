@@ -147,7 +147,11 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
         return fail(writers.error());
     }
     InputWriters& w = *writers;
-    bus::waitForReaders(w.observations, wait, dds::topicName(dds::TopicId::Observation, bus.config()), kCommand);
+    std::array<bool, 4> used{}; // the topics the input has lines for, in the writers' order (the variant's)
+    for (const Line& line : *lines) {
+        used[line.message.index()] = true;
+    }
+    w.waitForReaders(used, wait, bus.config(), kCommand);
     std::printf("sending %zu message(s) to %d reader(s)\n", lines->size(), w.observations.matched());
     (void)std::fflush(stdout);
     const auto start = Clock::now();
@@ -313,8 +317,8 @@ int runBusSend(int argc, char** argv)
         {"rate", "HZ", "--input: messages per second, default as fast as the writers accept; --poses: default 10",
          false},
         {"duration", "S", "--poses: how long, default 10", false},
-        {"wait-readers", "N", "wait for N readers of the observation (--poses: pose) topic before sending, default 1",
-         false},
+        {"wait-readers", "N",
+         "wait for N readers of each topic the input uses (--poses: the pose topic) before sending, default 1", false},
         {"wait-timeout", "S", "wait at most S seconds for them (then send anyway, with a warning), default 20", false},
         {"linger", "S", "stay S more seconds after the acknowledgements (late readers get the history)", false}};
     for (auto& spec : bus::options()) {

@@ -76,6 +76,26 @@ bool InputWriters::waitForAcks()
     return ok;
 }
 
+void InputWriters::waitForReaders(const std::array<bool, 4>& used, const ReaderWait& wait,
+                                  const ipc::dds::BusConfig& config, const std::string& command) const
+{
+    const auto until =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait.timeoutS));
+    using ipc::dds::TopicId;
+    if (used[0]) {
+        bus::waitForReaders(observations, wait, until, topicName(TopicId::Observation, config), command);
+    }
+    if (used[1]) {
+        bus::waitForReaders(uav, wait, until, topicName(TopicId::Uav, config), command);
+    }
+    if (used[2]) {
+        bus::waitForReaders(confirmations, wait, until, topicName(TopicId::Confirmation, config), command);
+    }
+    if (used[3]) {
+        bus::waitForReaders(corrections, wait, until, topicName(TopicId::PoseCorrection, config), command);
+    }
+}
+
 int finish(InputWriters& w, const std::string& command, const std::string& what, double lingerS,
            const ipc::dds::BusConfig& config)
 {

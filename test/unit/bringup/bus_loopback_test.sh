@@ -36,8 +36,9 @@ l1=$!; pids+=($l1)
 l2=$!; pids+=($l2)
 "$tool" listen pose_corrections --count "$n_cor" --timeout 30 "${bus[@]}" >"$work/cor.out" 2>"$work/cor.err" &
 l3=$!; pids+=($l3)
-# --linger: the uav and pose_corrections listeners may match after the observation reader bus-send waits for;
-# transient-local durability hands them the history while the sender lives.
+# bus-send waits for a reader of each topic the file uses (a CI mirror under load once matched the pose_corrections
+# listener only after bus-send had ended, when it waited for the observation reader alone); --linger keeps the
+# transient-local history for a reader that still comes late.
 out=$("$tool" bus-send --input "$work/obs.jsonl" --source gcs-test --linger 3 "${bus[@]}" 2>&1) || fail "bus-send: $out"
 echo "$out"
 grep -qE "sent $n_all message\(s\) \($n_obs observation\(s\), $n_uav UAV fix\(es\), 0 confirmation\(s\), $n_cor pose correction\(s\)\).*acknowledged by [1-9]" <<<"$out" ||

@@ -41,16 +41,14 @@ struct ReaderWait {
     double timeoutS = kDefaultWaitReadersS;
 };
 
-/// Waits up to wait.timeoutS for wait.readers matched readers of `writer`; a warning on stderr if fewer came.
+/// Waits until `until` for wait.readers matched readers of `writer`; a warning on stderr if fewer came.
 template <class T>
-void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, const std::string& topic,
-                    const std::string& command)
+void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, Clock::time_point until,
+                    const std::string& topic, const std::string& command)
 {
     if (wait.readers <= 0) {
         return;
     }
-    const auto until =
-        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait.timeoutS));
     while (writer.matched() < wait.readers && Clock::now() < until && !gStop.load()) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
@@ -59,6 +57,17 @@ void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, c
                   << " reader(s) of " << topic << " after " << wait.timeoutS
                   << " s; sending anyway (late reliable readers get the history while this process lives)\n";
     }
+}
+
+/// As above, for up to wait.timeoutS from now.
+template <class T>
+void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, const std::string& topic,
+                    const std::string& command)
+{
+    waitForReaders(writer, wait,
+                   Clock::now() +
+                       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait.timeoutS)),
+                   topic, command);
 }
 
 /// Writes one sample, retrying while Fast DDS refuses it (a full keep-all history: a reader is slow to
@@ -87,6 +96,11 @@ struct InputWriters {
     [[nodiscard]] std::uint64_t total() const { return sent[0] + sent[1] + sent[2] + sent[3]; }
     /// The most readers any used writer has.
     [[nodiscard]] int readers() const;
+    /// Waits for wait.readers readers of each topic marked in `used` (in the writers' order), all within
+    /// wait.timeoutS: a reader that matches only after the samples were written gets them from the writer's history
+    /// only while the sender lives.
+    void waitForReaders(const std::array<bool, 4>& used, const ReaderWait& wait, const ipc::dds::BusConfig& config,
+                        const std::string& command) const;
     /// Every used writer's samples acknowledged by all its matched reliable readers, within kAckTimeout in all.
     bool waitForAcks();
 };
