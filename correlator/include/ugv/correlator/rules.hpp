@@ -49,13 +49,13 @@ struct Identity {
 
 /// Gives a new object its identity: the id and order as issued, its class, and `state` (by default the class's
 /// initial confirmation).
-inline void identify(Identity& object, std::string id, std::uint64_t order, OoiClass cls)
-{
-    object = Identity{std::move(id), order, cls, initialState(cls), true};
-}
 inline void identify(Identity& object, std::string id, std::uint64_t order, OoiClass cls, Confirmation state)
 {
     object = Identity{std::move(id), order, cls, state, true};
+}
+inline void identify(Identity& object, std::string id, std::uint64_t order, OoiClass cls)
+{
+    identify(object, std::move(id), order, cls, initialState(cls));
 }
 
 inline std::string trackKey(const std::string& ugv, const std::string& track)
