@@ -15,6 +15,9 @@ namespace {
 /// Added to a static object's covariance: its observations share their UGVs' remaining pose errors, so it is
 /// never more certain than those (the information of independent observations would say centimetres).
 constexpr double kFloorSigmaM = 0.3;
+/// A new track takes an object from the track that keeps it out only if it fits the object's other tracks better by
+/// this much (chi-square: a likelihood ratio of e^0.5); a tie keeps the status quo (hysteresis).
+constexpr double kContestMargin = 1.0;
 constexpr double kSplitDistanceM = 2.0;        ///< track groups of one object at least this far apart may split
 constexpr double kMaxPriorObservations = 20.0; ///< a folded prior is worth at most this many observations
 constexpr int kTwoMeansIterations = 5;
@@ -240,29 +243,132 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
     }
     const int ti = it->second;
     noteInstant(ugv, ti, o.t);
-    Track& track = tracks_[static_cast<std::size_t>(ti)];
-    store(track, sample, poses.window(o.t));
+    store(tracks_[static_cast<std::size_t>(ti)], sample, poses.window(o.t));
     Eigen::Vector2d p;
     Eigen::Matrix2d cov;
     Eigen::Matrix2d measurementCov;
     poses.project(ugv, sample, p, &cov, &measurementCov);
-    if (track.object < 0) {
+    int displaced = -1;
+    if (tracks_[static_cast<std::size_t>(ti)].object < 0) {
         int best = associate(ugv, ti, p, cov, measurementCov);
         if (best < 0) {
-            best = static_cast<int>(objects_.size());
-            StaticObject created;
-            ObjectIds::Issued issued = ids.issue(true, best);
-            rules::identify(created, std::move(issued.id), issued.order, o.cls);
-            created.firstT = o.t;
-            objects_.push_back(std::move(created));
+            best = contest(ugv, ti, p, cov, measurementCov, poses, displaced);
         }
-        track.object = best;
-        track.origin = best;
-        objects_[static_cast<std::size_t>(best)].tracks.push_back(ti);
+        join(ti, best >= 0 ? best : create(o.cls, o.t, ids));
     }
-    StaticObject& object = objects_[static_cast<std::size_t>(track.object)];
+    StaticObject& object = objects_[static_cast<std::size_t>(tracks_[static_cast<std::size_t>(ti)].object)];
     fuse(object, p, cov, measurementCov);
     ++object.observations;
+    if (displaced >= 0) {
+        rehome(displaced, o.t, poses, ids);
+    }
+}
+
+int StaticMap::create(OoiClass cls, double t, ObjectIds& ids)
+{
+    const int index = static_cast<int>(objects_.size());
+    StaticObject created;
+    ObjectIds::Issued issued = ids.issue(true, index);
+    rules::identify(created, std::move(issued.id), issued.order, cls);
+    created.firstT = t;
+    objects_.push_back(std::move(created));
+    return index;
+}
+
+void StaticMap::join(int ti, int object)
+{
+    Track& track = tracks_[static_cast<std::size_t>(ti)];
+    track.object = object;
+    track.origin = object;
+    objects_[static_cast<std::size_t>(object)].tracks.push_back(ti);
+}
+
+StaticMap::TrackEstimate StaticMap::estimateOfTracks(const std::vector<int>& tracks, int except,
+                                                     const UgvPoseErrors& poses) const
+{
+    StaticObject all;
+    StaticObject unused;
+    for (const int ti : tracks) {
+        if (ti != except) {
+            fuseTrack(unused, all, tracks_[static_cast<std::size_t>(ti)], poses);
+        }
+    }
+    return estimateOf(all);
+}
+
+/// A close pair's posts seen one after the other: under the wide gates of unknown pose errors the first reading of
+/// the nearer post can join the object its neighbour founded; when one UGV then reports both at one instant, the
+/// neighbour's new track is kept out of its own object. Here it contends: an object kept from new track `ti` by one
+/// track `rival` alone (not the object's first track) goes to whichever of the two fits the object's other tracks
+/// better (Mahalanobis distance of the new reading, and of the rival's own estimate, by kContestMargin); the rival is
+/// displaced (rehome). The id stays with the evidence that founded it.
+int StaticMap::contest(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+                       const Eigen::Matrix2d& measurementCov, const UgvPoseErrors& poses, int& displaced) const
+{
+    int best = -1;
+    double bestD2 = config_.gateChi2;
+    const Track& track = tracks_[static_cast<std::size_t>(ti)];
+    for (const Apart& apart : track.apart) {
+        const int rival = apart.track;
+        const int j = tracks_[static_cast<std::size_t>(rival)].object;
+        if (j < 0) {
+            continue;
+        }
+        const StaticObject& so = objects_[static_cast<std::size_t>(j)];
+        const bool keptOutByRivalAlone = std::none_of(track.apart.begin(), track.apart.end(), [&](const Apart& a) {
+            return a.track != rival && tracks_[static_cast<std::size_t>(a.track)].object == j;
+        });
+        if (!so.alive || so.cls != track.cls || so.tracks.size() < 2 || so.tracks.front() == rival ||
+            !keptOutByRivalAlone) {
+            continue;
+        }
+        const TrackEstimate rest = estimateOfTracks(so.tracks, rival, poses);
+        const TrackEstimate theirs = estimateOfTracks({rival}, -1, poses);
+        if (!rest.valid || !theirs.valid) {
+            continue;
+        }
+        // Against tracks of this UGV alone, its pose error is common to both: measurement noise only.
+        const bool ownOnly = std::all_of(so.tracks.begin(), so.tracks.end(), [this, ugv, rival](int other) {
+            return other == rival || tracks_[static_cast<std::size_t>(other)].ugv == ugv;
+        });
+        const Eigen::Matrix2d restCov = ownOnly ? rest.measurementCov : Eigen::Matrix2d(rest.cov + floorCovariance());
+        const double mine = mahalanobis2(p - rest.mean, (ownOnly ? measurementCov : cov) + restCov);
+        const double rivals =
+            mahalanobis2(theirs.mean - rest.mean, (ownOnly ? theirs.measurementCov : theirs.cov) + restCov);
+        if (mine < bestD2 && mine + kContestMargin < rivals) {
+            best = j;
+            bestD2 = mine;
+            displaced = rival;
+        }
+    }
+    if (best < 0) {
+        displaced = -1;
+    }
+    return best;
+}
+
+void StaticMap::rehome(int ti, double t, const UgvPoseErrors& poses, ObjectIds& ids)
+{
+    Track& track = tracks_[static_cast<std::size_t>(ti)];
+    const auto recount = [this](StaticObject& so) {
+        so.observations = 0;
+        for (const int k : so.tracks) {
+            so.observations += tracks_[static_cast<std::size_t>(k)].seen;
+        }
+    };
+    std::vector<int>& left = objects_[static_cast<std::size_t>(track.object)].tracks;
+    left.erase(std::find(left.begin(), left.end(), ti));
+    recount(objects_[static_cast<std::size_t>(track.object)]);
+    refit(objects_[static_cast<std::size_t>(track.object)], poses);
+    const TrackEstimate own = estimateOfTracks({ti}, -1, poses);
+    int to = own.valid ? associate(track.ugv, ti, own.mean, own.cov, own.measurementCov) : -1;
+    if (to < 0) {
+        to = create(track.cls, t, ids);
+    }
+    join(ti, to);
+    StaticObject& joined = objects_[static_cast<std::size_t>(to)];
+    recount(joined);
+    refit(joined, poses);
 }
 
 void StaticMap::refit(StaticObject& object, const UgvPoseErrors& poses)

@@ -9,6 +9,10 @@
 ///   kApartInstants instants (one shared instant is often a clutter report beside a real one);
 /// - a new track joins the nearest object within the chi-square gate (Mahalanobis distance, the UGVs' pose
 ///   uncertainty included unless only its own UGV saw the object) and not seen apart from it, else starts one;
+/// - a new track kept out of an object by one track of its UGV alone (seen with it; not the object's first track)
+///   takes the object when it fits the object's other tracks clearly better than that track does, which moves to
+///   another object or starts one (a close pair's post that joined its neighbour first under wide gates): the id
+///   stays with the evidence that founded it;
 /// - a track whose own estimate lies outside its object's gate and inside another's (not seen apart from it) moves
 ///   there at the next rebuild (hard-assignment EM over tracks: a first reading decided its object);
 /// - split: an object whose tracks form two groups far apart (associated while the pose errors were unknown)
@@ -132,6 +136,20 @@ private:
     void store(Track& track, const RangeBearing& sample, int window);
     /// Records that track `ti` of UGV index `ugv` was observed at time t with the UGV's other tracks of that instant.
     void noteInstant(int ugv, int ti, double t);
+    /// A new static object of class `cls` first seen at t; its index.
+    int create(OoiClass cls, double t, ObjectIds& ids);
+    /// Track `ti` joins the object at index `object` (its first object: its origin).
+    void join(int ti, int object);
+    /// The estimate of `tracks` but `except` fused from their stored samples under `poses`.
+    [[nodiscard]] TrackEstimate estimateOfTracks(const std::vector<int>& tracks, int except,
+                                                 const UgvPoseErrors& poses) const;
+    /// The object new track `ti` (reading `p`) takes from the one track of its UGV seen with it that keeps it out,
+    /// which goes to `displaced` (see the .cpp), or -1.
+    [[nodiscard]] int contest(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
+                              const Eigen::Matrix2d& measurementCov, const UgvPoseErrors& poses, int& displaced) const;
+    /// Track `ti`, displaced from its object at time t, joins the nearest object within its gate not seen apart
+    /// from it, else starts one; both objects are re-fitted.
+    void rehome(int ti, double t, const UgvPoseErrors& poses, ObjectIds& ids);
     /// The alive object within the gate of `p` nearest to it and not seen apart from track `ti`, or -1.
     [[nodiscard]] int associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                                 const Eigen::Matrix2d& measurementCov) const;
