@@ -34,8 +34,6 @@ constexpr double kLineMinSpeedSigmaMps = 0.03; ///< people do not walk at an exa
 
 using History = std::vector<std::pair<double, Eigen::Vector2d>>;
 
-constexpr double kMadToSigma = 1.4826; ///< sigma of a normal distribution over its median absolute deviation
-
 double median(std::vector<double>& v)
 {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());

@@ -10,6 +10,8 @@
 #include <Eigen/LU>
 #include <Eigen/Sparse>
 
+#include "ugv/correlator/measurement_model.hpp"
+
 namespace ugv::correlator {
 namespace {
 
@@ -19,7 +21,6 @@ constexpr int kMinSamplesToSolve = 10;
 constexpr double kCommonOffsetPull = 0.01;
 constexpr double kWalkPriorFloor = 1e-4; ///< [m^2] keeps the random walk's prior finite without drift
 // Learnt noise (learnNoise).
-constexpr double kMadToSigma = 1.4826;            ///< sigma of a Gaussian over its median absolute deviation
 constexpr double kMaxNoiseScale = 5.0;            ///< the measured spread is trusted up to this x the configured one
 constexpr int kMinNoiseSamples = 30;              ///< fewer residuals of a UGV: the configured model
 constexpr int kMinNoiseObjectObservations = 6;    ///< objects seen this often give residuals

@@ -19,6 +19,10 @@ namespace ugv::correlator {
 
 inline constexpr double kRadPerDeg = kDegToRad; ///< the correlator's name of ugv::kDegToRad
 
+/// Sigma of a normal distribution over its median absolute deviation: the robust noise estimates (learnt noise,
+/// a walker's speed spread) scale a median by it.
+constexpr double kMadToSigma = 1.4826;
+
 /// One observation as stored: the UGV's reported pose and what it measured.
 struct RangeBearing {
     double t = 0.0;                                   ///< [s]
