@@ -9,6 +9,7 @@
 #include <random>
 #include <span>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Core>
@@ -851,11 +852,12 @@ Result<void, Error> validateOptions(const RenderOptions& o)
     const bool ok = o.samplesPerAxis >= 1 && o.samplesPerAxis <= 4 && o.roiTopFraction >= 0.0 &&
                     o.roiTopFraction < 1.0 && o.minHeightM >= 0.0 && o.minDepthM >= 0.0 && o.minVisibleDropM >= 0.0 &&
                     o.clearanceM > 0.0 && o.sectorCount >= 1 && o.sectorCount <= kMaxSectors &&
-                    o.dangerDistanceM >= 0.0F && o.cautionDistanceM >= o.dangerDistanceM;
+                    o.dangerDistanceM >= 0.0F && o.cautionDistanceM >= o.dangerDistanceM && o.threads >= 0 &&
+                    o.threads <= 64;
     if (!ok) {
         return Unexpected(Error{"sim render options", "out of range",
                                 "samplesPerAxis 1..4, roiTopFraction [0,1), sectorCount 1.." +
-                                    std::to_string(kMaxSectors) + ", caution >= danger >= 0"});
+                                    std::to_string(kMaxSectors) + ", caution >= danger >= 0, threads 0..64"});
     }
     return {};
 }
@@ -1012,7 +1014,70 @@ void compressJpeg(cv::Mat& image, int quality)
 // NOLINTNEXTLINE(cert-err58-cpp): a fixed-size Eigen vector neither allocates nor throws
 const Vector3d kLuma(0.114, 0.587, 0.299);
 
-/// Images: samplesPerAxis^2 stratified, jittered rays per pixel, then gains, gradient, vignetting, noise, JPEG.
+/// Runs rowBody(y) for every y in [0, rows), the rows dealt out in turn to `threads` threads (this one too; 0: one
+/// per core), all joined before it returns. Plain threads, not OpenCV's pool: Debian's OpenCV runs its pool on TBB,
+/// whose hand-offs ThreadSanitizer cannot see.
+template <typename RowBody>
+void forEachRow(int rows, int threads, const RowBody& rowBody)
+{
+    if (threads <= 0) {
+        threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1U, 64U));
+    }
+    const auto share = [&](int first) {
+        for (int y = first; y < rows; y += threads) {
+            rowBody(y);
+        }
+    };
+    std::vector<std::thread> workers;
+    workers.reserve(static_cast<std::size_t>(threads - 1));
+    for (int k = 1; k < threads; ++k) {
+        workers.emplace_back(share, k);
+    }
+    share(0);
+    for (std::thread& worker : workers) {
+        worker.join();
+    }
+}
+
+/// Each pixel's sums over its samplesPerAxis^2 stratified, jittered rays (grey, and BGR when `colour`), rows in
+/// parallel (forEachRow): every pixel is traced alone and the rays are deterministic (lattice jitter, no random draws),
+/// so the sums are the same for any number of threads.
+void traceView(const Tracer& tracer, const Scene& scene, const RenderOptions& options, int view, bool colour,
+               cv::Mat& greySums, cv::Mat& colourSums)
+{
+    const Rig& rig = scene.rig;
+    const int n = options.samplesPerAxis;
+    const Vector3d o = tracer.origin(view);
+    const auto jitterSeed = static_cast<std::uint32_t>(scene.seed * 7919U + static_cast<std::uint64_t>(view));
+    greySums.create(rig.height, rig.width, CV_64F);
+    colourSums.create(rig.height, rig.width, CV_64FC3);
+    forEachRow(rig.height, options.threads, [&](int y) {
+        auto* grey = greySums.ptr<double>(y);
+        auto* bgr = colourSums.ptr<cv::Vec3d>(y);
+        for (int x = 0; x < rig.width; ++x) {
+            double sum = 0.0;
+            Vector3d sumColour = Vector3d::Zero();
+            for (int k = 0; k < n * n; ++k) {
+                const int stratumColumn = k % n; // the sample's stratum in the n x n grid of the pixel
+                const int stratumRow = k / n;
+                const double jx = detail::lattice(x, y, 2 * k, jitterSeed);
+                const double jy = detail::lattice(x, y, 2 * k + 1, jitterSeed);
+                const double u = x - 0.5 + (stratumColumn + jx) / n;
+                const double v = y - 0.5 + (stratumRow + jy) / n;
+                RayContext ray{x, y, view};
+                ray.colour = colour;
+                const Radiance r = tracer.radiance(o, tracer.direction(u, v), 0.0, ray);
+                sum += r.grey;
+                sumColour += r.bgr;
+            }
+            grey[x] = sum;
+            bgr[x] = cv::Vec3d(sumColour.x(), sumColour.y(), sumColour.z());
+        }
+    });
+}
+
+/// Images: the rays of each pixel (traceView), then gains, gradient, vignetting, noise (drawn in pixel order, one
+/// thread), JPEG.
 void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions& options, RenderResult& out)
 {
     const Rig& rig = scene.rig;
@@ -1031,36 +1096,26 @@ void renderImages(const Tracer& tracer, const Scene& scene, const RenderOptions&
     if (options.rightColour) {
         out.rightColour.create(rig.height, rig.width, CV_8UC3);
     }
+    cv::Mat greySums;
+    cv::Mat colourSums;
     for (int view = 0; view < 2; ++view) {
         cv::Mat& img = view == 0 ? out.left : out.right;
         img.create(rig.height, rig.width, CV_8U);
-        const Vector3d o = tracer.origin(view);
         const double cameraGain = light.gain * (view == 0 ? 1.0 : light.rightGain);
         const double offset = light.offsetGrey + (view == 0 ? 0.0 : light.rightOffsetGrey); // [grey levels]
         const double vignette = view == 0 ? light.vignetteLeft : light.vignetteRight;
-        const auto jitterSeed = static_cast<std::uint32_t>(scene.seed * 7919U + static_cast<std::uint64_t>(view));
         // The right camera's colour draws its chroma noise after the left's: the left and grey images do not change.
         const bool colour = view == 0 || options.rightColour;
         cv::Mat& colourImg = view == 0 ? out.leftColour : out.rightColour;
+        traceView(tracer, scene, options, view, colour, greySums, colourSums);
         for (int y = 0; y < rig.height; ++y) {
             auto* row = img.ptr<std::uint8_t>(y);
             auto* colourRow = colour ? colourImg.ptr<cv::Vec3b>(y) : nullptr;
+            const auto* sums = greySums.ptr<double>(y);
+            const auto* colourSumRow = colourSums.ptr<cv::Vec3d>(y);
             for (int x = 0; x < rig.width; ++x) {
-                double sum = 0.0;
-                Vector3d sumColour = Vector3d::Zero();
-                for (int k = 0; k < n * n; ++k) {
-                    const int stratumColumn = k % n; // the sample's stratum in the n x n grid of the pixel
-                    const int stratumRow = k / n;
-                    const double jx = detail::lattice(x, y, 2 * k, jitterSeed);
-                    const double jy = detail::lattice(x, y, 2 * k + 1, jitterSeed);
-                    const double u = x - 0.5 + (stratumColumn + jx) / n;
-                    const double v = y - 0.5 + (stratumRow + jy) / n;
-                    RayContext ray{x, y, view};
-                    ray.colour = colour;
-                    const Radiance r = tracer.radiance(o, tracer.direction(u, v), 0.0, ray);
-                    sum += r.grey;
-                    sumColour += r.bgr;
-                }
+                const double sum = sums[x];
+                const Vector3d sumColour(colourSumRow[x][0], colourSumRow[x][1], colourSumRow[x][2]);
                 double gradient = 1.0 + light.gradientX * ((x - rig.cx()) / rig.width) +
                                   light.gradientY * ((y - rig.cy()) / rig.height);
                 if (vignette > 0.0) {

@@ -5,6 +5,10 @@
 /// ground truth (disparity, depth, label, obstacle id, height) and ground-truth obstacle sectors.
 /// The definition of the ground truth is in bringup/sim/README.md.
 ///
+/// The image rays run on every core (RenderOptions::threads, rows dealt out in turn); each pixel is traced alone and
+/// the noise is drawn in pixel order on one thread, so the images are the same bit for bit whatever the number of
+/// threads.
+///
 /// Thread-safety: reentrant (no shared state). RT-safe: no (host tooling; allocates the output images).
 
 #include <cstdint>
@@ -39,6 +43,7 @@ struct RenderOptions {
     float dangerDistanceM = 1.5F;  ///< [m] classify(): Red below this range
     float cautionDistanceM = 5.0F; ///< [m] classify(): Blue below this range
     bool rightColour = false;      ///< also the right camera in colour (RenderResult::rightColour: colour recordings)
+    int threads = 0; ///< threads tracing the image rays, 0..64; 0: one per core (the images do not depend on it)
 };
 
 /// One rendered stereo pair with its ground truth (all images rig.width x rig.height).
