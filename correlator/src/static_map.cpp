@@ -347,15 +347,17 @@ int StaticMap::contest(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::M
     return best;
 }
 
+void StaticMap::recount(StaticObject& object) const
+{
+    object.observations = 0;
+    for (const int ti : object.tracks) {
+        object.observations += tracks_[static_cast<std::size_t>(ti)].seen;
+    }
+}
+
 void StaticMap::rehome(int ti, double t, const UgvPoseErrors& poses, ObjectIds& ids)
 {
     Track& track = tracks_[static_cast<std::size_t>(ti)];
-    const auto recount = [this](StaticObject& so) {
-        so.observations = 0;
-        for (const int k : so.tracks) {
-            so.observations += tracks_[static_cast<std::size_t>(k)].seen;
-        }
-    };
     std::vector<int>& left = objects_[static_cast<std::size_t>(track.object)].tracks;
     left.erase(std::find(left.begin(), left.end(), ti));
     recount(objects_[static_cast<std::size_t>(track.object)]);
@@ -434,10 +436,7 @@ void StaticMap::reassignTracks(const UgvPoseErrors& poses)
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
     for (const int j : changed) {
         StaticObject& so = objects_[static_cast<std::size_t>(j)];
-        so.observations = 0;
-        for (const int ti : so.tracks) {
-            so.observations += tracks_[static_cast<std::size_t>(ti)].seen;
-        }
+        recount(so);
         refit(so, poses);
     }
 }
@@ -593,18 +592,14 @@ void StaticMap::split(std::size_t j, const UgvPoseErrors& poses, ObjectIds& ids)
         objects_.push_back(std::move(created));
     }
     StaticObject& moved = objects_[static_cast<std::size_t>(newIndex)];
-    moved.observations = 0;
     for (const int ti : leaving) {
         moved.tracks.push_back(ti);
         tracks_[static_cast<std::size_t>(ti)].object = newIndex;
-        moved.observations += tracks_[static_cast<std::size_t>(ti)].seen;
     }
+    recount(moved);
     StaticObject& kept = objects_[j];
     kept.tracks = std::move(stay);
-    kept.observations = 0;
-    for (const int ti : kept.tracks) {
-        kept.observations += tracks_[static_cast<std::size_t>(ti)].seen;
-    }
+    recount(kept);
     kept.priorInfo.setZero();
     refit(objects_[j], poses);
     refit(objects_[static_cast<std::size_t>(newIndex)], poses);

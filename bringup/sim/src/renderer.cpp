@@ -1028,15 +1028,12 @@ void forEachRow(int rows, int threads, const RowBody& rowBody)
             rowBody(y);
         }
     };
-    std::vector<std::thread> workers;
+    std::vector<std::jthread> workers; // joined when they go, also when starting one more throws
     workers.reserve(static_cast<std::size_t>(threads - 1));
     for (int k = 1; k < threads; ++k) {
         workers.emplace_back(share, k);
     }
     share(0);
-    for (std::thread& worker : workers) {
-        worker.join();
-    }
 }
 
 /// Each pixel's sums over its samplesPerAxis^2 stratified, jittered rays (grey, and BGR when `colour`), rows in

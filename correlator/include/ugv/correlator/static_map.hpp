@@ -147,6 +147,8 @@ private:
     /// which goes to `displaced` (see the .cpp), or -1.
     [[nodiscard]] int contest(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                               const Eigen::Matrix2d& measurementCov, const UgvPoseErrors& poses, int& displaced) const;
+    /// An object's observation count from its tracks' (after tracks moved).
+    void recount(StaticObject& object) const;
     /// Track `ti`, displaced from its object at time t, joins the nearest object within its gate not seen apart
     /// from it, else starts one; both objects are re-fitted.
     void rehome(int ti, double t, const UgvPoseErrors& poses, ObjectIds& ids);
