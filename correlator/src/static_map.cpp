@@ -206,6 +206,13 @@ bool StaticMap::seenApart(const StaticObject& x, int y) const
                        [this, y](int ti) { return trackSeenApart(ti, y, kApartInstants); });
 }
 
+bool StaticMap::onlySeenBy(const StaticObject& object, int ugv, int except) const
+{
+    return std::all_of(object.tracks.begin(), object.tracks.end(), [this, ugv, except](int ti) {
+        return ti == except || tracks_[static_cast<std::size_t>(ti)].ugv == ugv;
+    });
+}
+
 int StaticMap::associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                          const Eigen::Matrix2d& measurementCov) const
 {
@@ -217,9 +224,7 @@ int StaticMap::associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen:
             continue;
         }
         // Against an object only this UGV has seen, its pose error is common to both: measurement noise only.
-        const bool ownOnly = std::all_of(so.tracks.begin(), so.tracks.end(), [this, ugv](int other) {
-            return tracks_[static_cast<std::size_t>(other)].ugv == ugv;
-        });
+        const bool ownOnly = onlySeenBy(so, ugv);
         const Eigen::Matrix2d objectCov = ownOnly ? Eigen::Matrix2d(so.measurementInfo.inverse())
                                                   : Eigen::Matrix2d(so.info.inverse() + floorCovariance());
         const double d2 = mahalanobis2(p - so.mean, (ownOnly ? measurementCov : cov) + objectCov);
@@ -243,20 +248,21 @@ void StaticMap::add(const Observation& o, int ugv, const RangeBearing& sample, c
     }
     const int ti = it->second;
     noteInstant(ugv, ti, o.t);
-    store(tracks_[static_cast<std::size_t>(ti)], sample, poses.window(o.t));
+    Track& track = tracks_[static_cast<std::size_t>(ti)]; // tracks_ does not grow below (create and rehome add objects)
+    store(track, sample, poses.window(o.t));
     Eigen::Vector2d p;
     Eigen::Matrix2d cov;
     Eigen::Matrix2d measurementCov;
     poses.project(ugv, sample, p, &cov, &measurementCov);
     int displaced = -1;
-    if (tracks_[static_cast<std::size_t>(ti)].object < 0) {
+    if (track.object < 0) {
         int best = associate(ugv, ti, p, cov, measurementCov);
         if (best < 0) {
             best = contest(ugv, ti, p, cov, measurementCov, poses, displaced);
         }
         join(ti, best >= 0 ? best : create(o.cls, o.t, ids));
     }
-    StaticObject& object = objects_[static_cast<std::size_t>(tracks_[static_cast<std::size_t>(ti)].object)];
+    StaticObject& object = objects_[static_cast<std::size_t>(track.object)];
     fuse(object, p, cov, measurementCov);
     ++object.observations;
     if (displaced >= 0) {
@@ -328,9 +334,7 @@ int StaticMap::contest(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::M
             continue;
         }
         // Against tracks of this UGV alone, its pose error is common to both: measurement noise only.
-        const bool ownOnly = std::all_of(so.tracks.begin(), so.tracks.end(), [this, ugv, rival](int other) {
-            return other == rival || tracks_[static_cast<std::size_t>(other)].ugv == ugv;
-        });
+        const bool ownOnly = onlySeenBy(so, ugv, rival);
         const Eigen::Matrix2d restCov = ownOnly ? rest.measurementCov : Eigen::Matrix2d(rest.cov + floorCovariance());
         const double mine = mahalanobis2(p - rest.mean, (ownOnly ? measurementCov : cov) + restCov);
         const double rivals =

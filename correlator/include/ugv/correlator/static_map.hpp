@@ -152,6 +152,9 @@ private:
     /// Track `ti`, displaced from its object at time t, joins the nearest object within its gate not seen apart
     /// from it, else starts one; both objects are re-fitted.
     void rehome(int ti, double t, const UgvPoseErrors& poses, ObjectIds& ids);
+    /// Every track of `object` but `except` is one of UGV index `ugv`'s: against it that UGV's pose error is common,
+    /// and only measurement noise separates its readings.
+    [[nodiscard]] bool onlySeenBy(const StaticObject& object, int ugv, int except = -1) const;
     /// The alive object within the gate of `p` nearest to it and not seen apart from track `ti`, or -1.
     [[nodiscard]] int associate(int ugv, int ti, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov,
                                 const Eigen::Matrix2d& measurementCov) const;
