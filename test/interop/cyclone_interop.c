@@ -105,6 +105,8 @@ typedef struct {
     const char* truthPath;
     Drop drops[kMaxDrops];
     int dropCount;
+    const char* enclave; ///< an SROS2 enclave folder: DDS Security as rmw_cyclonedds_cpp sets it up, ROS topics only
+    bool expectDenied;   ///< pass only when nothing of the service is discovered or received (no valid certificate)
 } Options;
 
 static Nav2Source nav2SourceDefaults(bool clearing)
@@ -222,12 +224,17 @@ static void usage(void)
     fprintf(stderr,
             "usage: cyclone_interop --domain N --ns NS --frame FRAME_ID --vehicle ID [--duration MAX_S] "
             "[--min-duration S]\n"
-            "         [--frames N] [--participant NAME]\n"
+            "         [--frames N] [--participant NAME] [--enclave DIR] [--expect-denied]\n"
             "         [--best-effort] [--verbose] [--clear-range M] [--min-depth M]\n"
             "         [--truth REC.ugvrec.truth.csv --drop NAME:X,Y,HALF_X,HALF_Y ...] [SOURCE.KEY=VALUE ...]\n"
             "  --truth: the replayed course's truth (ego pose per frame); --drop: a negative obstacle of the course\n"
             "  (centre and half extents in the course's frame): every published drop point must lie on one, and each\n"
             "  must be published and marked\n"
+            "  --enclave: join a secured bus as a ROS 2 node with this SROS2 enclave (its six files, the plugins as\n"
+            "  rmw_cyclonedds_cpp loads them); it then reads and checks the ROS 2 topics only (a ROS 2 node's\n"
+            "  permissions allow none of ugvsense/*)\n"
+            "  --expect-denied: succeed only if, for the whole --duration, no writer or reader of the service matches\n"
+            "  and no sample arrives (a participant without a certificate, or with another CA's, on a secured bus)\n"
             "  SOURCE: layer | scan | clear | negatives; KEY: a Nav2 obstacle layer parameter (min_obstacle_height,\n"
             "  max_obstacle_height, obstacle_max_range, raytrace_max_range, inf_is_valid, marking, clearing, ...)\n");
 }
@@ -249,6 +256,8 @@ static bool parseOptions(int argc, char** argv, Options* o)
             o->bestEffort = true;
         } else if (strcmp(a, "--verbose") == 0) {
             o->verbose = true;
+        } else if (strcmp(a, "--expect-denied") == 0) {
+            o->expectDenied = true;
         } else if (strchr(a, '=') != NULL && a[0] != '-') {
             if (!setNav2(&o->nav2, a)) {
                 fprintf(stderr, "cyclone_interop: bad or unmodelled Nav2 parameter '%s'\n", a);
@@ -264,6 +273,8 @@ static bool parseOptions(int argc, char** argv, Options* o)
             o->ns = argv[++i];
         } else if (strcmp(a, "--participant") == 0) {
             o->participant = argv[++i];
+        } else if (strcmp(a, "--enclave") == 0) {
+            o->enclave = argv[++i];
         } else if (strcmp(a, "--frame") == 0) {
             o->frame = argv[++i];
         } else if (strcmp(a, "--vehicle") == 0 && strlen(v) > 0 && strlen(v) <= kMaxNameLength) {
@@ -981,7 +992,7 @@ typedef struct {
 /// Every expectation that needs samples is met: the rest of the run would only repeat the checks.
 static bool enough(const Options* o, const Stats* st, const Run* r)
 {
-    if (o->participant != NULL && !r->nameKnown) {
+    if (o->expectDenied || (o->participant != NULL && !r->nameKnown)) {
         return false;
     }
     for (int i = 0; i < o->dropCount; ++i) {
@@ -989,7 +1000,8 @@ static bool enough(const Options* o, const Stats* st, const Run* r)
             return false;
         }
     }
-    return r->frames >= o->minFrames && r->pairedSectors > 0 && st->points > 0 && st->posesAccepted >= 3 &&
+    const bool ours = o->enclave == NULL; // ugvsense/sectors and ugvsense/pose are read and written
+    return r->frames >= o->minFrames && (!ours || (r->pairedSectors > 0 && st->posesAccepted >= 3)) && st->points > 0 &&
            st->clearRays > 0 && st->obstacleRays > 0;
 }
 
@@ -1013,12 +1025,13 @@ static void discover(dds_entity_t scans, dds_entity_t clearScans, dds_entity_t c
         r->cloudMatched =
             matchedWriter(clouds, "PointCloud2", sensor_msgs_msg_dds__PointCloud2__desc.m_typename, true, NULL);
     }
-    if (!r->sectorsMatched) {
+    if (!r->sectorsMatched && sectors > 0) {
         r->sectorsMatched =
             matchedWriter(sectors, "ObstacleSectors", ugvsense_msg_ObstacleSectors_desc.m_typename, false, NULL);
     }
     dds_publication_matched_status_t pm;
-    if (!r->poseMatched && dds_get_publication_matched_status(poses, &pm) == DDS_RETCODE_OK && pm.current_count > 0) {
+    if (!r->poseMatched && poses > 0 && dds_get_publication_matched_status(poses, &pm) == DDS_RETCODE_OK &&
+        pm.current_count > 0) {
         r->poseMatched = true;
         st->poseMatchedS = sinceStartS;
         printf("discovered the service's ugvsense/pose reader\n");
@@ -1105,13 +1118,14 @@ static void checkRun(const Options* o, const Stats* st, const Grid* g, const Run
     if (!r->scanMatched || !r->clearMatched || !r->cloudMatched) {
         fail("the service's scan, clearing scan or cloud writer was not discovered in %.0f s", o->durationS);
     }
-    if (!r->poseMatched) {
+    const bool ours = o->enclave == NULL; // a ROS 2 node reads none of ugvsense/*
+    if (ours && !r->poseMatched) {
         fail("the service's ugvsense/pose reader was not discovered in %.0f s", o->durationS);
     }
     if (r->frames < o->minFrames) {
         fail("only %ld frames with both LaserScans and a PointCloud2 (at least %d)", r->frames, o->minFrames);
     }
-    if (r->pairedSectors < 1) {
+    if (ours && r->pairedSectors < 1) {
         fail("no frame's scan could be checked against its ugvsense/sectors");
     }
     if (st->clearRays == 0 || st->obstacleRays == 0) {
@@ -1121,7 +1135,7 @@ static void checkRun(const Options* o, const Stats* st, const Grid* g, const Run
     if (st->points == 0) {
         fail("no negative obstacle point in %ld clouds: the default course has a hole ahead", st->clouds);
     }
-    if (st->posesAccepted < 3) {
+    if (ours && st->posesAccepted < 3) {
         fail("only %ld ugvsense/sectors samples carry our pose (valid, not stale)", st->posesAccepted);
     }
     if (g->unmarkedPoints > 0) {
@@ -1141,6 +1155,60 @@ static void checkRun(const Options* o, const Stats* st, const Grid* g, const Run
         fail("the Nav2 negatives source's topic '%s' is not /%s", o->nav2.negatives.topic,
              r->cloudTopic + strlen("rt/"));
     }
+}
+
+/// The participant's QoS for an SROS2 enclave, property by property as rmw_cyclonedds_cpp (Humble, rmw_node.cpp)
+/// sets them from ROS_SECURITY_ENCLAVE: the three plugins of Cyclone DDS and the enclave's six files; its user data
+/// names the enclave as ROS 2's does.
+static dds_qos_t* enclaveQos(const char* enclave)
+{
+    static const char* const plugins[][3] = {{"auth", "dds_security_auth", "authentication"},
+                                             {"crypto", "dds_security_crypto", "crypto"},
+                                             {"access", "dds_security_ac", "access_control"}};
+    static const char* const files[][2] = {{"dds.sec.auth.identity_ca", "identity_ca.cert.pem"},
+                                           {"dds.sec.auth.identity_certificate", "cert.pem"},
+                                           {"dds.sec.auth.private_key", "key.pem"},
+                                           {"dds.sec.access.permissions_ca", "permissions_ca.cert.pem"},
+                                           {"dds.sec.access.governance", "governance.p7s"},
+                                           {"dds.sec.access.permissions", "permissions.p7s"}};
+    dds_qos_t* q = dds_create_qos();
+    char name[64], value[4096];
+    for (size_t i = 0; i < sizeof plugins / sizeof plugins[0]; ++i) {
+        snprintf(name, sizeof name, "dds.sec.%s.library.path", plugins[i][0]);
+        dds_qset_prop(q, name, plugins[i][1]);
+        snprintf(name, sizeof name, "dds.sec.%s.library.init", plugins[i][0]);
+        snprintf(value, sizeof value, "init_%s", plugins[i][2]);
+        dds_qset_prop(q, name, value);
+        snprintf(name, sizeof name, "dds.sec.%s.library.finalize", plugins[i][0]);
+        snprintf(value, sizeof value, "finalize_%s", plugins[i][2]);
+        dds_qset_prop(q, name, value);
+    }
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        snprintf(value, sizeof value, "file:%s/%s", enclave, files[i][1]);
+        dds_qset_prop(q, files[i][0], value);
+    }
+    const char* base = strrchr(enclave, '/');
+    snprintf(value, sizeof value, "enclave=/%s;", base != NULL ? base + 1 : enclave);
+    dds_qset_userdata(q, value, strlen(value));
+    return q;
+}
+
+/// --expect-denied: the whole run saw nothing of the service.
+static int checkDenied(const Options* o, const Stats* st, const Run* r)
+{
+    const long samples = st->scans + st->clearScans + st->clouds + st->sectors;
+    const bool matched = r->scanMatched || r->clearMatched || r->cloudMatched || r->sectorsMatched || r->poseMatched;
+    printf("%s for %.0f s: %ld samples received (%ld LaserScan, %ld clearing LaserScan, %ld PointCloud2, %ld "
+           "ObstacleSectors), %s; %ld poses written\n",
+           o->enclave != NULL ? "with another CA's enclave" : "without a certificate", o->durationS, samples, st->scans,
+           st->clearScans, st->clouds, st->sectors,
+           matched ? "a writer or reader of the service matched" : "nothing of the service matched", st->posesWritten);
+    if (samples > 0 || matched) {
+        printf("FAIL: a participant without a valid certificate saw the secured service\n");
+        return 1;
+    }
+    printf("OK: denied: nothing of the secured service was discovered or received\n");
+    return 0;
 }
 
 int main(int argc, char** argv)
@@ -1163,7 +1231,13 @@ int main(int argc, char** argv)
     }
 
     const double t0 = monoS();
-    const dds_entity_t pp = dds_create_participant((dds_domainid_t)o.domain, NULL, NULL);
+    dds_qos_t* ppQos = o.enclave != NULL ? enclaveQos(o.enclave) : NULL;
+    const dds_entity_t pp = dds_create_participant((dds_domainid_t)o.domain, ppQos, NULL);
+    dds_delete_qos(ppQos);
+    if (pp < 0 && o.expectDenied) {
+        printf("OK: denied: the participant could not even be created (%s)\n", dds_strretcode(pp));
+        return 0;
+    }
     if (pp < 0) {
         fprintf(stderr, "cyclone_interop: participant on domain %d: %s\n", o.domain, dds_strretcode(pp));
         return 2;
@@ -1172,10 +1246,14 @@ int main(int argc, char** argv)
     const dds_entity_t scans = makeReader(pp, &sensor_msgs_msg_dds__LaserScan__desc, r.scanTopic, reliable);
     const dds_entity_t clearScans = makeReader(pp, &sensor_msgs_msg_dds__LaserScan__desc, r.clearTopic, reliable);
     const dds_entity_t clouds = makeReader(pp, &sensor_msgs_msg_dds__PointCloud2__desc, r.cloudTopic, reliable);
-    // ugvsense/sectors is written best effort: only a best-effort reader matches it.
-    const dds_entity_t sectors = makeReader(pp, &ugvsense_msg_ObstacleSectors_desc, "ugvsense/sectors", false);
-    const dds_entity_t poseTopic = dds_create_topic(pp, &ugvsense_msg_VehiclePose_desc, "ugvsense/pose", NULL, NULL);
-    const dds_entity_t poses = poseTopic < 0 ? poseTopic : dds_create_writer(pp, poseTopic, NULL, NULL);
+    // ugvsense/sectors is written best effort: only a best-effort reader matches it. A ROS 2 node (an enclave) has
+    // no permission for ugvsense/*: 0 stands for "not made".
+    const bool ours = o.enclave == NULL;
+    const dds_entity_t sectors =
+        ours ? makeReader(pp, &ugvsense_msg_ObstacleSectors_desc, "ugvsense/sectors", false) : 0;
+    const dds_entity_t poseTopic =
+        ours ? dds_create_topic(pp, &ugvsense_msg_VehiclePose_desc, "ugvsense/pose", NULL, NULL) : 0;
+    const dds_entity_t poses = poseTopic <= 0 ? poseTopic : dds_create_writer(pp, poseTopic, NULL, NULL);
     const dds_entity_t participants = dds_create_reader(pp, DDS_BUILTIN_TOPIC_DCPSPARTICIPANT, NULL, NULL);
     if (scans < 0 || clearScans < 0 || clouds < 0 || sectors < 0 || poses < 0) {
         dds_delete(pp);
@@ -1185,14 +1263,16 @@ int main(int argc, char** argv)
     dds_waitset_attach(ws, dds_create_readcondition(scans, DDS_ANY_STATE), 0);
     dds_waitset_attach(ws, dds_create_readcondition(clearScans, DDS_ANY_STATE), 0);
     dds_waitset_attach(ws, dds_create_readcondition(clouds, DDS_ANY_STATE), 0);
-    dds_waitset_attach(ws, dds_create_readcondition(sectors, DDS_ANY_STATE), 0);
+    if (ours) {
+        dds_waitset_attach(ws, dds_create_readcondition(sectors, DDS_ANY_STATE), 0);
+    }
 
     Stats st = {0};
     int64_t lastScanNs = 0, lastClearNs = 0, lastCloudNs = 0;
     double nextPoseS = t0;
     for (double now = t0; now - t0 < o.durationS && !(now - t0 >= o.minDurationS && enough(&o, &st, &r));
          now = monoS()) {
-        if (now >= nextPoseS) {
+        if (ours && now >= nextPoseS) {
             writePose(poses, &o, &st);
             nextPoseS += 0.1;
         }
@@ -1214,13 +1294,19 @@ int main(int argc, char** argv)
             }
             checkCloud(sample, &o, &st, &lastCloudNs);
         });
-        TAKE_EACH(sectors, ugvsense_msg_ObstacleSectors, {
-            ++st.sectors;
-            checkSectors(sample, &o, &st);
-        });
+        if (ours) {
+            TAKE_EACH(sectors, ugvsense_msg_ObstacleSectors, {
+                ++st.sectors;
+                checkSectors(sample, &o, &st);
+            });
+        }
         processFrames(&g, &o, now, &r);
     }
     dds_delete(pp);
+    if (o.expectDenied) {
+        free(g.cells);
+        return checkDenied(&o, &st, &r);
+    }
 
     printSummary(&o, &st, &g, &r);
     checkRun(&o, &st, &g, &r);
@@ -1229,8 +1315,9 @@ int main(int argc, char** argv)
         printf("FAIL: %d check(s) failed\n", failures);
         return 1;
     }
-    printf("OK: Cyclone DDS read the service's two LaserScans and PointCloud2, wrote a pose it used, and a Nav2 layer "
-           "marks every negative obstacle and clears nothing beyond %g m\n",
-           o.clearRangeM);
+    printf("OK: Cyclone DDS%s read the service's two LaserScans and PointCloud2%s, and a Nav2 layer marks every "
+           "negative obstacle and clears nothing beyond %g m\n",
+           o.enclave != NULL ? " (a ROS 2 node's enclave on the secured bus)" : "",
+           o.enclave != NULL ? "" : ", wrote a pose it used", o.clearRangeM);
     return 0;
 }

@@ -16,20 +16,10 @@ cleanup() { [ -n "$svc" ] && kill -9 "$svc" 2>/dev/null; wait 2>/dev/null; true;
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -n 20 "$f"; done; exit 1; }
 
-# The Nav2 block of the README ("obstacle_layer:" up to the blank line): layer keys at 6 spaces, the observation
-# sources' keys at 8, as SOURCE.KEY=VALUE (ugvsense_scan -> scan, ugvsense_clear -> clear, ugvsense_negatives ->
-# negatives).
-mapfile -t nav2 < <(awk '
-    /^    obstacle_layer:/ { inside = 1; next }
-    inside && /^[[:space:]]*$/ { exit }
-    inside {
-        line = $0; sub(/#.*/, "", line); match(line, /^ */); indent = RLENGTH; gsub(/^ +| +$/, "", line)
-        if (line == "") next
-        key = line; sub(/:.*/, "", key); value = line; sub(/^[^:]*:[ ]*/, "", value); gsub(/"/, "", value)
-        if (indent == 6 && value == "") { source = key == "ugvsense_scan" ? "scan" : key == "ugvsense_clear" ? "clear" : key == "ugvsense_negatives" ? "negatives" : key; next }
-        if (indent == 6) print "layer." key "=" value
-        else if (indent == 8) print source "." key "=" value
-    }' "$readme")
+# The Nav2 block of the README, as SOURCE.KEY=VALUE arguments.
+# shellcheck source=test/interop/common.sh
+source "$(dirname "$0")/common.sh"
+mapfile -t nav2 < <(nav2_from_readme "$readme")
 [ "${#nav2[@]}" -ge 10 ] || fail "no Nav2 obstacle layer block in $readme (found ${#nav2[*]} keys)"
 printf 'Nav2 (README): %s\n' "${nav2[*]}"
 
@@ -54,9 +44,6 @@ rc=$?
 cat "$work/interop.out"
 [ "$rc" -eq 0 ] || fail "cyclone-interop exited with $rc"
 [ "$ours" -ge 8 ] || fail "only $ours of 10 sectors samples (Fast DDS listener) carry the Cyclone pose"
-kill -TERM "$svc"
-wait "$svc" || fail "the service exited with an error"
-svc=""
-grep -E "^dds: [1-9][0-9]* frame\(s\) sent.*poses [1-9][0-9]* used, 0 of other vehicles, 0 refused" "$work/service.log" ||
-    fail "no bus report with the Cyclone poses used and none refused"
+stop_service "^dds: [1-9][0-9]* frame\(s\) sent.*poses [1-9][0-9]* used, 0 of other vehicles, 0 refused" \
+    "no bus report with the Cyclone poses used and none refused"
 echo "OK: Cyclone DDS <-> Fast DDS: scan, cloud and sectors read and checked, $ours/10 sectors samples with the Cyclone pose"

@@ -47,6 +47,8 @@ sed 's/"ugv":"ugv-1"/"ugv":"ugv-2"/' "$work/ugv-1.jsonl" >"$work/ugv-2.jsonl" # 
 own=$(wc -l <"$work/ugv-1.jsonl") others=$(wc -l <"$work/others.jsonl") foreign=$(wc -l <"$work/ugv-2.jsonl")
 [ "$own" -gt 10 ] && [ "$foreign" -gt 10 ] || fail "scenario too short ($own, $foreign lines)"
 
+# shellcheck source=test/support/security_yaml.sh
+source "$(dirname "$0")/../support/security_yaml.sh"
 sec=$work/team/gcs
 cat >"$work/gcs.yaml" <<YAML
 vehicle_id: gcs
@@ -55,14 +57,7 @@ vision:
 dds:
   domain_id: $domain
   partition: $partition
-  security:
-    enabled: true
-    identity_ca: $sec/identity_ca.cert.pem
-    certificate: $sec/cert.pem
-    private_key: $sec/key.pem
-    permissions_ca: $sec/permissions_ca.cert.pem
-    governance: $sec/governance.p7s
-    permissions: $sec/permissions.p7s
+$(security_yaml "$sec")
 correlator:
   enabled: true
   reorder_ms: 500

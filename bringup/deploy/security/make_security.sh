@@ -53,7 +53,9 @@ if [ ! -s "$ca_key" ] || [ ! -s "$ca_cert" ]; then
 fi
 not_before=$(date -u +%Y-%m-%dT%H:%M:%S -d "-1 day")
 not_after=$(date -u +%Y-%m-%dT%H:%M:%S -d "+$days days")
-domains="<domains><id_range><min>0</min><max>232</max></id_range></domains>"
+# Domains 0-230: Cyclone DDS (rmw_cyclonedds_cpp, a ROS 2 node's DDS) cannot parse a governance or permissions
+# document naming a domain above 230 and the node then cannot start (found by system.cyclone-interop-secured).
+domains="<domains><id_range><min>0</min><max>230</max></id_range></domains>"
 
 cat >"$out/governance.xml" <<XML
 <?xml version="1.0" encoding="UTF-8"?>
