@@ -11,6 +11,9 @@
 //   Security: PKI-DH, Access-Permissions, AES-GCM; the files made once per run by
 //   bringup/deploy/security/make_security.sh in a temporary folder): the cost of security against the open bus in the
 //   same run. Target: p99 at most 1.5x the open bus's (issue 22 item 4).
+// - BM_SectorsHandoverOpenAndSecuredInTurns / BM_RawWriteOpenAndSecuredInTurns: both buses in one run, taking turns
+//   of 0.12 s (a writer's process each, the idle one paused), so that the machine's busy spells fall on both alike;
+//   the counters hold both buses' p50/p99 and the secured/open ratios.
 // The latency benchmarks report p50/p99/max counters [us] over the iterations (manual time = the latency).
 #include <fcntl.h>
 #include <semaphore.h>
@@ -19,8 +22,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
@@ -168,6 +173,15 @@ void BM_FramePathRingPushOnly(benchmark::State& state)
 BENCHMARK(BM_FramePathRingPushOnly)->UseManualTime()->Iterations(20000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchmark::kMicrosecond);
 
+/// A writer's child writes nothing between SIGUSR1 and SIGUSR2 (measurePaired takes turns).
+volatile std::sig_atomic_t gPaused = 0;
+
+void installPauseSignals()
+{
+    ::signal(SIGUSR1, [](int) { gPaused = 1; });
+    ::signal(SIGUSR2, [](int) { gPaused = 0; });
+}
+
 /// The child's side: the service's ring and bus task feeding the real DdsBridge, 100 frames per second.
 [[noreturn]] void runBridgeChild(const std::string& partition, const std::string& security)
 {
@@ -188,8 +202,12 @@ BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchm
         }
     });
     service::BusFrame frame = sampleFrame();
+    installPauseSignals();
     for (std::uint64_t seq = 1;; ++seq) {
         ::usleep(10000);
+        if (gPaused != 0) {
+            continue;
+        }
         frame.message.sectors.sequence = seq;
         frame.message.sectors.captureStampNs = MonotonicClock::nowNs() - 30'000'000;
         frame.message.publishStampNs = MonotonicClock::nowNs(); // the hand-over
@@ -210,63 +228,176 @@ BENCHMARK(BM_FramePathHandover)->UseManualTime()->Iterations(20000)->Unit(benchm
     dds::msg::ObstacleSectors sample;
     const service::BusFrame frame = sampleFrame();
     dds::toDds(frame.message.sectors, {}, "bench", 0, 0, sample);
+    installPauseSignals();
     for (;;) {
         ::usleep(10000);
+        if (gPaused != 0) {
+            continue;
+        }
         sample.publish_stamp_ns(dds::realtimeNowNs());
         writer->write(sample);
     }
 }
 
-void measure(benchmark::State& state, bool raw, bool secure)
+/// This run's partition of a variant. The secured variants share one (the files name it), so that one team of
+/// files serves them all.
+std::string partitionOf(bool raw, bool secure, const char* suffix = "")
 {
-    // One secured team per run (the files name the partition); the open variants each have their own.
-    const std::string partition = "bench-" + std::to_string(::getpid()) +
-                                  (secure ? std::string("-secured")
-                                   : raw  ? std::string("-raw")
-                                          : std::string("-bridge"));
-    const std::string security = secure ? securityFolder(partition) : std::string();
-    if (secure && security.empty()) {
-        state.SkipWithError("bringup/deploy/security/make_security.sh failed (openssl missing?)");
-        return;
-    }
-    // A fresh process (fork + exec of this program): a forked copy of a process that already ran Fast DDS inherits
-    // its factory without its threads and hangs.
+    return "bench-" + std::to_string(::getpid()) +
+           (secure ? std::string("-secured")
+            : raw  ? std::string("-raw")
+                   : std::string("-bridge")) +
+           suffix;
+}
+
+/// Starts the writer's side in a fresh process (fork + exec of this program): a forked copy of a process that
+/// already ran Fast DDS inherits its factory without its threads and hangs.
+pid_t startChild(bool raw, const std::string& partition, const std::string& security)
+{
     const pid_t child = ::fork();
     if (child == 0) {
         ::execl("/proc/self/exe", "bench-dds", raw ? "--child-raw" : "--child-bridge", partition.c_str(),
                 security.c_str(), nullptr);
         ::_exit(127);
     }
-    dds::BusConfig bc;
-    bc.domainId = kDomain;
-    bc.partitions = {partition};
-    auto bus = dds::Bus::create(secured(bc, security, kReaderIdentity));
-    auto reader = (*bus)->reader<dds::msg::ObstacleSectors>();
-    dds::msg::ObstacleSectors s;
-    // The bridge's publish stamp is the hand-over's monotonic time on the bus's real-time clock.
-    std::vector<double> us;
-    while (reader->matched() == 0) {
-        ::usleep(1000);
-    }
-    for (int warm = 0; warm < 20;) { // discovery, first-touch
-        if (reader->wait(std::chrono::milliseconds(100)) && reader->take(s)) {
-            ++warm;
-        }
-    }
-    for (auto _ : state) {
-        while (!(reader->wait(std::chrono::milliseconds(100)) && reader->take(s))) {
-        }
-        const double latencyS = static_cast<double>(dds::realtimeNowNs() - s.publish_stamp_ns()) * 1e-9;
-        state.SetIterationTime(latencyS);
-        us.push_back(latencyS * 1e6);
-    }
+    return child;
+}
+
+void stopChild(pid_t child)
+{
     ::kill(child, SIGKILL);
     ::waitpid(child, nullptr, 0);
-    std::sort(us.begin(), us.end());
-    const auto at = [&us](double p) { return us[std::min(us.size() - 1, static_cast<std::size_t>(p * us.size()))]; };
-    state.counters["p50_us"] = at(0.50);
-    state.counters["p99_us"] = at(0.99);
-    state.counters["max_us"] = us.back();
+}
+
+/// A subscriber of one bus: latency [us] of each sample from its publish stamp (the hand-over's monotonic time on
+/// the bus's real-time clock) to its take.
+class LatencyReader {
+public:
+    LatencyReader(const std::string& partition, const std::string& security)
+    {
+        dds::BusConfig bc;
+        bc.domainId = kDomain;
+        bc.partitions = {partition};
+        auto bus = dds::Bus::create(secured(bc, security, kReaderIdentity));
+        bus_ = std::move(bus.value());
+        reader_ = *bus_->reader<dds::msg::ObstacleSectors>();
+    }
+    /// Waits for the writer and 20 samples (discovery, first touch).
+    void warmUp()
+    {
+        while (reader_.matched() == 0) {
+            ::usleep(1000);
+        }
+        for (int warm = 0; warm < 20;) {
+            warm += takeOne() ? 1 : 0;
+        }
+    }
+    /// The next sample's latency [s].
+    double next()
+    {
+        while (!takeOne()) {
+        }
+        const double latencyS = static_cast<double>(dds::realtimeNowNs() - sample_.publish_stamp_ns()) * 1e-9;
+        us_.push_back(latencyS * 1e6);
+        return latencyS;
+    }
+    /// Waits for the next sample and drops it.
+    void skip()
+    {
+        while (!takeOne()) {
+        }
+    }
+    /// Takes what is queued, unrecorded.
+    void drain()
+    {
+        while (reader_.take(sample_)) {
+        }
+    }
+    /// The p-quantile [us] of the latencies so far.
+    [[nodiscard]] double quantile(double p)
+    {
+        std::sort(us_.begin(), us_.end());
+        return us_[std::min(us_.size() - 1, static_cast<std::size_t>(p * static_cast<double>(us_.size())))];
+    }
+
+private:
+    bool takeOne() { return reader_.wait(std::chrono::milliseconds(100)) && reader_.take(sample_); }
+
+    std::unique_ptr<dds::Bus> bus_;
+    dds::Reader<dds::msg::ObstacleSectors> reader_;
+    dds::msg::ObstacleSectors sample_;
+    std::vector<double> us_;
+};
+
+void measure(benchmark::State& state, bool raw, bool secure)
+{
+    const std::string partition = partitionOf(raw, secure);
+    const std::string security = secure ? securityFolder(partition) : std::string();
+    if (secure && security.empty()) {
+        state.SkipWithError("bringup/deploy/security/make_security.sh failed (openssl missing?)");
+        return;
+    }
+    const pid_t child = startChild(raw, partition, security);
+    LatencyReader reader(partition, security);
+    reader.warmUp();
+    for (auto _ : state) {
+        state.SetIterationTime(reader.next());
+    }
+    stopChild(child);
+    state.counters["p50_us"] = reader.quantile(0.50);
+    state.counters["p99_us"] = reader.quantile(0.99);
+    state.counters["max_us"] = reader.quantile(1.0);
+}
+
+/// The open and the secured bus in turns of 0.12 s (12 samples; the first 2 after the resume are not recorded: the
+/// writer's threads wake from idle), a writer's process each: the machine's busy spells fall on both alike (on a
+/// shared machine a spell inside one 10 s run decides that run's p99), and only one bus writes at a time (the other's
+/// child is paused), so neither loads the other. Samples in flight at a switch are dropped. One iteration: 1000 samples
+/// of each; its time is the secured bus's p99, the counters give both buses' quantiles and their ratios.
+void measurePaired(benchmark::State& state, bool raw)
+{
+    const std::string securedPartition = partitionOf(raw, true);
+    const std::string openPartition = partitionOf(raw, false, "-paired");
+    const std::string security = securityFolder(securedPartition);
+    if (security.empty()) {
+        state.SkipWithError("bringup/deploy/security/make_security.sh failed (openssl missing?)");
+        return;
+    }
+    const std::array<pid_t, 2> child{startChild(raw, openPartition, std::string()),
+                                     startChild(raw, securedPartition, security)};
+    std::array<LatencyReader, 2> bus{LatencyReader(openPartition, std::string()),
+                                     LatencyReader(securedPartition, security)};
+    bus[0].warmUp();
+    bus[1].warmUp();
+    constexpr int kSamples = 1000;
+    constexpr int kTurn = 10;  // samples recorded per turn
+    constexpr int kWakeUp = 2; // and the first ones after a resume, not recorded (threads woken from idle)
+    for (auto _ : state) {
+        for (int turn = 0; turn < 2 * kSamples / kTurn; ++turn) {
+            const int on = turn % 2;
+            ::kill(child[static_cast<std::size_t>(1 - on)], SIGUSR1);
+            ::kill(child[static_cast<std::size_t>(on)], SIGUSR2);
+            ::usleep(30000); // what was in flight arrives
+            bus[0].drain();
+            bus[1].drain();
+            for (int i = 0; i < kWakeUp; ++i) {
+                bus[static_cast<std::size_t>(on)].skip();
+            }
+            for (int i = 0; i < kTurn; ++i) {
+                (void)bus[static_cast<std::size_t>(on)].next();
+            }
+        }
+        state.SetIterationTime(bus[1].quantile(0.99) * 1e-6);
+    }
+    for (const pid_t c : child) {
+        stopChild(c);
+    }
+    state.counters["open_p50_us"] = bus[0].quantile(0.50);
+    state.counters["open_p99_us"] = bus[0].quantile(0.99);
+    state.counters["secured_p50_us"] = bus[1].quantile(0.50);
+    state.counters["secured_p99_us"] = bus[1].quantile(0.99);
+    state.counters["ratio_p50"] = bus[1].quantile(0.50) / bus[0].quantile(0.50);
+    state.counters["ratio_p99"] = bus[1].quantile(0.99) / bus[0].quantile(0.99);
 }
 
 void BM_SectorsHandoverToSubscriber(benchmark::State& state)
@@ -289,6 +420,16 @@ BENCHMARK(BM_SectorsHandoverToSubscriber)->UseManualTime()->Iterations(1000)->Un
 BENCHMARK(BM_RawWriteToSubscriber)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SectorsHandoverToSubscriberSecured)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RawWriteToSubscriberSecured)->UseManualTime()->Iterations(1000)->Unit(benchmark::kMicrosecond);
+void BM_SectorsHandoverOpenAndSecuredInTurns(benchmark::State& state)
+{
+    measurePaired(state, false);
+}
+void BM_RawWriteOpenAndSecuredInTurns(benchmark::State& state)
+{
+    measurePaired(state, true);
+}
+BENCHMARK(BM_SectorsHandoverOpenAndSecuredInTurns)->UseManualTime()->Iterations(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RawWriteOpenAndSecuredInTurns)->UseManualTime()->Iterations(1)->Unit(benchmark::kMicrosecond);
 
 } // namespace
 
