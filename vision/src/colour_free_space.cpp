@@ -51,6 +51,12 @@ inline std::uint8_t colourBin(int b, int g, int r, int& value) noexcept
 }
 
 /// First ROI row [px]: roiTopFraction of the image height, rounded.
+/// Rows just above the horizon that aboveHorizonIsGround() reads: one window's height.
+int aboveHorizonRows(const ColourFreeSpaceConfig& config)
+{
+    return 2 * config.windowRadius + 1;
+}
+
 int roiTopRow(const ColourFreeSpaceConfig& config, cv::Size imageSize)
 {
     return static_cast<int>(std::lround(imageSize.height * config.roiTopFraction));
@@ -91,10 +97,12 @@ Result<void, Error> checkConfig(const ColourFreeSpaceConfig& config, cv::Size im
     if (!(config.matchThreshold > 0.0 && config.matchThreshold <= 1.0) ||
         !(config.minColourShare > 0.0 && config.minColourShare <= 1.0) ||
         !(config.minSliceFraction > 0.0 && config.minSliceFraction <= 1.0) ||
+        !(config.clearSliceFraction >= config.minSliceFraction && config.clearSliceFraction <= 1.0) ||
         !(config.minGroundCoverage >= 0.0 && config.minGroundCoverage <= 1.0)) {
-        return Unexpected(configError("matchThreshold, minColourShare, minSliceFraction and minGroundCoverage must "
-                                      "lie in (0, 1], (0, 1], (0, 1] and [0, 1]",
-                                      "use e.g. 0.5, 0.02, 0.5 and 0.7"));
+        return Unexpected(configError("matchThreshold, minColourShare, minSliceFraction, clearSliceFraction and "
+                                      "minGroundCoverage must lie in (0, 1], (0, 1], (0, 1], [minSliceFraction, 1] "
+                                      "and [0, 1]",
+                                      "use e.g. 0.5, 0.02, 0.5, 0.75 and 0.7"));
     }
     if (config.minObstacleRows < 1 || config.minObstacleRows > imageSize.height - roiTop) {
         return Unexpected(configError("minObstacleRows " + std::to_string(config.minObstacleRows) + " is out of range",
@@ -144,7 +152,22 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
     sut.hfovDeg_ = static_cast<float>(2.0 * std::atan(imageSize.width / (2.0 * projection.fx)) * kRadToDeg);
     const int roiTop = roiTopRow(config, imageSize);
     sut.roiTop_ = roiTop;
-    sut.binTop_ = std::max(0, roiTop - config.windowRadius);
+    // Each column's first row below the horizon (the ray meets the ground), and the rows binned: from a window's
+    // height above the highest horizon (see aboveHorizonIsGround) or half a window above the ROI.
+    sut.horizonRow_.assign(static_cast<std::size_t>(imageSize.width), imageSize.height);
+    int highestHorizon = imageSize.height;
+    for (int x = 0; x < imageSize.width; ++x) {
+        for (int y = 0; y < imageSize.height; ++y) {
+            double range = 0.0;
+            double bearing = 0.0;
+            if (sut.groundPoint(x, y, range, bearing, std::numeric_limits<double>::infinity())) {
+                sut.horizonRow_[static_cast<std::size_t>(x)] = y;
+                highestHorizon = std::min(highestHorizon, y);
+                break;
+            }
+        }
+    }
+    sut.binTop_ = std::max(0, std::min(roiTop - config.windowRadius, highestHorizon - aboveHorizonRows(config)));
     sut.thresholdScore_ = static_cast<int>(std::lround(config.matchThreshold * kScoreMax));
     sut.bins_ = Image<std::uint8_t>(imageSize.width, imageSize.height - sut.binTop_);
     sut.scores_ = Image<std::uint8_t>(imageSize.width, imageSize.height - roiTop);
@@ -154,6 +177,8 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
     sut.columnRange_.assign(w, 0.0F);
     sut.columnBearing_.assign(w, 0.0F);
     sut.columnHit_.assign(w, 0);
+    sut.columnUnsure_.assign(w, 0);
+    sut.tentativeCount_.assign(w, 0);
     sut.rowSum_.assign(3 * w, 0);
     sut.topRow_.assign(w, imageSize.height);
     for (int x = 0; x < imageSize.width; ++x) {
@@ -171,6 +196,12 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
 
 bool ColourFreeSpace::groundPoint(double x, double y, double& rangeM, double& bearingDeg) const noexcept
 {
+    return groundPoint(x, y, rangeM, bearingDeg, config_.maxRangeM);
+}
+
+bool ColourFreeSpace::groundPoint(double x, double y, double& rangeM, double& bearingDeg,
+                                  double maxRangeM) const noexcept
+{
     const double dx = (x - projection_.cx) / projection_.fx;
     const double dy = (y - projection_.cy) / projection_.fy;
     const double along = ground_.nx * dx + ground_.ny * dy + ground_.nz;
@@ -181,7 +212,7 @@ bool ColourFreeSpace::groundPoint(double x, double y, double& rangeM, double& be
     const VehiclePoint p = ground_.toVehicle(t * dx, t * dy, t);
     rangeM = std::hypot(p.x, p.y);
     bearingDeg = std::atan2(p.y, p.x) * kRadToDeg;
-    return rangeM <= config_.maxRangeM;
+    return rangeM <= maxRangeM;
 }
 
 ColourFreeSpaceStatus ColourFreeSpace::process(ConstBgrView image, ObstacleSectors& out) noexcept
@@ -207,6 +238,7 @@ ColourFreeSpaceStatus ColourFreeSpace::processImage(ImageView<const Pixel> image
     }
     computeBins(image);
     computeReference();
+    countTentative();
     computeScores();
     scanColumns();
     fillSectors(out);
@@ -290,6 +322,7 @@ void ColourFreeSpace::computeReference() noexcept
     const int width = size_.width;
     const int slices = config_.bandSlices;
     const int needSlices = static_cast<int>(std::ceil(config_.minSliceFraction * slices - 1e-9));
+    const int sureSlices = static_cast<int>(std::ceil(config_.clearSliceFraction * slices - 1e-9));
     std::array<std::int32_t, kMaxSlices> minCount{};
     for (int s = 0; s < slices; ++s) {
         const int x0 = (s * width + slices - 1) / slices; // first x with x * slices / width == s
@@ -309,7 +342,7 @@ void ColourFreeSpace::computeReference() noexcept
             count += c;
         }
         const bool ground = present >= needSlices;
-        learnt_[static_cast<std::size_t>(bin)] = ground ? 1 : 0;
+        learnt_[static_cast<std::size_t>(bin)] = present >= sureSlices ? 2 : (ground ? 1 : 0);
         covered += ground ? count : 0;
         colours += ground ? 1 : 0;
     }
@@ -317,16 +350,18 @@ void ColourFreeSpace::computeReference() noexcept
     // ground whose hue drifts across an edge (a lawn from lush to dry, the light's colour from sun to shade) must not
     // turn into an obstacle there. Brightness and saturation are not widened: they are what tells concrete from
     // asphalt, or a grey post from the road.
+    // A bin is as sure as the surest of itself and its neighbours.
     for (int bin = 0; bin < kColourBins; ++bin) {
         std::uint8_t near = learnt_[static_cast<std::size_t>(bin)];
         if (bin < kChromaticBins) {
             const int hue = bin / kSatBins;
             const int sat = bin % kSatBins;
             for (const int h : {(hue + kHueBins - 1) % kHueBins, (hue + 1) % kHueBins}) { // hue is circular
-                near |= learnt_[static_cast<std::size_t>(h * kSatBins + sat)];
+                near = std::max(near, learnt_[static_cast<std::size_t>(h * kSatBins + sat)]);
             }
         }
-        groundColour_[static_cast<std::size_t>(bin)] = near;
+        groundColour_[static_cast<std::size_t>(bin)] = near > 0 ? 1 : 0;
+        tentative_[static_cast<std::size_t>(bin)] = near == 1 ? 1 : 0;
     }
     const double bandPixels = static_cast<double>(width) * config_.bandRows;
     reference_.meanValue = static_cast<double>(bandValueSum_) / bandPixels;
@@ -414,6 +449,43 @@ void ColourFreeSpace::scanColumns() noexcept
         columnBearing_[column] = seen ? static_cast<float>(bearing)
                                       : static_cast<float>(std::atan2(projection_.cx - x, projection_.fx) * kRadToDeg);
         columnHit_[column] = boundary >= 0 ? 1 : 0;
+        // Reached the top through mostly tentative colours, or the ground colours go on above the horizon.
+        const bool tentative = 2 * tentativeCount_[column] > height - top;
+        columnUnsure_[column] = boundary < 0 && (tentative || aboveHorizonIsGround(x)) ? 1 : 0;
+    }
+}
+
+bool ColourFreeSpace::aboveHorizonIsGround(int x) const noexcept
+{
+    const int horizon = horizonRow_[static_cast<std::size_t>(x)];
+    const int first = std::max(binTop_, horizon - aboveHorizonRows(config_));
+    if (first >= horizon) {
+        return false;
+    }
+    const ConstImageViewU8 bins = bins_.view();
+    int count = 0;
+    for (int y = first; y < horizon; ++y) {
+        count += groundColour_[bins.row(y - binTop_)[x]];
+    }
+    return 2 * count > horizon - first;
+}
+
+void ColourFreeSpace::countTentative() noexcept
+{
+    std::fill(tentativeCount_.begin(), tentativeCount_.end(), std::int16_t{0});
+    if (std::none_of(tentative_.begin(), tentative_.end(), [](std::uint8_t t) { return t != 0; })) {
+        return; // the common case: every ground colour is sure
+    }
+    const int width = size_.width;
+    const ConstImageViewU8 bins = bins_.view();
+    const int first = *std::min_element(topRow_.begin(), topRow_.end());
+    for (int y = first; y < size_.height; ++y) {
+        const std::uint8_t* row = bins.row(y - binTop_);
+        for (int x = 0; x < width; ++x) {
+            const bool below = y >= topRow_[static_cast<std::size_t>(x)];
+            tentativeCount_[static_cast<std::size_t>(x)] = static_cast<std::int16_t>(
+                tentativeCount_[static_cast<std::size_t>(x)] + (below ? tentative_[row[x]] : 0));
+        }
     }
 }
 
@@ -424,6 +496,7 @@ void ColourFreeSpace::fillSectors(ObstacleSectors& out) noexcept
     std::array<float, kMaxSectors> minRange{};
     std::array<std::uint8_t, kMaxSectors> minHit{};
     std::array<std::uint8_t, kMaxSectors> seen{};
+    std::array<std::uint8_t, kMaxSectors> unsure{};
     minRange.fill(std::numeric_limits<float>::infinity());
     const float binWidth = hfovDeg_ / static_cast<float>(out.count);
     for (std::size_t x = 0; x < columnRange_.size(); ++x) {
@@ -431,6 +504,7 @@ void ColourFreeSpace::fillSectors(ObstacleSectors& out) noexcept
                                      out.count - 1);
         const auto i = static_cast<std::size_t>(index);
         seen[i] = 1;
+        unsure[i] = static_cast<std::uint8_t>(unsure[i] | columnUnsure_[x]);
         if (columnRange_[x] < minRange[i] || (columnRange_[x] == minRange[i] && columnHit_[x] != 0)) {
             minRange[i] = columnRange_[x];
             minHit[i] = columnHit_[x];
@@ -445,10 +519,12 @@ void ColourFreeSpace::fillSectors(ObstacleSectors& out) noexcept
             s.state = SectorState::Obstacle;
             s.kind = ObstacleKind::Positive;
             s.rangeM = minRange[i];
-        } else if (minRange[i] >= config_.cautionDistanceM) {
+        } else if (unsure[i] == 0 && minRange[i] >= config_.cautionDistanceM) {
             s.state = SectorState::Clear;
         } else {
-            continue; // the free run ends at the ROI top short of the caution distance: not known to be free
+            // Not known to be free: a free run ends at the ROI top short of the caution distance, or one is not
+            // evidence of ground (tentative colours, or ground colours above the horizon).
+            continue;
         }
         s.confidence = static_cast<float>(reference_.coverage);
         s.danger = classify(s.state, s.rangeM, config_.dangerDistanceM, config_.cautionDistanceM);

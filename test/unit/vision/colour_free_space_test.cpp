@@ -234,6 +234,65 @@ TEST(ColourFreeSpace, AnObstacleStandingInPartOfTheBandIsNotGround)
     EXPECT_EQ(out.sectors[sectorAt(out, -20.0)].state, SectorState::Clear);
 }
 
+TEST(ColourFreeSpace, AnObstacleOverAThirdOfTheBandIsNeverClearBehindIt)
+{
+    // A brown box at 1.25 m covers a third of the image's width from the bottom up: its colour is in 4 of the band's
+    // 8 slices, so it is learnt as a ground colour, but only tentatively (under 6 of 8). Its sectors are not known
+    // to be free: Unknown, never Clear. Counted with the rule off (clearSliceFraction = minSliceFraction) too, which
+    // calls them Clear.
+    const auto scene = catalogue("box", 1.25, 0.0);
+    const auto frame = renderScene(scene);
+    const cv::Mat bgr = tintByLabels(frame, {});
+    auto sut = makeSut(scene.rig);
+    ColourFreeSpaceConfig off;
+    off.clearSliceFraction = off.minSliceFraction;
+    auto without = makeSut(scene.rig, off);
+    ObstacleSectors out;
+    ObstacleSectors outWithout;
+
+    ASSERT_EQ(sut.process(bgrView(bgr), out), ColourFreeSpaceStatus::Ok);
+    ASSERT_EQ(without.process(bgrView(bgr), outWithout), ColourFreeSpaceStatus::Ok);
+
+    ASSERT_TRUE(sut.reference().groundLike);
+    int truthObstacle = 0;
+    int clear = 0;
+    int clearWithout = 0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(out.count); ++i) {
+        if (frame.sectors.sectors[i].state == SectorState::Obstacle) {
+            ++truthObstacle;
+            clear += out.sectors[i].state == SectorState::Clear ? 1 : 0;
+            clearWithout += outWithout.sectors[i].state == SectorState::Clear ? 1 : 0;
+        }
+    }
+    EXPECT_GE(truthObstacle, 15);
+    EXPECT_EQ(clear, 0) << "of " << truthObstacle << " sectors the box stands in";
+    EXPECT_GE(clearWithout, truthObstacle / 2) << "the rule off: the box's colour is ground, its sectors Clear";
+    EXPECT_EQ(out.sectors[sectorAt(out, -25.0)].state, SectorState::Clear);
+    EXPECT_EQ(out.sectors[sectorAt(out, 25.0)].state, SectorState::Clear);
+}
+
+TEST(ColourFreeSpace, AnObstacleFillingTheViewIsUnknownNotClear)
+{
+    // A barrier across the whole view at 1.25 m, taller than the camera: the band sees only the barrier, whose colours
+    // are therefore learnt as the ground's in every slice. But they go on above the horizon, where no ground can be
+    // seen: every sector is Unknown, none Clear.
+    const auto scene = catalogue("barrier", 1.25, 0.0);
+    const auto frame = renderScene(scene);
+    auto sut = makeSut(scene.rig);
+    ObstacleSectors out;
+
+    ASSERT_EQ(sut.process(bgrView(tintByLabels(frame, {})), out), ColourFreeSpaceStatus::Ok);
+
+    for (int i = 0; i < out.count; ++i) {
+        EXPECT_NE(out.sectors[static_cast<std::size_t>(i)].state, SectorState::Clear) << "sector " << i;
+    }
+    int aboveHorizon = 0;
+    for (const std::uint8_t unsure : sut.columnUnsure()) {
+        aboveHorizon += unsure;
+    }
+    EXPECT_EQ(aboveHorizon, scene.rig.width);
+}
+
 TEST(ColourFreeSpace, AGroundWhoseHueDriftsAcrossABinEdgeStaysClear)
 {
     // The band's grass has hue 52 (bin 4 of 0..179 in 16 bins); beyond 3 m it dries to hue 44 (bin 3), a colour the

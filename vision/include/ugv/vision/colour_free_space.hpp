@@ -19,13 +19,16 @@
 /// the ground plane) gives the free range and bearing, and each sector takes the minimum over its columns.
 ///
 /// Sector states: Obstacle (kind Positive) when a column's free run ends inside the ROI; Clear when every column of
-/// the sector reaches the ROI top (or the horizon, i.e. maxRangeM) beyond the caution distance; Unknown when the
+/// the sector reaches the ROI top (or the horizon, i.e. maxRangeM) beyond the caution distance and none of them does
+/// so mostly through tentative colours (present in fewer than clearSliceFraction of the slices) or with ground colours
+/// going on above the horizon, where no ground can be seen (an obstacle filling the view); Unknown when the
 /// band is not ground-like (too dark for colour to mean anything, or less than minGroundCoverage of it in ground
 /// colours: the band is mostly obstacle or clutter) or the free run reaches the ROI top short of the caution
 /// distance. Output sectors are marked `degraded` (a single-camera mode) and carry heightM 0.
 ///
-/// Limits, by design of a colour cue: an obstacle in the ground's own colours is not seen; one across the whole band
-/// (nearer than the band's far edge, about 1.6 m on the default rig) becomes ground.
+/// Limits, by design of a colour cue: an obstacle in the ground's own colours is not seen; one across most of the band
+/// (nearer than the band's far edge, about 1.6 m on the default rig) becomes ground: not seen as an obstacle either,
+/// but its sectors are Clear only if it is in three quarters of the band's slices and lower than the horizon.
 
 #include <array>
 #include <cstdint>
@@ -51,11 +54,16 @@ inline constexpr int kColourBins = kChromaticBins + kGreyBins; ///< grey bins fo
 inline constexpr int kGreyChroma = 16; ///< max - min of B, G, R (after the blur) below which a pixel is grey
 
 struct ColourFreeSpaceConfig {
-    double roiTopFraction = 0.5;    ///< first analysed row = round(height * roiTopFraction)
-    int bandRows = 40;              ///< [px] reference band: the bottom rows of the image, the whole width
-    int bandSlices = 8;             ///< column slices of the band, 2..32
-    double minColourShare = 0.02;   ///< a bin is present in a slice holding at least this share of its pixels
-    double minSliceFraction = 0.5;  ///< a ground colour is present in at least this fraction of the slices
+    double roiTopFraction = 0.5;   ///< first analysed row = round(height * roiTopFraction)
+    int bandRows = 40;             ///< [px] reference band: the bottom rows of the image, the whole width
+    int bandSlices = 8;            ///< column slices of the band, 2..32
+    double minColourShare = 0.02;  ///< a bin is present in a slice holding at least this share of its pixels
+    double minSliceFraction = 0.5; ///< a ground colour is present in at least this fraction of the slices
+    /// A ground colour present in fewer slices than this fraction is tentative: a column whose free run is mostly of
+    /// tentative colours may end at an obstacle but never makes its sector Clear (Unknown instead). An obstacle a third
+    /// of the image wide standing over the band (nearer than its far edge) is in half the slices; no ground is Clear
+    /// on that evidence. In [minSliceFraction, 1].
+    double clearSliceFraction = 0.75;
     double minGroundCoverage = 0.5; ///< share of the band in ground colours below which it is not ground-like
     double minBandValue = 30.0;     ///< mean brightness (0..255) of the band below which colour is noise
     int windowRadius = 7;           ///< [px] comparison window (2 r + 1)^2, r in [1, 15]
@@ -124,6 +132,10 @@ public:
     /// horizon) when columnHit() is 0; 0 when the column sees no ground.
     [[nodiscard]] const std::vector<float>& columnRangeM() const noexcept { return columnRange_; }
     [[nodiscard]] const std::vector<std::uint8_t>& columnHit() const noexcept { return columnHit_; }
+    /// 1 for a column whose free run reached the top on evidence that does not make its sector Clear: mostly through
+    /// tentative ground colours, or with ground colours going on above the horizon (no ground is seen there: the
+    /// "ground" is a surface standing in front of the camera).
+    [[nodiscard]] const std::vector<std::uint8_t>& columnUnsure() const noexcept { return columnUnsure_; }
 
 private:
     ColourFreeSpace() = default;
@@ -135,8 +147,15 @@ private:
     void computeScores() noexcept;
     void scanColumns() noexcept;
     void fillSectors(ObstacleSectors& out) noexcept;
+    /// Per column, the pixels with tentative ground colours from its top row down (row by row; nothing to count, and
+    /// all 0, when every ground colour is sure).
+    void countTentative() noexcept;
+    /// More than half of the window's height of rows just above column x's horizon have ground colours.
+    [[nodiscard]] bool aboveHorizonIsGround(int x) const noexcept;
     /// Ground point of pixel (x, y): false when the ray does not meet the ground within maxRangeM.
     bool groundPoint(double x, double y, double& rangeM, double& bearingDeg) const noexcept;
+    /// The same within maxRangeM (infinity: wherever the ray meets the ground).
+    bool groundPoint(double x, double y, double& rangeM, double& bearingDeg, double maxRangeM) const noexcept;
 
     ColourFreeSpaceConfig config_;
     cv::Size size_;
@@ -150,11 +169,15 @@ private:
     Image<std::uint8_t> scores_;
     std::vector<std::int16_t> colSum_;                     ///< per column: ground pixels of the window's rows
     std::vector<std::int32_t> sliceCounts_;                ///< bandSlices x kColourBins, the band's histograms
-    std::array<std::uint8_t, kColourBins> learnt_{};       ///< 1: a colour of the band
+    std::array<std::uint8_t, kColourBins> learnt_{};       ///< 2: a sure colour of the band, 1: tentative, 0: none
     std::array<std::uint8_t, kColourBins> groundColour_{}; ///< 1: a ground colour (learnt, or next to one)
+    std::array<std::uint8_t, kColourBins> tentative_{};    ///< 1: a ground colour only tentatively
     std::vector<float> columnRange_;                       ///< [m]
     std::vector<float> columnBearing_;                     ///< [deg]
     std::vector<std::uint8_t> columnHit_;                  ///< 1: run ended at an obstacle; 0: reached the top
+    std::vector<std::uint8_t> columnUnsure_;               ///< 1: reached the top, but not on evidence of Clear
+    std::vector<std::int16_t> tentativeCount_;             ///< per column: see countTentative()
+    std::vector<int> horizonRow_;                          ///< per column: first row whose ray meets the ground
     std::vector<int> topRow_;           ///< per column: first ROI row whose ground point is within maxRangeM
     std::vector<std::uint16_t> rowSum_; ///< 3 x width vertical 3-row sums of B, G, R (or 1 x width: grey) (blur)
     std::int64_t bandValueSum_ = 0;
