@@ -50,13 +50,13 @@ inline std::uint8_t colourBin(int b, int g, int r, int& value) noexcept
     return static_cast<std::uint8_t>(hueBin * kSatBins + sat * kSatBins / (kScoreMax + 1));
 }
 
-/// First ROI row [px]: roiTopFraction of the image height, rounded.
 /// Rows just above the horizon that aboveHorizonIsGround() reads: one window's height.
 int aboveHorizonRows(const ColourFreeSpaceConfig& config)
 {
     return 2 * config.windowRadius + 1;
 }
 
+/// First ROI row [px]: roiTopFraction of the image height, rounded.
 int roiTopRow(const ColourFreeSpaceConfig& config, cv::Size imageSize)
 {
     return static_cast<int>(std::lround(imageSize.height * config.roiTopFraction));
@@ -153,7 +153,9 @@ Result<ColourFreeSpace, Error> ColourFreeSpace::create(const ColourFreeSpaceConf
     const int roiTop = roiTopRow(config, imageSize);
     sut.roiTop_ = roiTop;
     // Each column's first row below the horizon (the ray meets the ground), and the rows binned: from a window's
-    // height above the highest horizon (see aboveHorizonIsGround) or half a window above the ROI.
+    // height above the highest horizon (see aboveHorizonIsGround) or half a window above the ROI, whichever is higher
+    // (on a rig pitched down the horizon is well above the ROI, and the rows between are binned too: more work, for
+    // a check that must hold at every pitch).
     sut.horizonRow_.assign(static_cast<std::size_t>(imageSize.width), imageSize.height);
     int highestHorizon = imageSize.height;
     for (int x = 0; x < imageSize.width; ++x) {
