@@ -449,11 +449,14 @@ TEST(ColourFreeSpace, CreateRejectsBadConfigNamingIt)
     threshold.matchThreshold = 0.0;
     ColourFreeSpaceConfig sectors;
     sectors.sectorCount = ugv::kMaxSectors + 1;
+    ColourFreeSpaceConfig clear;
+    clear.clearSliceFraction = clear.minSliceFraction / 2.0; // Clear on less evidence than a ground colour needs
 
     const auto badWindow = ColourFreeSpace::create(window, {640, 480}, projection, ground);
     const auto badBand = ColourFreeSpace::create(band, {640, 480}, projection, ground);
     const auto badThreshold = ColourFreeSpace::create(threshold, {640, 480}, projection, ground);
     const auto badSectors = ColourFreeSpace::create(sectors, {640, 480}, projection, ground);
+    const auto badClear = ColourFreeSpace::create(clear, {640, 480}, projection, ground);
     const auto badGround = ColourFreeSpace::create({}, {640, 480}, projection, ugv::vision::GroundPlane{});
 
     ASSERT_FALSE(badWindow.has_value());
@@ -464,6 +467,8 @@ TEST(ColourFreeSpace, CreateRejectsBadConfigNamingIt)
     EXPECT_NE(badThreshold.error().what.find("matchThreshold"), std::string::npos);
     ASSERT_FALSE(badSectors.has_value());
     EXPECT_NE(badSectors.error().what.find("sectorCount"), std::string::npos);
+    ASSERT_FALSE(badClear.has_value());
+    EXPECT_NE(badClear.error().what.find("clearSliceFraction"), std::string::npos);
     ASSERT_FALSE(badGround.has_value());
     EXPECT_FALSE(badGround.error().fix.empty());
 }
