@@ -109,6 +109,13 @@ typedef struct {
     bool expectDenied;   ///< pass only when nothing of the service is discovered or received (no valid certificate)
 } Options;
 
+/// Whether the run reads ugvsense/sectors and writes ugvsense/pose: not as a ROS 2 node (an enclave), whose
+/// permissions allow none of ugvsense/*.
+static bool usesOurTopics(const Options* o)
+{
+    return o->enclave == NULL;
+}
+
 static Nav2Source nav2SourceDefaults(bool clearing)
 {
     const Nav2Source s = {.minObstacleHeight = 0.0,
@@ -1000,7 +1007,7 @@ static bool enough(const Options* o, const Stats* st, const Run* r)
             return false;
         }
     }
-    const bool ours = o->enclave == NULL; // ugvsense/sectors and ugvsense/pose are read and written
+    const bool ours = usesOurTopics(o);
     return r->frames >= o->minFrames && (!ours || (r->pairedSectors > 0 && st->posesAccepted >= 3)) && st->points > 0 &&
            st->clearRays > 0 && st->obstacleRays > 0;
 }
@@ -1118,7 +1125,7 @@ static void checkRun(const Options* o, const Stats* st, const Grid* g, const Run
     if (!r->scanMatched || !r->clearMatched || !r->cloudMatched) {
         fail("the service's scan, clearing scan or cloud writer was not discovered in %.0f s", o->durationS);
     }
-    const bool ours = o->enclave == NULL; // a ROS 2 node reads none of ugvsense/*
+    const bool ours = usesOurTopics(o);
     if (ours && !r->poseMatched) {
         fail("the service's ugvsense/pose reader was not discovered in %.0f s", o->durationS);
     }
@@ -1246,9 +1253,8 @@ int main(int argc, char** argv)
     const dds_entity_t scans = makeReader(pp, &sensor_msgs_msg_dds__LaserScan__desc, r.scanTopic, reliable);
     const dds_entity_t clearScans = makeReader(pp, &sensor_msgs_msg_dds__LaserScan__desc, r.clearTopic, reliable);
     const dds_entity_t clouds = makeReader(pp, &sensor_msgs_msg_dds__PointCloud2__desc, r.cloudTopic, reliable);
-    // ugvsense/sectors is written best effort: only a best-effort reader matches it. A ROS 2 node (an enclave) has
-    // no permission for ugvsense/*: 0 stands for "not made".
-    const bool ours = o.enclave == NULL;
+    // ugvsense/sectors is written best effort: only a best-effort reader matches it. 0 stands for "not made".
+    const bool ours = usesOurTopics(&o);
     const dds_entity_t sectors =
         ours ? makeReader(pp, &ugvsense_msg_ObstacleSectors_desc, "ugvsense/sectors", false) : 0;
     const dds_entity_t poseTopic =

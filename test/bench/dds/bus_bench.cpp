@@ -295,8 +295,7 @@ public:
     /// The next sample's latency [s].
     double next()
     {
-        while (!takeOne()) {
-        }
+        skip();
         const double latencyS = static_cast<double>(dds::realtimeNowNs() - sample_.publish_stamp_ns()) * 1e-9;
         us_.push_back(latencyS * 1e6);
         return latencyS;
