@@ -93,6 +93,11 @@ void quietIceoryxLog()
     iox::log::LogManager::GetLogManager().SetDefaultLogLevel(iox::log::LogLevel::kWarn);
 }
 
+} // namespace
+
+// Named, not anonymous: the subscribers' Impl types (declared in the header) derive from it.
+namespace detail {
+
 /// A subscriber with the wait set that blocks on its data (attached for its whole life), and a trigger that ends a
 /// wait at once (wake()). iceoryx 2.0.3 times its waits on CLOCK_REALTIME (sem_timedwait): a clock step back
 /// during a wait stretches it by the step; frames still end it, and wake() does when the owner stops.
@@ -145,6 +150,10 @@ struct WaitingSubscriber {
     iox::popo::WaitSet<2> waitSet; // after the trigger: destroyed first, it detaches both
     bool attached = false;
 };
+
+} // namespace detail
+
+namespace {
 
 std::string topicName(Topic topic)
 {
@@ -293,7 +302,7 @@ bool FramePublisher::hasSubscribers() const noexcept
     return impl_->publisher.hasSubscribers();
 }
 
-struct FrameSubscriber::Impl : WaitingSubscriber {
+struct FrameSubscriber::Impl : detail::WaitingSubscriber {
     using WaitingSubscriber::WaitingSubscriber;
 };
 
@@ -400,7 +409,7 @@ bool SectorsPublisher::publish(const SectorsMessage& message) noexcept
     return true;
 }
 
-struct SectorsSubscriber::Impl : WaitingSubscriber {
+struct SectorsSubscriber::Impl : detail::WaitingSubscriber {
     using WaitingSubscriber::WaitingSubscriber;
 };
 

@@ -1,6 +1,8 @@
 #include "run_command.hpp"
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 
 #include <sys/wait.h>
 
@@ -21,6 +23,17 @@ CommandRun runCommand(const std::string& commandLine)
     const int status = pclose(pipe);
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return result;
+}
+
+std::string readText(const std::filesystem::path& path)
+{
+    std::ifstream in(path);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeText(const std::filesystem::path& path, const std::string& text)
+{
+    std::ofstream(path) << text;
 }
 
 } // namespace ugv::test

@@ -38,7 +38,7 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
     const std::string source = args.get("source", kCommand);
     auto writers = bus::InputWriters::create(bus);
     if (!writers) {
-        return bus::fail(kCommand, writers.error());
+        return reportError(kCommand, writers.error());
     }
     bus::InputWriters& w = *writers;
     bus::waitForReaders(w.observations, bus::ReaderWait{waitReaders},
@@ -198,10 +198,10 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
     }
     if (!ok) {
         return gStop.load() ? 1
-                            : bus::fail(kCommand, Error{"ugvsense " + std::string(kCommand),
-                                                        "the bus refused a sample for " +
-                                                            std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
-                                                        "check the readers"});
+                            : reportError(kCommand, Error{"ugvsense " + std::string(kCommand),
+                                                          "the bus refused a sample for " +
+                                                              std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
+                                                          "check the readers"});
     }
     std::printf("hostile samples sent (each breaks one check):\n");
     for (const Kind& k : kinds) {
@@ -247,11 +247,11 @@ int sendHostile(dds::Bus& bus, const Args& args, int waitReaders, double lingerS
     std::fflush(stdout);
     if (flooded < flood || ahead < aheadFlood) {
         return gStop.load() ? 1
-                            : bus::fail(kCommand, Error{"ugvsense " + std::string(kCommand) + " --flood",
-                                                        "the bus refused the flood after " + std::to_string(flooded) +
-                                                            " sample(s) for " +
-                                                            std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
-                                                        "check the readers"});
+                            : reportError(kCommand, Error{"ugvsense " + std::string(kCommand) + " --flood",
+                                                          "the bus refused the flood after " + std::to_string(flooded) +
+                                                              " sample(s) for " +
+                                                              std::to_string(bus::kRefusedWriteTimeout.count()) + " s",
+                                                          "check the readers"});
     }
     return bus::finish(w, kCommand, "(" + std::to_string(hostile) + " hostile, then the flood)", lingerS, bus.config());
 }
@@ -309,7 +309,7 @@ int run(int argc, char** argv)
     installStopHandler();
     auto created = dds::Bus::create(*config);
     if (!created) {
-        return bus::fail(kCommand, created.error());
+        return reportError(kCommand, created.error());
     }
     return sendHostile(**created, args, static_cast<int>(*readers), *linger, static_cast<std::uint64_t>(*flood),
                        static_cast<std::uint64_t>(*aheadFlood));

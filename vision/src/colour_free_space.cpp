@@ -18,7 +18,7 @@ constexpr int kHueRange = 180; // OpenCV 8-bit hue 0..179
 constexpr int kGreyShift = 4;  // 256 / kGreyBins
 constexpr int kBlurTaps = 9;   // 3x3 box
 
-Error configError(const std::string& what, const std::string& fix)
+Error colourConfigError(const std::string& what, const std::string& fix)
 {
     return Error{"ColourFreeSpaceConfig", what, fix};
 }
@@ -68,54 +68,58 @@ Result<void, Error> checkConfig(const ColourFreeSpaceConfig& config, cv::Size im
     const int r = config.windowRadius;
     const int win = 2 * r + 1;
     if (r < 1 || r > kMaxWindowRadius) {
-        return Unexpected(configError("windowRadius " + std::to_string(r) + " is out of range",
-                                      "use 1.." + std::to_string(kMaxWindowRadius)));
+        return Unexpected(colourConfigError("windowRadius " + std::to_string(r) + " is out of range",
+                                            "use 1.." + std::to_string(kMaxWindowRadius)));
     }
     if (imageSize.width < win || imageSize.height < win) {
-        return Unexpected(configError("image size " + std::to_string(imageSize.width) + "x" +
-                                          std::to_string(imageSize.height) + " is smaller than the window",
-                                      "give the camera's image size"));
+        return Unexpected(colourConfigError("image size " + std::to_string(imageSize.width) + "x" +
+                                                std::to_string(imageSize.height) + " is smaller than the window",
+                                            "give the camera's image size"));
     }
     if (!(config.roiTopFraction >= 0.0 && config.roiTopFraction < 1.0)) {
-        return Unexpected(configError("roiTopFraction " + std::to_string(config.roiTopFraction) + " is outside [0, 1)",
-                                      "use e.g. 0.5 (bottom half)"));
+        return Unexpected(
+            colourConfigError("roiTopFraction " + std::to_string(config.roiTopFraction) + " is outside [0, 1)",
+                              "use e.g. 0.5 (bottom half)"));
     }
     const int roiTop = roiTopRow(config, imageSize);
     if (imageSize.height - roiTop < win) {
-        return Unexpected(configError("the ROI has fewer rows than the window (" + std::to_string(win) + ")",
-                                      "lower roiTopFraction or windowRadius"));
+        return Unexpected(colourConfigError("the ROI has fewer rows than the window (" + std::to_string(win) + ")",
+                                            "lower roiTopFraction or windowRadius"));
     }
     if (config.bandRows < win || config.bandRows > imageSize.height - roiTop) {
-        return Unexpected(configError("bandRows " + std::to_string(config.bandRows) + " does not fit the ROI",
-                                      "the reference band must be at least one window (" + std::to_string(win) +
-                                          " rows) and lie inside the ROI rows, e.g. 40"));
+        return Unexpected(colourConfigError("bandRows " + std::to_string(config.bandRows) + " does not fit the ROI",
+                                            "the reference band must be at least one window (" + std::to_string(win) +
+                                                " rows) and lie inside the ROI rows, e.g. 40"));
     }
     if (config.bandSlices < 2 || config.bandSlices > kMaxSlices || imageSize.width / config.bandSlices < win) {
-        return Unexpected(configError("bandSlices " + std::to_string(config.bandSlices) + " is out of range",
-                                      "use 2.." + std::to_string(kMaxSlices) + " slices at least one window wide"));
+        return Unexpected(
+            colourConfigError("bandSlices " + std::to_string(config.bandSlices) + " is out of range",
+                              "use 2.." + std::to_string(kMaxSlices) + " slices at least one window wide"));
     }
     if (!(config.matchThreshold > 0.0 && config.matchThreshold <= 1.0) ||
         !(config.minColourShare > 0.0 && config.minColourShare <= 1.0) ||
         !(config.minSliceFraction > 0.0 && config.minSliceFraction <= 1.0) ||
         !(config.clearSliceFraction >= config.minSliceFraction && config.clearSliceFraction <= 1.0) ||
         !(config.minGroundCoverage >= 0.0 && config.minGroundCoverage <= 1.0)) {
-        return Unexpected(configError("matchThreshold, minColourShare, minSliceFraction, clearSliceFraction and "
-                                      "minGroundCoverage must lie in (0, 1], (0, 1], (0, 1], [minSliceFraction, 1] "
-                                      "and [0, 1]",
-                                      "use e.g. 0.5, 0.02, 0.5, 0.75 and 0.7"));
+        return Unexpected(
+            colourConfigError("matchThreshold, minColourShare, minSliceFraction, clearSliceFraction and "
+                              "minGroundCoverage must lie in (0, 1], (0, 1], (0, 1], [minSliceFraction, 1] "
+                              "and [0, 1]",
+                              "use e.g. 0.5, 0.02, 0.5, 0.75 and 0.7"));
     }
     if (config.minObstacleRows < 1 || config.minObstacleRows > imageSize.height - roiTop) {
-        return Unexpected(configError("minObstacleRows " + std::to_string(config.minObstacleRows) + " is out of range",
-                                      "use 1..ROI rows, e.g. 3"));
+        return Unexpected(
+            colourConfigError("minObstacleRows " + std::to_string(config.minObstacleRows) + " is out of range",
+                              "use 1..ROI rows, e.g. 3"));
     }
     if (config.sectorCount < 1 || config.sectorCount > kMaxSectors) {
-        return Unexpected(configError("sectorCount " + std::to_string(config.sectorCount) + " is out of range",
-                                      "use 1.." + std::to_string(kMaxSectors)));
+        return Unexpected(colourConfigError("sectorCount " + std::to_string(config.sectorCount) + " is out of range",
+                                            "use 1.." + std::to_string(kMaxSectors)));
     }
     if (!(config.maxRangeM > 0.0) || !(config.dangerDistanceM > 0.0F) ||
         !(config.cautionDistanceM >= config.dangerDistanceM)) {
-        return Unexpected(configError("distances must be positive with dangerDistanceM <= cautionDistanceM",
-                                      "use e.g. maxRangeM 50, danger 1.5, caution 5"));
+        return Unexpected(colourConfigError("distances must be positive with dangerDistanceM <= cautionDistanceM",
+                                            "use e.g. maxRangeM 50, danger 1.5, caution 5"));
     }
     return {};
 }

@@ -7,8 +7,8 @@
 namespace ugv::vision {
 namespace {
 
-constexpr double kDisparityScale = 1.0 / 16.0; ///< CV_16S fixed point -> [px]
-constexpr double kMinDeterminant = 1e-9;       ///< relative, for degenerate samples and normal equations
+constexpr double kD16ToPx = 1.0 / 16.0;  ///< CV_16S fixed point -> [px]
+constexpr double kMinDeterminant = 1e-9; ///< relative, for degenerate samples and normal equations
 
 /// splitmix64: tiny, allocation-free, reproducible sampling.
 struct Rng {
@@ -90,7 +90,7 @@ int GroundEstimator::collectCandidates(ImageView<const std::int16_t> disparity) 
             if (row[x] < 0) {
                 continue;
             }
-            const double d = row[x] * kDisparityScale;
+            const double d = row[x] * kD16ToPx;
             candidates_[static_cast<std::size_t>(count++)] =
                 Candidate{static_cast<float>(x), static_cast<float>(y), static_cast<float>(d)};
         }

@@ -15,7 +15,7 @@ constexpr int kMaxHalfWidth = 7; ///< window up to 15 x 9
 constexpr int kMaxHalfHeight = 4;
 constexpr std::int16_t kInvalid = -kSub;
 
-Error configError(const std::string& what)
+Error verifierConfigError(const std::string& what)
 {
     return Error{"ObstacleVerifierConfig", what, "see vision/include/ugv/vision/obstacle_verifier.hpp"};
 }
@@ -126,24 +126,25 @@ bool windowInside(int x, int d16, int hw, int w) noexcept
 Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierConfig& config)
 {
     if (config.width < 1 || config.height < 1) {
-        return Unexpected(
-            configError("ROI " + std::to_string(config.width) + "x" + std::to_string(config.height) + " is empty"));
+        return Unexpected(verifierConfigError("ROI " + std::to_string(config.width) + "x" +
+                                              std::to_string(config.height) + " is empty"));
     }
     const auto windowOk = [](int hw, int hh) {
         return hw >= 1 && hw <= kMaxHalfWidth && hh >= 0 && hh <= kMaxHalfHeight;
     };
     if (!windowOk(config.windowHalfWidth, config.windowHalfHeight) ||
         !windowOk(config.belowHalfWidth, config.belowHalfHeight)) {
-        return Unexpected(configError("window half sizes " + std::to_string(config.windowHalfWidth) + " x " +
-                                      std::to_string(config.windowHalfHeight) + " and below ground " +
-                                      std::to_string(config.belowHalfWidth) + " x " +
-                                      std::to_string(config.belowHalfHeight) + " must be in 1..7 x 0..4"));
+        return Unexpected(verifierConfigError("window half sizes " + std::to_string(config.windowHalfWidth) + " x " +
+                                              std::to_string(config.windowHalfHeight) + " and below ground " +
+                                              std::to_string(config.belowHalfWidth) + " x " +
+                                              std::to_string(config.belowHalfHeight) + " must be in 1..7 x 0..4"));
     }
     if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
         !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F) || !(config.refineMaxGroundPx >= 0.0F) ||
         !(config.contrastNoiseFactor >= 0.0F)) {
-        return Unexpected(configError("minResidualPx, contrastNoiseFactor, minContrast and minContrastBelow must be "
-                                      ">= 0 and acceptRatio in (0, 1]"));
+        return Unexpected(
+            verifierConfigError("minResidualPx, contrastNoiseFactor, minContrast and minContrastBelow must be "
+                                ">= 0 and acceptRatio in (0, 1]"));
     }
     auto noise = ImageNoise::create(config.width, config.height);
     if (!noise) {

@@ -16,7 +16,7 @@ constexpr int kMaxBlockSize = 11;
 constexpr double kMaxGroundRangeDropM = 10.0;     ///< [m]
 constexpr double kMaxGroundRangeMarginDeg = 10.0; ///< [deg]
 
-Error configError(const std::string& what)
+Error matcherConfigError(const std::string& what)
 {
     return Error{"RoiMatcherConfig", what, "see vision/include/ugv/vision/roi_matcher.hpp for the valid ranges"};
 }
@@ -40,35 +40,37 @@ int toOpenCvMode(MatcherMode mode) noexcept
 Result<RoiMatcher, Error> RoiMatcher::create(const RoiMatcherConfig& config, cv::Size roiSize)
 {
     if (config.numDisparities < 16 || config.numDisparities % 16 != 0) {
-        return Unexpected(configError("numDisparities " + std::to_string(config.numDisparities) +
-                                      " is not a positive multiple of 16"));
+        return Unexpected(matcherConfigError("numDisparities " + std::to_string(config.numDisparities) +
+                                             " is not a positive multiple of 16"));
     }
     if (config.blockSize < 1 || config.blockSize > kMaxBlockSize || config.blockSize % 2 == 0) {
-        return Unexpected(configError("blockSize " + std::to_string(config.blockSize) + " is not odd in 1..11"));
+        return Unexpected(matcherConfigError("blockSize " + std::to_string(config.blockSize) + " is not odd in 1..11"));
     }
     if (config.uniquenessRatio < 0 || config.speckleWindowSize < 0 || config.speckleRange < 0 ||
         config.preFilterCap < 1) {
-        return Unexpected(configError("uniquenessRatio, speckle settings or preFilterCap out of range"));
+        return Unexpected(matcherConfigError("uniquenessRatio, speckle settings or preFilterCap out of range"));
     }
     if (!(config.groundRangeDropM > 0.0 && config.groundRangeDropM <= kMaxGroundRangeDropM) ||
         !(config.groundRangeMarginDeg >= 0.0 && config.groundRangeMarginDeg <= kMaxGroundRangeMarginDeg)) {
-        return Unexpected(configError("groundRangeDropM " + std::to_string(config.groundRangeDropM) +
-                                      " (need (0, 10] m) or groundRangeMarginDeg " +
-                                      std::to_string(config.groundRangeMarginDeg) +
-                                      " (need [0, 10] deg) out of range"));
+        return Unexpected(matcherConfigError("groundRangeDropM " + std::to_string(config.groundRangeDropM) +
+                                             " (need (0, 10] m) or groundRangeMarginDeg " +
+                                             std::to_string(config.groundRangeMarginDeg) +
+                                             " (need [0, 10] deg) out of range"));
     }
     const int halfRows = config.halfResolutionRows;
     if (halfRows != 0 && (config.mode != MatcherMode::CensusSgm || config.padLeft || config.numDisparities % 32 != 0 ||
                           halfRows < 0 || halfRows % 2 != 0 || halfRows + 2 * kHalfOverlapRows > roiSize.height)) {
-        return Unexpected(configError("halfResolutionRows " + std::to_string(halfRows) +
-                                      " needs the census matcher without padLeft, numDisparities a multiple of 32 "
-                                      "and an even count of at most the ROI height " +
-                                      std::to_string(roiSize.height) + " - " + std::to_string(2 * kHalfOverlapRows)));
+        return Unexpected(
+            matcherConfigError("halfResolutionRows " + std::to_string(halfRows) +
+                               " needs the census matcher without padLeft, numDisparities a multiple of 32 "
+                               "and an even count of at most the ROI height " +
+                               std::to_string(roiSize.height) + " - " + std::to_string(2 * kHalfOverlapRows)));
     }
     if (roiSize.width <= config.numDisparities || roiSize.height < config.blockSize) {
-        return Unexpected(configError("ROI " + std::to_string(roiSize.width) + "x" + std::to_string(roiSize.height) +
-                                      " is too small for numDisparities " + std::to_string(config.numDisparities) +
-                                      " and blockSize " + std::to_string(config.blockSize)));
+        return Unexpected(matcherConfigError("ROI " + std::to_string(roiSize.width) + "x" +
+                                             std::to_string(roiSize.height) + " is too small for numDisparities " +
+                                             std::to_string(config.numDisparities) + " and blockSize " +
+                                             std::to_string(config.blockSize)));
     }
 
     cv::setNumThreads(1);
@@ -317,13 +319,13 @@ bool RoiMatcher::toFloat(cv::Mat& out) const noexcept
     if (out.type() != CV_32FC1 || out.rows != roiSize_.height || out.cols != roiSize_.width) {
         return false;
     }
-    constexpr float kInvalid = -1.0F;
+    constexpr float kNoDisparity = -1.0F;
     constexpr float kInvScale = 1.0F / static_cast<float>(kScale);
     for (int y = 0; y < disp16_.rows; ++y) {
         const auto* src = disp16_.ptr<std::int16_t>(y);
         auto* dst = out.ptr<float>(y);
         for (int x = 0; x < disp16_.cols; ++x) {
-            dst[x] = src[x] < 0 ? kInvalid : static_cast<float>(src[x]) * kInvScale;
+            dst[x] = src[x] < 0 ? kNoDisparity : static_cast<float>(src[x]) * kInvScale;
         }
     }
     return true;

@@ -42,7 +42,7 @@ GroundAxes groundAxes(const GroundPlane& g) noexcept
     return a;
 }
 
-Error configError(const std::string& what)
+Error sectorConfigError(const std::string& what)
 {
     return Error{"SectorBuilderConfig", what, "see vision/include/ugv/vision/sector_builder.hpp"};
 }
@@ -50,8 +50,8 @@ Error configError(const std::string& what)
 Result<void, Error> checkConfig(const SectorBuilderConfig& config)
 {
     if (config.sectorCount < 1 || config.sectorCount > kMaxSectors) {
-        return Unexpected(configError("sectorCount " + std::to_string(config.sectorCount) + " is not in 1.." +
-                                      std::to_string(kMaxSectors)));
+        return Unexpected(sectorConfigError("sectorCount " + std::to_string(config.sectorCount) + " is not in 1.." +
+                                            std::to_string(kMaxSectors)));
     }
     if (!(config.minHeightM > 0.0F) || !(config.minDepthM > 0.0F) || !(config.rangeBinM > 0.0F) ||
         !(config.maxRangeM >= 0.0F) || !(config.maxRangeDisparityPx > 0.0F) || config.minSupport < 1 ||
@@ -67,7 +67,7 @@ Result<void, Error> checkConfig(const SectorBuilderConfig& config)
         !(config.dropProfileResidualPx > 0.0F) || config.dropProfileMinPixels < 1 || config.dropEdgeSectors < 0 ||
         !(config.closeGapM >= 0.0F) || !(config.faceSupportRangeM > 0.0F) || config.minFaceSupport < 1 ||
         config.minFarTallVotes < 1 || !(config.referenceColumnsPerSector > 0.0F) || !(config.referenceFocalPx > 0.0F)) {
-        return Unexpected(configError(
+        return Unexpected(sectorConfigError(
             "a threshold is out of range (all must be positive, percentile in [0, 1), faceHeightFraction in (0, 1])"));
     }
     const LocalGroundConfig& lg = config.localGround;
@@ -77,8 +77,8 @@ Result<void, Error> checkConfig(const SectorBuilderConfig& config)
         !(config.heightNoiseFactor >= 0.0F) || !(config.dropNoiseFactor >= 0.0F) ||
         !(config.dropProfileNoiseFactor >= 0.0F) || config.dropProfileMinLabels < 0 || !(config.maxWallSlope > 0.0F) ||
         !(config.wallSlopeSigmas >= 0.0F) || !(config.floorLineTolerance >= 0.0F)) {
-        return Unexpected(configError("a local-ground or drop-evidence setting is out of range (band, bin > 0, "
-                                      "minPoints >= 1, share in [0, 1], maxWallSlope > 0, the others >= 0)"));
+        return Unexpected(sectorConfigError("a local-ground or drop-evidence setting is out of range (band, bin > 0, "
+                                            "minPoints >= 1, share in [0, 1], maxWallSlope > 0, the others >= 0)"));
     }
     return {};
 }
@@ -130,7 +130,7 @@ Result<SectorBuilder, Error> SectorBuilder::create(const SectorBuilderConfig& co
     sut.config_ = rigConfig(config, projection);
     if (!(sut.config_.maxRangeM > config.rangeBinM)) {
         return Unexpected(
-            configError("maxRangeM " + std::to_string(sut.config_.maxRangeM) + " is not above rangeBinM"));
+            sectorConfigError("maxRangeM " + std::to_string(sut.config_.maxRangeM) + " is not above rangeBinM"));
     }
     sut.projection_ = projection;
     sut.roi_ = roi;

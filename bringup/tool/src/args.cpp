@@ -128,6 +128,12 @@ int reportUsageError(const std::string& command, const Error& error)
     return 2;
 }
 
+int reportError(const std::string& command, const Error& error)
+{
+    std::cerr << "ugvsense " << command << ": error: " << error.message() << '\n';
+    return 1;
+}
+
 std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command, Positionals positionals)
 {
     if (auto parsed = args.parse(argc, argv, 2); !parsed) {

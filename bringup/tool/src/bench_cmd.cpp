@@ -25,7 +25,7 @@
 namespace ugv::tool {
 namespace {
 
-constexpr const char* kCommand = "bench";
+constexpr const char* kBenchCommand = "bench";
 
 /// Counts each task thread's allocations from its steady state to its end (ServiceOptions::probe).
 class AllocationProbe {
@@ -77,12 +77,6 @@ private:
     std::map<std::string, std::unique_ptr<rt::ThreadAllocationScope>> scopes_;
     std::map<std::string, std::size_t> counts_;
 };
-
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense bench: error: " << error.message() << '\n';
-    return 1;
-}
 
 struct BenchRun {
     service::RunResult result;
@@ -139,7 +133,8 @@ int sweep(const Args& args, std::uint64_t frames, bool oneCore)
     std::error_code ec;
     const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string(); // this ugvsense binary
     if (ec) {
-        return fail(Error{"/proc/self/exe", "cannot find this program: " + ec.message(), "run it from its path"});
+        return reportError(kBenchCommand, Error{"/proc/self/exe", "cannot find this program: " + ec.message(),
+                                                "run it from its path"});
     }
     for (const int r : {10, 15, 20, 25, 30}) {
         std::string command = "'" + self + "' bench --recording '" + args.get("recording") + "' --rate " +
@@ -156,9 +151,10 @@ int sweep(const Args& args, std::uint64_t frames, bool oneCore)
             std::ifstream failed(log);
             const std::string output{std::istreambuf_iterator<char>(failed), std::istreambuf_iterator<char>()};
             (void)std::fprintf(stderr, "%s", output.substr(output.size() > 4000 ? output.size() - 4000 : 0).c_str());
-            return fail(Error{"ugvsense bench --sweep",
-                              "the run at " + std::to_string(r) + " fps failed (its output above)",
-                              "run it alone: ugvsense bench --recording REC --rate " + std::to_string(r)});
+            return reportError(kBenchCommand,
+                               Error{"ugvsense bench --sweep",
+                                     "the run at " + std::to_string(r) + " fps failed (its output above)",
+                                     "run it alone: ugvsense bench --recording REC --rate " + std::to_string(r)});
         }
         std::filesystem::remove(log);
         std::ifstream in(json);
@@ -184,7 +180,7 @@ int sweep(const Args& args, std::uint64_t frames, bool oneCore)
 int runBench(int argc, char** argv)
 {
     Args args(
-        kCommand,
+        kBenchCommand,
         "--recording REC [--rate FPS] [--frames N] [--json OUT] [--one-core] [--sweep] [--config FILE]\n"
         "  Replays REC (looping) through the real service: iceoryx rings (a running RouDi, else one inside this\n"
         "  process), capture/vision/publish threads at their configured priorities where permitted. Reports\n"
@@ -198,14 +194,14 @@ int runBench(int argc, char** argv)
          {"one-core", "", "pin the three tasks to CPU 0 (the one-core budget)", false},
          {"sweep", "", "find the highest rate without deadline misses", false},
          {"config", "FILE", "service config (default: built-in defaults)", false}});
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kBenchCommand)) {
         return *exit;
     }
     const auto rate = args.number("rate", 0.0, 0.0, 1000.0);
     const auto frames = args.number("frames", 300, 20, 1e9);
     for (const auto* value : {&rate, &frames}) {
         if (!*value) {
-            return reportUsageError(kCommand, value->error());
+            return reportUsageError(kBenchCommand, value->error());
         }
     }
     const bool oneCore = args.has("one-core");
@@ -215,7 +211,7 @@ int runBench(int argc, char** argv)
     auto run =
         benchOnce(args.get("recording"), args.get("config"), *rate, static_cast<std::uint64_t>(*frames), oneCore);
     if (!run) {
-        return fail(run.error());
+        return reportError(kBenchCommand, run.error());
     }
     std::printf("%s%s", service::formatReport(run->result.report, run->result.extras).c_str(),
                 service::formatBusReport(run->result).c_str());
@@ -226,7 +222,7 @@ int runBench(int argc, char** argv)
         std::ofstream out(args.get("json"));
         out << service::reportJson(run->result.report, run->result.extras);
         if (!out) {
-            return fail(Error{args.get("json"), "cannot write the file", "check the folder"});
+            return reportError(kBenchCommand, Error{args.get("json"), "cannot write the file", "check the folder"});
         }
         std::printf("wrote %s\n", args.get("json").c_str());
     }

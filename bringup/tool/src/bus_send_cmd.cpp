@@ -45,8 +45,7 @@ using bus::kRefusedWriteTimeout;
 using bus::sleepUntil;
 using bus::writeOne;
 
-constexpr const char* kCommand = "bus-send";
-constexpr int kMaxReportedLines = 50;
+constexpr const char* kBusSendCommand = "bus-send";
 constexpr double kMaxRateHz = 1e6;
 constexpr double kMaxLingerS = 1e7;
 constexpr double kMaxReaders = 1000;
@@ -60,11 +59,6 @@ constexpr double kPoseSigmaM = 0.2;   ///< position standard deviation of the co
 constexpr double kPoseSigmaDeg = 1.0; ///< heading standard deviation [deg]
 constexpr double kDefaultPoseRateHz = 10.0;
 constexpr double kDefaultPoseDurationS = 10.0;
-
-int fail(const Error& error)
-{
-    return bus::fail(kCommand, error);
-}
 
 /// A line of the input file and its message.
 struct Line {
@@ -132,26 +126,27 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
     std::size_t bad = 0;
     auto lines = readInput(path, bad);
     if (!lines) {
-        return fail(lines.error());
+        return reportError(kBusSendCommand, lines.error());
     }
     if (!onlyUgv.empty()) {
         if (auto none = keepOnlyUgv(*lines, path, onlyUgv)) {
-            return fail(*none);
+            return reportError(kBusSendCommand, *none);
         }
     }
     if (lines->empty()) {
-        return fail(Error{path, "no message to send", "give a file of correlator JSON lines (ugvsense correlate-sim)"});
+        return reportError(kBusSendCommand, Error{path, "no message to send",
+                                                  "give a file of correlator JSON lines (ugvsense correlate-sim)"});
     }
     auto writers = InputWriters::create(bus);
     if (!writers) {
-        return fail(writers.error());
+        return reportError(kBusSendCommand, writers.error());
     }
     InputWriters& w = *writers;
     std::array<bool, 4> used{}; // the topics the input has lines for, in the writers' order (the variant's)
     for (const Line& line : *lines) {
         used[line.message.index()] = true;
     }
-    w.waitForReaders(used, wait, bus.config(), kCommand);
+    w.waitForReaders(used, wait, bus.config(), kBusSendCommand);
     std::printf("sending %zu message(s) to %d reader(s)\n", lines->size(), w.observations.matched());
     (void)std::fflush(stdout);
     const auto start = Clock::now();
@@ -185,10 +180,11 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
             if (gStop.load()) {
                 break;
             }
-            return fail(Error{path + ":" + std::to_string(line.number),
-                              "the bus refused the message for " + std::to_string(kRefusedWriteTimeout.count()) +
-                                  " s (a reader does not acknowledge and the writer's history is full)",
-                              "check the readers, or pace the sender with --rate"});
+            return reportError(kBusSendCommand,
+                               Error{path + ":" + std::to_string(line.number),
+                                     "the bus refused the message for " + std::to_string(kRefusedWriteTimeout.count()) +
+                                         " s (a reader does not acknowledge and the writer's history is full)",
+                                     "check the readers, or pace the sender with --rate"});
         }
         ++w.sent[topic];
     }
@@ -204,7 +200,7 @@ int sendInput(dds::Bus& bus, const Args& args, double rateHz, const bus::ReaderW
     char what[512];
     (void)std::snprintf(what, sizeof(what), "from %s%s in %.2f s", path.c_str(),
                         onlyUgv.empty() ? "" : (" (only ugv " + onlyUgv + ")").c_str(), seconds);
-    return bus::finish(w, kCommand, what, lingerS, bus.config());
+    return bus::finish(w, kBusSendCommand, what, lingerS, bus.config());
 }
 
 /// --poses: a vehicle on a 10 m circle, heading along it, at --rate for --duration.
@@ -213,9 +209,9 @@ int sendPoses(dds::Bus& bus, const std::string& vehicle, double rateHz, double d
 {
     auto writer = bus.writer<msg::VehiclePose>();
     if (!writer) {
-        return fail(writer.error());
+        return reportError(kBusSendCommand, writer.error());
     }
-    bus::waitForReaders(*writer, wait, dds::topicName(dds::TopicId::Pose, bus.config()), kCommand);
+    bus::waitForReaders(*writer, wait, dds::topicName(dds::TopicId::Pose, bus.config()), kBusSendCommand);
     const correlator::LocalFrame frame(kCircleCentreLat, kCircleCentreLon);
     const auto count = static_cast<std::uint64_t>(std::floor(durationS * rateHz)) + 1;
     const double omega = kCircleSpeedMps / kCircleRadiusM; // [rad/s], counter-clockwise seen from above
@@ -271,7 +267,7 @@ int sendPoses(dds::Bus& bus, const std::string& vehicle, double rateHz, double d
 /// One mode (--input or --poses), options only where they apply, and names the bus can carry.
 std::optional<Error> checkModeAndNames(const Args& args)
 {
-    const std::string where = std::string("ugvsense ") + kCommand;
+    const std::string where = std::string("ugvsense ") + kBusSendCommand;
     const int modes = (args.has("input") ? 1 : 0) + (args.has("poses") ? 1 : 0);
     if (modes != 1) {
         return Error{where, modes == 0 ? "nothing to send" : "both --input and --poses",
@@ -324,7 +320,7 @@ int runBusSend(int argc, char** argv)
     for (auto& spec : bus::options()) {
         specs.push_back(std::move(spec));
     }
-    Args args(kCommand,
+    Args args(kBusSendCommand,
               "(--input OBS.jsonl [--source NAME] [--only-ugv NAME] [--rate HZ] | --poses VEHICLE [--rate HZ] "
               "[--duration S]) [--wait-readers N] [--wait-timeout S] [--linger S] [--domain N] "
               "[--partition P] [--ros-namespace NS] [--discovery-server LIST]\n"
@@ -334,11 +330,11 @@ int runBusSend(int argc, char** argv)
               "  vehicle on a 10 m circle. --input ends when every matched reader acknowledged everything (60 s at\n"
               "  most, else exit 1).",
               specs);
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kBusSendCommand)) {
         return *exit;
     }
     if (auto bad = checkModeAndNames(args)) {
-        return reportUsageError(kCommand, *bad);
+        return reportUsageError(kBusSendCommand, *bad);
     }
     const auto rate = args.number("rate", args.has("poses") ? kDefaultPoseRateHz : 0.0, 0.001, kMaxRateHz);
     const auto duration = args.number("duration", kDefaultPoseDurationS, 0.0, 1e7);
@@ -347,17 +343,17 @@ int runBusSend(int argc, char** argv)
     const auto waitTimeout = args.number("wait-timeout", bus::kDefaultWaitReadersS, 0.0, kMaxLingerS);
     for (const auto* n : {&rate, &duration, &linger, &readers, &waitTimeout}) {
         if (!*n) {
-            return reportUsageError(kCommand, n->error());
+            return reportUsageError(kBusSendCommand, n->error());
         }
     }
-    auto config = bus::configFrom(args, kCommand, "ugvsense/bus-send");
+    auto config = bus::configFrom(args, kBusSendCommand, "ugvsense/bus-send");
     if (!config) {
-        return reportUsageError(kCommand, config.error());
+        return reportUsageError(kBusSendCommand, config.error());
     }
     installStopHandler();
     auto created = dds::Bus::create(*config);
     if (!created) {
-        return fail(created.error());
+        return reportError(kBusSendCommand, created.error());
     }
     dds::Bus& b = **created;
     const bus::ReaderWait wait{static_cast<int>(*readers), *waitTimeout};

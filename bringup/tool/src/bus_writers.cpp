@@ -13,12 +13,6 @@ constexpr auto kSlice = std::chrono::milliseconds(100);
 
 } // namespace
 
-int fail(const std::string& command, const Error& error)
-{
-    std::cerr << "ugvsense " << command << ": error: " << error.message() << '\n';
-    return 1;
-}
-
 bool sleepUntil(Clock::time_point until)
 {
     while (!gStop.load()) {
@@ -110,7 +104,7 @@ int finish(InputWriters& w, const std::string& command, const std::string& what,
                 acked ? "acknowledged" : "NOT all acknowledged", readers);
     (void)std::fflush(stdout);
     if (!acked) {
-        return fail(
+        return reportError(
             command,
             Error{"ugvsense " + command,
                   "the readers did not acknowledge every message within " + std::to_string(kAckTimeout.count()) + " s",

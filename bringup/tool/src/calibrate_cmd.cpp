@@ -101,11 +101,7 @@ bool parentIsFolder(const std::string& path)
     return std::filesystem::is_directory(parent, ec);
 }
 
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense calibrate: error: " << error.message() << '\n';
-    return 1;
-}
+constexpr const char* kCalibrateCommand = "calibrate";
 
 /// Where and how large the board appears in a kept pair.
 struct BoardView {
@@ -337,24 +333,25 @@ int runCalibrate(int argc, char** argv)
     const std::string jsonPath = args.get("json");
     for (const std::string& path : {outPath, jsonPath}) {
         if (!path.empty() && !parentIsFolder(path)) {
-            return fail(
-                Error{path, "the folder of the output file does not exist", "create it or choose another path"});
+            return reportError(kCalibrateCommand, Error{path, "the folder of the output file does not exist",
+                                                        "create it or choose another path"});
         }
     }
     if (args.has("capture")) {
         auto captured = capturePairs(args, config.innerCorners);
         if (!captured) {
-            return fail(captured.error());
+            return reportError(kCalibrateCommand, captured.error());
         }
         std::printf("captured %d pair(s) into %s\n", *captured, args.get("images").c_str());
     }
     const auto listing = listPairs(args.get("images"));
     if (!listing) {
-        return fail(listing.error());
+        return reportError(kCalibrateCommand, listing.error());
     }
     if (listing->pairs.empty()) {
-        return fail(Error{args.get("images"), "no left*/right* image pairs found",
-                          "name the images leftNN.ext and rightNN.ext (e.g. left01.jpg, right01.jpg)"});
+        return reportError(kCalibrateCommand,
+                           Error{args.get("images"), "no left*/right* image pairs found",
+                                 "name the images leftNN.ext and rightNN.ext (e.g. left01.jpg, right01.jpg)"});
     }
     for (const auto& unpaired : listing->unpaired) {
         std::cout << "unpaired image: " << unpaired << '\n';
@@ -367,7 +364,7 @@ int runCalibrate(int argc, char** argv)
         if (!unreadable.empty()) {
             error.what += " (" + std::to_string(unreadable.size()) + " pair(s) unreadable)";
         }
-        return fail(error);
+        return reportError(kCalibrateCommand, error);
     }
     vision::CalibrationReport& report = *result;
     report.rejected.insert(report.rejected.begin(), unreadable.begin(), unreadable.end());
@@ -375,12 +372,13 @@ int runCalibrate(int argc, char** argv)
     report.calibration.mount = mount;
     printReport(report, unreadable.size());
     if (auto saved = adapters::saveCalibration(outPath, report.calibration); !saved) {
-        return fail(saved.error());
+        return reportError(kCalibrateCommand, saved.error());
     }
     std::printf("wrote %s\n", outPath.c_str());
     if (!jsonPath.empty()) {
         if (!writeJson(jsonPath, report)) {
-            return fail(Error{jsonPath, "cannot write the JSON report", "check that the folder is writable"});
+            return reportError(kCalibrateCommand,
+                               Error{jsonPath, "cannot write the JSON report", "check that the folder is writable"});
         }
         std::printf("wrote %s\n", jsonPath.c_str());
     }

@@ -42,15 +42,8 @@ using correlator::OoiClass;
 using correlator::project;
 using correlator::Snapshot;
 
-constexpr const char* kCommand = "correlate";
+constexpr const char* kCorrelateCommand = "correlate";
 constexpr int kMapSize = 900;
-constexpr int kMaxReportedLines = 50; ///< bad lines printed one by one; the rest are counted
-
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense " << kCommand << ": error: " << error.message() << '\n';
-    return 1;
-}
 
 cv::Scalar stateColour(const ObjectEstimate& o)
 {
@@ -155,12 +148,14 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     const auto duration = args.number("duration", 0.0, 0.0, 1e7);
     const auto fallback = bus::environmentDomain();
     if (!fallback) {
-        return reportUsageError(kCommand, fallback.error());
+        return reportUsageError(kCorrelateCommand, fallback.error());
     }
     const auto domain = args.number("domain", *fallback, 0, bus::kMaxDomainId);
     const auto reorder = args.number("reorder-ms", 2000.0, 0.0, 60000.0);
     if (!duration || !domain || !reorder) {
-        return reportUsageError(kCommand, !duration ? duration.error() : !domain ? domain.error() : reorder.error());
+        return reportUsageError(kCorrelateCommand, !duration ? duration.error()
+                                                   : !domain ? domain.error()
+                                                             : reorder.error());
     }
     ipc::dds::BusConfig bc;
     bc.domainId = static_cast<int>(*domain);
@@ -173,7 +168,7 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     bc.security = bus::securityFrom(args);
     auto bus = ipc::dds::Bus::create(bc);
     if (!bus) {
-        return fail(bus.error());
+        return reportError(kCorrelateCommand, bus.error());
     }
     service::LiveCorrelatorOptions o;
     o.mode = mode;
@@ -185,7 +180,7 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     o.logDir = args.get("log-dir");
     auto live = service::LiveCorrelator::create(**bus, o);
     if (!live) {
-        return fail(live.error());
+        return reportError(kCorrelateCommand, live.error());
     }
     installStopHandler();
     std::printf("correlating live inputs on DDS domain %d%s (Ctrl-C to stop)\n", bc.domainId,
@@ -221,11 +216,12 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
     out.flush();
     if (args.has("map")) {
         if (!last) {
-            return fail(Error{args.get("map"), "no input arrived: nothing to draw",
-                              "check the domain, the partition and that the vehicles publish"});
+            return reportError(kCorrelateCommand,
+                               Error{args.get("map"), "no input arrived: nothing to draw",
+                                     "check the domain, the partition and that the vehicles publish"});
         }
         if (auto drawn = drawMap(args.get("map"), *last, (*live)->feed().ugvs()); !drawn) {
-            return fail(drawn.error());
+            return reportError(kCorrelateCommand, drawn.error());
         }
         std::printf("map of t %.1f written to %s\n", last->t, args.get("map").c_str());
     }
@@ -240,7 +236,7 @@ namespace {
 Args correlateArgs()
 {
     return Args(
-        kCommand,
+        kCorrelateCommand,
         "(--input OBS.jsonl | --from-dds) --output SNAPSHOTS.jsonl [--period S] [--mode pose-corrected|original] "
         "[--map MAP.png]",
         {{"input", "OBS.jsonl", "time-ordered observations, UAV fixes, confirmations, pose corrections", false},
@@ -352,7 +348,7 @@ int correlateFile(const Args& args, correlator::Mode mode, double period, double
     const FileRun run = feedLines(args.get("input"), in, feed, out);
     out.flush();
     if (!out) {
-        return fail(Error{args.get("output"), "write failed", "check the free space"});
+        return reportError(kCorrelateCommand, Error{args.get("output"), "write failed", "check the free space"});
     }
     printFileSummary(feed, run, args.get("output"));
     if (args.has("map")) {
@@ -364,7 +360,7 @@ int correlateFile(const Args& args, correlator::Mode mode, double period, double
                                      "check the input's ranges and positions"});
         }
         if (!drawn) {
-            return fail(drawn.error());
+            return reportError(kCorrelateCommand, drawn.error());
         }
         std::printf("map of t %.1f written to %s\n", run.last.t, args.get("map").c_str());
     }
@@ -376,38 +372,41 @@ int correlateFile(const Args& args, correlator::Mode mode, double period, double
 int runCorrelate(int argc, char** argv)
 {
     Args args = correlateArgs();
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kCorrelateCommand)) {
         return *exit;
     }
     const auto period = args.number("period", 1.0, 0.01, 3600.0);
     const auto lateWindow = args.number("late-window-s", 300.0, 0.0, 3600.0);
     if (!period || !lateWindow) {
-        return reportUsageError(kCommand, !period ? period.error() : lateWindow.error());
+        return reportUsageError(kCorrelateCommand, !period ? period.error() : lateWindow.error());
     }
     const auto mode = correlator::parseMode(args.get("mode", "pose-corrected"));
     if (!mode) {
-        return reportUsageError(kCommand, Error{"--mode " + args.get("mode"), "unknown mode",
-                                                "use " + std::string(correlator::kModeNames)});
+        return reportUsageError(kCorrelateCommand, Error{"--mode " + args.get("mode"), "unknown mode",
+                                                         "use " + std::string(correlator::kModeNames)});
     }
     // Before the run, not after it: cv::imwrite throws on an extension it has no writer for.
     if (args.has("map") && !cv::haveImageWriter(args.get("map"))) {
-        return reportUsageError(kCommand, Error{"--map " + args.get("map"), "no image writer for this file name",
-                                                "give a .png (or .jpg) file name"});
+        return reportUsageError(
+            kCorrelateCommand,
+            Error{"--map " + args.get("map"), "no image writer for this file name", "give a .png (or .jpg) file name"});
     }
     if (args.has("input") == args.has("from-dds")) {
-        return reportUsageError(kCommand, Error{"--input / --from-dds", "give exactly one input",
-                                                "a JSON-lines file with --input, or --from-dds for the live bus"});
+        return reportUsageError(kCorrelateCommand,
+                                Error{"--input / --from-dds", "give exactly one input",
+                                      "a JSON-lines file with --input, or --from-dds for the live bus"});
     }
     std::ifstream in;
     if (args.has("input")) {
         in.open(args.get("input"));
         if (!in) {
-            return fail(Error{args.get("input"), "cannot open the input", "check the path"});
+            return reportError(kCorrelateCommand, Error{args.get("input"), "cannot open the input", "check the path"});
         }
     }
     std::ofstream out(args.get("output"));
     if (!out) {
-        return fail(Error{args.get("output"), "cannot create the output", "check the folder"});
+        return reportError(kCorrelateCommand,
+                           Error{args.get("output"), "cannot create the output", "check the folder"});
     }
     if (args.has("from-dds")) {
         return correlateFromDds(args, *mode, *period, *lateWindow, out);

@@ -42,7 +42,7 @@ using Eigen::Vector2d;
 using nlohmann::json;
 using nlohmann::ordered_json;
 
-constexpr const char* kCommand = "correlate-eval";
+constexpr const char* kCorrelateEvalCommand = "correlate-eval";
 constexpr const correlator::GospaParams& kGospa = kScoreGospa;
 constexpr int kAlpha = kScoreAlpha;
 
@@ -320,26 +320,18 @@ Result<void, Error> writeJson(const std::string& path, const ordered_json& figur
     return {};
 }
 
-int reportFailure(const Error& error)
-{
-    std::cerr << "ugvsense " << kCommand << ": error: " << error.message() << '\n';
-    return 1;
-}
-
 /// --sweep: the options of the grid run (correlate_sweep.hpp).
 int runSweep(const Args& args)
 {
     constexpr double kMaxSeeds = 1000.0;
-    constexpr double kMaxSeed = 1e15;
-    constexpr double kMaxDurationS = 7.0 * 24.0 * 3600.0;
     SweepOptions options;
     options.quick = args.has("quick");
     const auto seeds = args.number("seeds", options.seeds, 1, kMaxSeeds);
-    const auto firstSeed = args.number("first-seed", static_cast<double>(options.firstSeed), 0, kMaxSeed);
-    const auto duration = args.number("duration", options.quick ? 600.0 : options.durationS, 1, kMaxDurationS);
+    const auto firstSeed = args.number("first-seed", static_cast<double>(options.firstSeed), 0, kMaxScenarioSeed);
+    const auto duration = args.number("duration", options.quick ? 600.0 : options.durationS, 1, kMaxScenarioDurationS);
     for (const auto* number : {&seeds, &firstSeed, &duration}) {
         if (!*number) {
-            return reportUsageError(kCommand, number->error());
+            return reportUsageError(kCorrelateEvalCommand, number->error());
         }
     }
     options.seeds = static_cast<int>(*seeds);
@@ -355,7 +347,7 @@ int runSweep(const Args& args)
 
 int runCorrelateEval(int argc, char** argv)
 {
-    Args args(kCommand,
+    Args args(kCorrelateEvalCommand,
               "--snapshots SNAPSHOTS.jsonl --truth TRUTH.jsonl [--json OUT]\n"
               "       ugvsense correlate-eval --sweep [--quick] [--seeds N] [--first-seed N] [--duration S] "
               "[--only TEXT] [--json OUT] [--require-targets]\n"
@@ -379,7 +371,7 @@ int runCorrelateEval(int argc, char** argv)
                {"duration", "S", "with --sweep: scenario length, default 1800 (--quick: 600)", false},
                {"only", "TEXT", "with --sweep: only the points whose name contains TEXT", false},
                {"require-targets", "", "with --sweep: exit 3 when a point misses a target", false}});
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kCorrelateEvalCommand)) {
         return *exit;
     }
     if (args.has("sweep")) {
@@ -387,25 +379,25 @@ int runCorrelateEval(int argc, char** argv)
     }
     for (const auto& [name, value] : {std::pair{"snapshots", "SNAPSHOTS.jsonl"}, std::pair{"truth", "TRUTH.jsonl"}}) {
         if (!args.has(name)) {
-            return reportUsageError(kCommand,
-                                    Error{"ugvsense " + std::string(kCommand),
+            return reportUsageError(kCorrelateEvalCommand,
+                                    Error{"ugvsense " + std::string(kCorrelateEvalCommand),
                                           std::string("missing required option '--") + name + " " + value + "'",
-                                          "see 'ugvsense " + std::string(kCommand) + " --help'"});
+                                          "see 'ugvsense " + std::string(kCorrelateEvalCommand) + " --help'"});
         }
     }
     const auto truth = readTruth(args.get("truth"));
     if (!truth) {
-        return reportFailure(truth.error());
+        return reportError(kCorrelateEvalCommand, truth.error());
     }
     const auto snapshots = readSnapshots(args.get("snapshots"));
     if (!snapshots) {
-        return reportFailure(snapshots.error());
+        return reportError(kCorrelateEvalCommand, snapshots.error());
     }
     const Figures figures = score(*snapshots, *truth);
     printTable(figures, *truth);
     if (args.has("json")) {
         if (auto written = writeJson(args.get("json"), figuresJson(figures, *truth)); !written) {
-            return reportFailure(written.error());
+            return reportError(kCorrelateEvalCommand, written.error());
         }
     }
     return 0;

@@ -30,10 +30,8 @@ using correlator::ScenarioSetting;
 using correlator::ScenarioTruth;
 using nlohmann::ordered_json;
 
-constexpr const char* kCommand = "correlate-sim";
+constexpr const char* kCorrelateSimCommand = "correlate-sim";
 constexpr double kMaxUgvs = 100.0;
-constexpr double kMaxDurationS = 7.0 * 24.0 * 3600.0;
-constexpr double kMaxSeed = 1e15; ///< exact in a double (and in the truth file's JSON number)
 constexpr double kMaxPeriodS = 3600.0;
 constexpr std::string_view kJsonLinesExtension = ".jsonl";
 
@@ -47,13 +45,6 @@ constexpr const char* kTruthFormat =
     "  {\"kind\":\"static\",\"id\":\"static-01\",\"class\":\"static\",\"lat\":DEG,\"lon\":DEG}   one per static OOI\n"
     "  {\"kind\":\"moving\",\"id\":\"mobile-01\",\"class\":\"mobile|noncombatant\",\"t\":S,\"lat\":DEG,\"lon\":DEG}\n"
     "                                                every moving object at t = 0, period_s, ... <= duration_s";
-
-/// Prints an error of the job (not of the command line) and returns exit code 1.
-int reportFailure(const Error& error)
-{
-    std::cerr << "ugvsense " << kCommand << ": error: " << error.message() << '\n';
-    return 1;
-}
 
 /// OBS.jsonl -> OBS.truth.jsonl; any other name gets ".truth.jsonl" appended.
 std::string defaultTruthPath(const std::string& out)
@@ -140,7 +131,7 @@ Result<void, Error> applyKnobs(const Args& args, ScenarioConfig& config)
         const std::string name = args.get("offset-model");
         const auto model = correlator::parseOffsetModel(name);
         if (!model) {
-            return Unexpected(Error{"ugvsense " + std::string(kCommand) + " --offset-model",
+            return Unexpected(Error{"ugvsense " + std::string(kCorrelateSimCommand) + " --offset-model",
                                     "unknown offset model '" + name + "'", "use disc, gaussian or student-t"});
         }
         config.offsetModel = *model;
@@ -159,13 +150,13 @@ Result<ScenarioConfig, Error> configFrom(const Args& args)
     const std::string settingName = args.get("setting", "clean");
     const auto setting = correlator::parseScenarioSetting(settingName);
     if (!setting) {
-        return Unexpected(Error{"ugvsense " + std::string(kCommand) + " --setting",
+        return Unexpected(Error{"ugvsense " + std::string(kCorrelateSimCommand) + " --setting",
                                 "unknown setting '" + settingName + "'", "use clean, bias or drift"});
     }
     ScenarioConfig config = correlator::scenarioPreset(*setting);
     const auto ugvs = args.wholeNumber("ugvs", config.ugvCount, 1, kMaxUgvs);
-    const auto seed = args.wholeNumber("seed", static_cast<double>(config.seed), 0, kMaxSeed);
-    const auto duration = args.number("duration", config.durationS, 1, kMaxDurationS);
+    const auto seed = args.wholeNumber("seed", static_cast<double>(config.seed), 0, kMaxScenarioSeed);
+    const auto duration = args.number("duration", config.durationS, 1, kMaxScenarioDurationS);
     const auto period = args.number("period", config.truthPeriodS, 0.01, kMaxPeriodS);
     for (const auto* number : {&ugvs, &seed, &duration, &period}) {
         if (!*number) {
@@ -315,7 +306,7 @@ void printSummary(const ScenarioConfig& config, ScenarioSetting setting, const c
 
 int runCorrelateSim(int argc, char** argv)
 {
-    Args args(kCommand,
+    Args args(kCorrelateSimCommand,
               "--out OBS.jsonl [--truth TRUTH.jsonl] [--setting clean|bias|drift] [--ugvs N] [--duration S] "
               "[--seed N] [--period S] [--pose-corrections] [world and sensor knobs, below]\n"
               "  Simulates UGVs patrolling loops and reporting objects of interest (static, mobile, non-combatant)\n"
@@ -357,25 +348,25 @@ int runCorrelateSim(int argc, char** argv)
                {"offset-m", "M", "radius of the disc offset model (overrides the setting's)", false},
                {"offset-sigma-m", "M", "per-axis scale of the gaussian and student-t offset models", false},
                {"drift", "SIGMA", "random-walk drift [m/sqrt(s)] per axis (overrides the setting's)", false}});
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kCorrelateSimCommand)) {
         return *exit;
     }
     const auto config = configFrom(args);
     if (!config) {
-        return reportUsageError(kCommand, config.error());
+        return reportUsageError(kCorrelateSimCommand, config.error());
     }
     const ScenarioSetting setting = *correlator::parseScenarioSetting(args.get("setting", "clean"));
     auto scenario = correlator::generateScenario(*config);
     if (!scenario) {
-        return reportUsageError(kCommand, scenario.error());
+        return reportUsageError(kCorrelateSimCommand, scenario.error());
     }
     const std::string out = args.get("out");
     const std::string truthPath = args.get("truth", defaultTruthPath(out));
     if (auto written = writeMessages(out, scenario->messages); !written) {
-        return reportFailure(written.error());
+        return reportError(kCorrelateSimCommand, written.error());
     }
     if (auto written = writeTruth(truthPath, truthLines(*config, setting, scenario->truth)); !written) {
-        return reportFailure(written.error());
+        return reportError(kCorrelateSimCommand, written.error());
     }
     printSummary(*config, setting, *scenario, out, truthPath);
     return 0;

@@ -33,11 +33,7 @@ namespace {
 
 constexpr double kMaxDistanceM = 100.0; ///< [m] upper bound of --danger / --caution
 
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense detect: error: " << error.message() << '\n';
-    return 1;
-}
+constexpr const char* kDetectCommand = "detect";
 
 const char* fallbackName(vision::GroundFallbackReason reason)
 {
@@ -144,23 +140,23 @@ bool writeMonoJson(const std::string& path, const vision::GroundPlane& g, const 
 int runMono(const Args& args, const vision::StereoCalibration& calib, const DetectionOptions& options)
 {
     if (!calib.mount) {
-        return fail(Error{args.get("calib"), "no mount: one camera cannot estimate the ground",
-                          "add the mount (height_m, pitch_deg, roll_deg) to the calibration"});
+        return reportError(kDetectCommand, Error{args.get("calib"), "no mount: one camera cannot estimate the ground",
+                                                 "add the mount (height_m, pitch_deg, roll_deg) to the calibration"});
     }
     std::string why;
     const cv::Mat image = readImage(args.get("left"), cv::IMREAD_COLOR, &why);
     if (image.empty()) {
-        return fail(Error{args.get("left"), why, "give an existing 8-bit image file"});
+        return reportError(kDetectCommand, Error{args.get("left"), why, "give an existing 8-bit image file"});
     }
     if (image.size() != calib.imageSize) {
-        return fail(Error{args.get("left"), "image size does not match the calibration",
-                          "use the calibration of this camera at this resolution"});
+        return reportError(kDetectCommand, Error{args.get("left"), "image size does not match the calibration",
+                                                 "use the calibration of this camera at this resolution"});
     }
     vision::RectifierConfig rectConfig;
     rectConfig.fullFrame = true;
     auto rectifier = vision::Rectifier::create(calib, rectConfig);
     if (!rectifier) {
-        return fail(rectifier.error());
+        return reportError(kDetectCommand, rectifier.error());
     }
     cv::Mat left = image;
     if (!calib.rectified) {
@@ -170,15 +166,16 @@ int runMono(const Args& args, const vision::StereoCalibration& calib, const Dete
             cv::initUndistortRectifyMap(calib.K1, calib.D1, calib.R1, calib.P1, calib.imageSize, CV_32FC1, mapX, mapY);
             cv::remap(image, left, mapX, mapY, cv::INTER_LINEAR);
         } catch (const std::exception& e) {
-            return fail(Error{args.get("calib"), std::string("cannot rectify the left image: ") + e.what(),
-                              "check the calibration file"});
+            return reportError(kDetectCommand,
+                               Error{args.get("calib"), std::string("cannot rectify the left image: ") + e.what(),
+                                     "check the calibration file"});
         }
     }
     const vision::GroundPlane ground = vision::GroundPlane::fromMount(*calib.mount);
     auto colour = vision::ColourFreeSpace::create(vision::colourConfigFor(detectorConfig(options).sectors),
                                                   calib.imageSize, rectifier->projection(), ground);
     if (!colour) {
-        return fail(colour.error());
+        return reportError(kDetectCommand, colour.error());
     }
     ObstacleSectors sectors;
     (void)colour->process(bgrViewOf(left), sectors); // the size was checked: always Ok
@@ -190,7 +187,8 @@ int runMono(const Args& args, const vision::StereoCalibration& calib, const Dete
     printSectors(sectors);
     if (args.has("json")) {
         if (!writeMonoJson(args.get("json"), ground, *colour, sectors)) {
-            return fail(Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
+            return reportError(kDetectCommand,
+                               Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
         }
         std::printf("wrote %s\n", args.get("json").c_str());
     }
@@ -328,30 +326,31 @@ int runDetect(int argc, char** argv)
     }
     auto calib = adapters::loadCalibration(args.get("calib"));
     if (!calib) {
-        return fail(calib.error());
+        return reportError(kDetectCommand, calib.error());
     }
     if (args.has("mono")) {
         return runMono(args, *calib, options);
     }
     auto pair = readStereoPair(args, *calib);
     if (!pair) {
-        return fail(pair.error());
+        return reportError(kDetectCommand, pair.error());
     }
     const vision::DetectorConfig config = detectorConfig(options);
     auto run = detectPair(*calib, pair->first, pair->second, config, args.get("calib"));
     if (!run) {
-        return fail(run.error());
+        return reportError(kDetectCommand, run.error());
     }
     printDetection(*run);
     if (args.has("json")) {
         if (!writeJson(args.get("json"), *run->detector, run->fit.has_value())) {
-            return fail(Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
+            return reportError(kDetectCommand,
+                               Error{args.get("json"), "cannot write the JSON file", "check that the folder exists"});
         }
         std::printf("wrote %s\n", args.get("json").c_str());
     }
     if (args.has("overlay")) {
         if (auto written = writeOverlay(args, *calib, *run, config); !written) {
-            return fail(written.error());
+            return reportError(kDetectCommand, written.error());
         }
     }
     return 0;

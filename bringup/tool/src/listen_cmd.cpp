@@ -32,17 +32,11 @@ namespace ros = ipc::dds::ros;
 namespace graph = ipc::dds::graph;
 using nlohmann::ordered_json;
 
-constexpr const char* kCommand = "listen";
+constexpr const char* kListenCommand = "listen";
 constexpr double kMaxCount = 1e12;
 constexpr double kMaxTimeoutS = 1e7;
 constexpr auto kPollSlice = std::chrono::milliseconds(100); ///< how quickly SIGINT and --timeout are noticed
 constexpr std::uint8_t kPointFieldFloat32 = 7;              ///< sensor_msgs/PointField FLOAT32
-
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense " << kCommand << ": error: " << error.message() << '\n';
-    return 1;
-}
 
 /// JSON has no NaN or infinity (nlohmann would write null): those become the strings "nan", "inf", "-inf",
 /// which keeps a LaserScan's clear rays (+inf) apart from its unknown ones (NaN).
@@ -345,7 +339,7 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
     const std::string topic = dds::topicName(id, bus.config());
     auto reader = bus.reader<T>(id);
     if (!reader) {
-        return fail(reader.error());
+        return reportError(kListenCommand, reader.error());
     }
     std::cerr << "listening to " << topic << " on " << bus::describe(bus.config())
               << (o.count > 0 ? ", for " + std::to_string(o.count) + " sample(s)" : std::string())
@@ -393,19 +387,21 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
         }
     }
     const double elapsedS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    (void)std::fprintf(stderr, "ugvsense %s: %llu sample(s) printed, %llu refused, in %.1f s%s\n", kCommand,
+    (void)std::fprintf(stderr, "ugvsense %s: %llu sample(s) printed, %llu refused, in %.1f s%s\n", kListenCommand,
                        static_cast<unsigned long long>(printed), static_cast<unsigned long long>(refused), elapsedS,
                        gStop.load() ? " (stopped by a signal)" : "");
     if (timedOut && printed == 0) {
         const int writers = reader->matched();
-        return fail(Error{topic + " on " + bus::describe(bus.config()),
-                          "nothing arrived in " + seconds(o.timeoutS) + " (" + std::to_string(writers) +
-                              " publisher(s) matched, " + std::to_string(refused) + " sample(s) refused)",
-                          writers == 0 ? "check that the publisher runs, on the same domain (--domain, "
-                                         "$UGV_DDS_DOMAIN) and partition (--partition), and that discovery reaches "
-                                         "it (multicast, or --discovery-server)"
-                                       : "a publisher is there but sent nothing valid: check that it publishes "
-                                         "now, and its QoS (ugvsense listen uses the topic's own)"});
+        return reportError(kListenCommand,
+                           Error{topic + " on " + bus::describe(bus.config()),
+                                 "nothing arrived in " + seconds(o.timeoutS) + " (" + std::to_string(writers) +
+                                     " publisher(s) matched, " + std::to_string(refused) + " sample(s) refused)",
+                                 writers == 0
+                                     ? "check that the publisher runs, on the same domain (--domain, "
+                                       "$UGV_DDS_DOMAIN) and partition (--partition), and that discovery reaches "
+                                       "it (multicast, or --discovery-server)"
+                                     : "a publisher is there but sent nothing valid: check that it publishes "
+                                       "now, and its QoS (ugvsense listen uses the topic's own)"});
     }
     return 0;
 }
@@ -439,7 +435,8 @@ int listenOn(dds::Bus& b, dds::TopicId id, const ListenOptions& o)
     case dds::TopicId::RosClearScan:
         return listenTo<ros::LaserScan_>(b, o, id);
     }
-    return fail(Error{std::string("ugvsense ") + kCommand, "topic without a listener", "a bug: add it to listenOn"});
+    return reportError(kListenCommand, Error{std::string("ugvsense ") + kListenCommand, "topic without a listener",
+                                             "a bug: add it to listenOn"});
 }
 
 } // namespace
@@ -453,7 +450,7 @@ int runListen(int argc, char** argv)
         specs.push_back(std::move(spec));
     }
     Args args(
-        kCommand,
+        kListenCommand,
         "TOPIC [--count N] [--timeout S] [--domain N] [--partition P] [--ros-namespace NS] "
         "[--discovery-server LIST]\n"
         "  Subscribes to one topic of the DDS bus with the topic's QoS and prints every sample as one JSON\n"
@@ -467,20 +464,20 @@ int runListen(int argc, char** argv)
         "  graph: which nodes each participant holds), or a wire name\n"
         "  (ugvsense/ooi/observations, rt/NS/obstacle_scan, ros_discovery_info, ...)",
         specs);
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand, Positionals::Allowed)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kListenCommand, Positionals::Allowed)) {
         return *exit;
     }
-    const std::string where = std::string("ugvsense ") + kCommand;
+    const std::string where = std::string("ugvsense ") + kListenCommand;
     if (args.positional().size() != 1) {
         return reportUsageError(
-            kCommand,
+            kListenCommand,
             Error{where,
                   args.positional().empty() ? "no TOPIC given" : "more than one TOPIC ('" + args.positional()[1] + "')",
                   "give one, e.g. 'ugvsense listen observations'; see --help"});
     }
-    auto config = bus::configFrom(args, kCommand, "ugvsense/listen");
+    auto config = bus::configFrom(args, kListenCommand, "ugvsense/listen");
     if (!config) {
-        return reportUsageError(kCommand, config.error());
+        return reportUsageError(kListenCommand, config.error());
     }
     dds::TopicId id{};
     if (!dds::parseTopic(args.positional()[0], *config, id)) {
@@ -488,17 +485,17 @@ int runListen(int argc, char** argv)
         for (int i = 0; i < dds::kTopicCount; ++i) {
             names += (i == 0 ? "" : ", ") + std::string(dds::shortName(static_cast<dds::TopicId>(i)));
         }
-        return reportUsageError(kCommand,
+        return reportUsageError(kListenCommand,
                                 Error{where, "unknown topic '" + args.positional()[0] + "'", "use one of " + names});
     }
     const auto count = args.number("count", 0, 1, kMaxCount);
     const auto timeout = args.number("timeout", 0, 0.001, kMaxTimeoutS);
     if (!count || !timeout) {
-        return reportUsageError(kCommand, !count ? count.error() : timeout.error());
+        return reportUsageError(kListenCommand, !count ? count.error() : timeout.error());
     }
     if (std::floor(*count) != *count) {
         return reportUsageError(
-            kCommand, Error{where + " --count", "bad value '" + args.get("count") + "'", "give a whole number"});
+            kListenCommand, Error{where + " --count", "bad value '" + args.get("count") + "'", "give a whole number"});
     }
     ListenOptions o;
     o.count = static_cast<std::uint64_t>(*count);
@@ -507,7 +504,7 @@ int runListen(int argc, char** argv)
     installStopHandler();
     auto created = dds::Bus::create(*config);
     if (!created) {
-        return fail(created.error());
+        return reportError(kListenCommand, created.error());
     }
     return listenOn(**created, id, o);
 }

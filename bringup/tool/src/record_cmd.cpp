@@ -22,15 +22,9 @@
 namespace ugv::tool {
 namespace {
 
-constexpr const char* kCommand = "record";
+constexpr const char* kRecordCommand = "record";
 constexpr int kQueue = 16;
 constexpr int kNiceness = 10; ///< below every service task
-
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense record: error: " << error.message() << '\n';
-    return 1;
-}
 
 /// The iceoryx runtime and a subscriber to the service's frames; SIGINT and SIGTERM end the recording.
 Result<std::unique_ptr<ipc::FrameSubscriber>, Error> subscribe()
@@ -87,7 +81,7 @@ std::optional<int> recordFrame(ipc::FrameSubscriber& subscriber, ipc::TakenFrame
         auto opened = openWriter(args, calibration, h);
         if (!opened) {
             subscriber.release(frame);
-            return fail(opened.error());
+            return reportError(kRecordCommand, opened.error());
         }
         writer.emplace(std::move(*opened));
         tally.firstSequence = h.sequence;
@@ -113,7 +107,7 @@ std::optional<int> recordFrame(ipc::FrameSubscriber& subscriber, ipc::TakenFrame
 
 int runRecord(int argc, char** argv)
 {
-    Args args(kCommand,
+    Args args(kRecordCommand,
               "--out REC --calib FILE [--frames N] [--seconds S] [--no-sync] [--force]\n"
               "  Records the stereo pairs the running service publishes (iceoryx, zero copy) into REC with the\n"
               "  calibration FILE; syncs every frame (a crash loses at most the frame being written) unless\n"
@@ -124,26 +118,26 @@ int runRecord(int argc, char** argv)
                {"seconds", "S", "stop after S seconds", false},
                {"no-sync", "", "do not fdatasync each frame (faster, a power cut may lose more)", false},
                {"force", "", "overwrite an existing recording", false}});
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kRecordCommand)) {
         return *exit;
     }
     const auto frames = args.number("frames", 0, 1, 1e12);
     const auto seconds = args.number("seconds", 0, 0.1, 1e9);
     for (const auto* value : {&frames, &seconds}) {
         if (!*value) {
-            return reportUsageError(kCommand, value->error());
+            return reportUsageError(kRecordCommand, value->error());
         }
     }
     // Checked as the service checks it when it replays the recording.
     const auto calibration = adapters::loadCalibrationWithText(args.get("calib"));
     if (!calibration) {
-        return fail(calibration.error());
+        return reportError(kRecordCommand, calibration.error());
     }
     (void)::setpriority(PRIO_PROCESS, 0, kNiceness); // low priority: never in the service's way
 
     auto created = subscribe();
     if (!created) {
-        return fail(created.error());
+        return reportError(kRecordCommand, created.error());
     }
     const std::unique_ptr<ipc::FrameSubscriber> subscriber = std::move(*created);
 
@@ -169,7 +163,8 @@ int runRecord(int argc, char** argv)
         return 1;
     }
     if (auto closed = writer->close(); !closed) {
-        return fail(Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
+        return reportError(kRecordCommand,
+                           Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
     }
     std::printf("recorded %llu frame(s) to %s (sequence %llu..%llu; %llu missed by the recorder)\n",
                 static_cast<unsigned long long>(tally.written), args.get("out").c_str(),

@@ -29,28 +29,22 @@
 namespace ugv::tool {
 namespace {
 
-constexpr const char* kCommand = "recording";
-
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense recording: error: " << error.message() << '\n';
-    return 1;
-}
+constexpr const char* kRecordingCommand = "recording";
 
 int runInfo(const Args& args)
 {
     if (args.positional().size() != 2) {
-        return reportUsageError(
-            kCommand, Error{"ugvsense recording info", "give one recording", "ugvsense recording info REC.ugvrec"});
+        return reportUsageError(kRecordingCommand, Error{"ugvsense recording info", "give one recording",
+                                                         "ugvsense recording info REC.ugvrec"});
     }
     const std::string path = args.positional()[1];
     auto reader = hal::RecordingReader::open(path);
     if (!reader) {
-        return fail(reader.error());
+        return reportError(kRecordingCommand, reader.error());
     }
     auto scan = hal::scanRecording(path);
     if (!scan) {
-        return fail(scan.error());
+        return reportError(kRecordingCommand, scan.error());
     }
     const double seconds = static_cast<double>(scan->lastStampNs - scan->firstStampNs) * 1e-9;
     std::printf("recording %s: %ux%u %s stereo, calibration %zu bytes\n", path.c_str(), reader->info().width,
@@ -168,22 +162,22 @@ int runImport(const Args& args)
 {
     for (const char* needed : {"pairs", "calib", "out"}) {
         if (!args.has(needed)) {
-            return reportUsageError(kCommand,
+            return reportUsageError(kRecordingCommand,
                                     Error{"ugvsense recording import", std::string("--") + needed + " is required",
                                           "ugvsense recording import --pairs DIR --calib FILE --out REC"});
         }
     }
     const auto fps = args.number("fps", 10.0, 0.1, 1000.0);
     if (!fps) {
-        return reportUsageError(kCommand, fps.error());
+        return reportUsageError(kRecordingCommand, fps.error());
     }
     auto listing = listPairs(args.get("pairs"));
     if (!listing) {
-        return fail(listing.error());
+        return reportError(kRecordingCommand, listing.error());
     }
     if (listing->pairs.empty()) {
-        return fail(Error{args.get("pairs"), "no left*/right* image pairs found",
-                          "name the images left<rest>.png and right<rest>.png"});
+        return reportError(kRecordingCommand, Error{args.get("pairs"), "no left*/right* image pairs found",
+                                                    "name the images left<rest>.png and right<rest>.png"});
     }
     for (const std::string& lonely : listing->unpaired) {
         std::cerr << "ugvsense recording: warning: skipped " << lonely << '\n';
@@ -191,28 +185,31 @@ int runImport(const Args& args)
     // Checked as the service will check it when it replays the recording (a deep or absurd file is refused here).
     const auto loaded = adapters::loadCalibrationWithText(args.get("calib"));
     if (!loaded) {
-        return fail(loaded.error());
+        return reportError(kRecordingCommand, loaded.error());
     }
     const vision::StereoCalibration* calib = &loaded->calibration;
     std::map<std::size_t, std::int64_t> stamps;
     if (args.has("timestamps")) {
         auto read = readTimestamps(args.get("timestamps"));
         if (!read) {
-            return fail(read.error());
+            return reportError(kRecordingCommand, read.error());
         }
         stamps = std::move(*read);
     }
 
     const cv::Mat first = readGrey(listing->pairs.front().left);
     if (first.empty()) {
-        return fail(Error{listing->pairs.front().left.string(), "not a readable image", "check the file"});
+        return reportError(kRecordingCommand,
+                           Error{listing->pairs.front().left.string(), "not a readable image", "check the file"});
     }
     if (first.size() != calib->imageSize) {
-        return fail(Error{listing->pairs.front().left.string(),
-                          "image size " + std::to_string(first.cols) + "x" + std::to_string(first.rows) +
-                              " differs from " + args.get("calib") + "'s " + std::to_string(calib->imageSize.width) +
-                              "x" + std::to_string(calib->imageSize.height),
-                          "give the calibration of these cameras at this resolution"});
+        return reportError(kRecordingCommand,
+                           Error{listing->pairs.front().left.string(),
+                                 "image size " + std::to_string(first.cols) + "x" + std::to_string(first.rows) +
+                                     " differs from " + args.get("calib") + "'s " +
+                                     std::to_string(calib->imageSize.width) + "x" +
+                                     std::to_string(calib->imageSize.height),
+                                 "give the calibration of these cameras at this resolution"});
     }
     hal::RecordingWriterOptions options;
     options.overwrite = args.has("force");
@@ -221,14 +218,15 @@ int runImport(const Args& args)
     auto writer = hal::RecordingWriter::create(args.get("out"), static_cast<std::uint32_t>(first.cols),
                                                static_cast<std::uint32_t>(first.rows), loaded->text, options);
     if (!writer) {
-        return fail(writer.error());
+        return reportError(kRecordingCommand, writer.error());
     }
     const auto skipped = appendPairs(*writer, listing->pairs, first.size(), stamps, args, *fps);
     if (!skipped) {
-        return fail(skipped.error());
+        return reportError(kRecordingCommand, skipped.error());
     }
     if (auto closed = writer->close(); !closed) {
-        return fail(Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
+        return reportError(kRecordingCommand,
+                           Error{args.get("out"), std::string("cannot close: ") + closed.error().text(), ""});
     }
     std::printf("imported %llu pair(s) of %zu (%zu skipped) into %s (%dx%d)\n",
                 static_cast<unsigned long long>(writer->framesWritten()), listing->pairs.size(), *skipped,
@@ -239,26 +237,28 @@ int runImport(const Args& args)
 int runExport(const Args& args)
 {
     if (args.positional().size() != 2 || !args.has("out")) {
-        return reportUsageError(kCommand, Error{"ugvsense recording export", "give one recording and --out DIR",
-                                                "ugvsense recording export REC.ugvrec --out DIR"});
+        return reportUsageError(kRecordingCommand,
+                                Error{"ugvsense recording export", "give one recording and --out DIR",
+                                      "ugvsense recording export REC.ugvrec --out DIR"});
     }
     const std::string path = args.positional()[1];
     auto reader = hal::RecordingReader::open(path);
     if (!reader) {
-        return fail(reader.error());
+        return reportError(kRecordingCommand, reader.error());
     }
     const std::filesystem::path out = args.get("out");
     std::error_code ec;
     std::filesystem::create_directories(out, ec);
     if (ec) {
-        return fail(Error{out.string(), "cannot create the folder: " + ec.message(), "choose a writable place"});
+        return reportError(kRecordingCommand,
+                           Error{out.string(), "cannot create the folder: " + ec.message(), "choose a writable place"});
     }
     std::ofstream(out / "calibration.yaml", std::ios::binary) << reader->info().calibrationText;
     std::ofstream index(out / "frames.csv");
     index << "frame,sequence,left_stamp_ns,right_stamp_ns\n";
     const auto only = args.number("frame", -1, 0, 1e12);
     if (!only) {
-        return reportUsageError(kCommand, only.error());
+        return reportUsageError(kRecordingCommand, only.error());
     }
     std::size_t k = 0;
     std::size_t written = 0;
@@ -280,7 +280,7 @@ int runExport(const Args& args)
             const char* side = right ? "right" : "left";
             const auto file = out / (std::string(stem) + "_" + side + ".png");
             if (!cv::imwrite(file.string(), m)) {
-                return fail(Error{file.string(), "cannot write PNG", "check the free space"});
+                return reportError(kRecordingCommand, Error{file.string(), "cannot write PNG", "check the free space"});
             }
         }
         const FrameHeader& h = reader->header();
@@ -288,7 +288,8 @@ int runExport(const Args& args)
         ++k;
     }
     if (status == hal::ReadStatus::IoError) {
-        return fail(Error{path, std::string("read failed: ") + reader->lastError().text(), "check the device"});
+        return reportError(kRecordingCommand,
+                           Error{path, std::string("read failed: ") + reader->lastError().text(), "check the device"});
     }
     std::printf("exported %zu frame(s) of %s to %s (frame_NNNNNN_{left,right}.png, frames.csv, calibration.yaml)\n",
                 written, path.c_str(), out.string().c_str());
@@ -307,7 +308,7 @@ int runExport(const Args& args)
 int runRecording(int argc, char** argv)
 {
     Args args(
-        kCommand,
+        kRecordingCommand,
         "info REC | import --pairs DIR --calib FILE --out REC [--timestamps CSV] [--fps F] [--colour] [--force] | "
         "export REC --out DIR [--frame N]\n"
         "  info: frame count, sequence gaps, duration, corrupt frames and a cut-off tail (what a crash left)\n"
@@ -322,7 +323,7 @@ int runRecording(int argc, char** argv)
          {"colour", "", "import: record the pairs in colour (BGR: for the one-camera detector)", false},
          {"force", "", "import: overwrite an existing recording", false},
          {"frame", "N", "export: only frame N (0-based, in file order)", false}});
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand, Positionals::Allowed)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kRecordingCommand, Positionals::Allowed)) {
         return *exit;
     }
     const std::string action = args.positional().empty() ? std::string() : args.positional()[0];
@@ -335,7 +336,7 @@ int runRecording(int argc, char** argv)
     if (action == "export") {
         return runExport(args);
     }
-    return reportUsageError(kCommand,
+    return reportUsageError(kRecordingCommand,
                             Error{"ugvsense recording", "expected info, import or export, got '" + action + "'",
                                   "see 'ugvsense recording --help'"});
 }

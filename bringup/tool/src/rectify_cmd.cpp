@@ -27,11 +27,7 @@ namespace {
 
 constexpr int kLineSpacingPx = 16; // horizontal guide lines in the written side-by-side images
 
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense rectify: error: " << error.message() << '\n';
-    return 1;
-}
+constexpr const char* kRectifyCommand = "rectify";
 
 /// The chessboard's mean |dy| between the rectified images, when the whole board is in both.
 std::optional<double> boardDy(const cv::Mat& left, const cv::Mat& right, cv::Size board)
@@ -141,28 +137,29 @@ int runRectify(int argc, char** argv)
     }
     const auto calib = adapters::loadCalibration(args.get("calib"));
     if (!calib) {
-        return fail(calib.error());
+        return reportError(kRectifyCommand, calib.error());
     }
     vision::RectifierConfig config;
     config.fullFrame = args.has("full");
     auto rectifier = vision::Rectifier::create(*calib, config);
     if (!rectifier) {
-        return fail(rectifier.error());
+        return reportError(kRectifyCommand, rectifier.error());
     }
     const auto listing = listPairs(args.get("images"));
     if (!listing) {
-        return fail(listing.error());
+        return reportError(kRectifyCommand, listing.error());
     }
     if (listing->pairs.empty()) {
-        return fail(Error{args.get("images"), "no left*/right* image pairs found",
-                          "name the images leftNN.ext and rightNN.ext"});
+        return reportError(kRectifyCommand, Error{args.get("images"), "no left*/right* image pairs found",
+                                                  "name the images leftNN.ext and rightNN.ext"});
     }
     const std::filesystem::path outDir = args.get("out");
     if (!outDir.empty()) {
         std::error_code ec;
         std::filesystem::create_directories(outDir, ec);
         if (!std::filesystem::is_directory(outDir, ec)) {
-            return fail(Error{outDir.string(), "cannot create the output folder", "choose a writable path"});
+            return reportError(kRectifyCommand,
+                               Error{outDir.string(), "cannot create the output folder", "choose a writable path"});
         }
     }
     const Rect roi = rectifier->roi();
@@ -171,11 +168,12 @@ int runRectify(int argc, char** argv)
     RectifyTally tally;
     for (const auto& files : listing->pairs) {
         if (auto done = rectifyPair(files, *rectifier, *calib, *board, config.fullFrame, outDir, tally); !done) {
-            return fail(done.error());
+            return reportError(kRectifyCommand, done.error());
         }
     }
     if (tally.rectified == 0) {
-        return fail(Error{args.get("images"), "no pair could be rectified", "use images of the calibrated size"});
+        return reportError(kRectifyCommand, Error{args.get("images"), "no pair could be rectified",
+                                                  "use images of the calibrated size"});
     }
     std::printf("rectified %d pair(s), mean rectify time %.1f us per pair\n", tally.rectified,
                 tally.totalMicros / tally.rectified);

@@ -46,7 +46,7 @@ constexpr double kDefaultFps = 10.0;
 constexpr double kMaxFps = 100.0;
 constexpr double kCourseSpeedMps = 1.5;
 constexpr int kMaxFrames = 100000;
-constexpr double kMaxSeed = 1e9;
+constexpr double kMaxSimSeed = 1e9;
 constexpr const char* kChessboard = "chessboard";
 
 /// Prints an error of the job (not of the command line) and returns exit code 1.
@@ -223,7 +223,7 @@ bool writeTruth(const std::string& path, const sim::SimRig& rig, const sim::SimB
 int runChessboard(const Args& args)
 {
     const auto pairs = args.number("pairs", kDefaultPairs, 1, kMaxPairs);
-    const auto seed = args.number("seed", 1, 0, kMaxSeed);
+    const auto seed = args.number("seed", 1, 0, kMaxSimSeed);
     const auto noise = args.number("noise", kDefaultNoise, 0, kMaxNoise);
     for (const auto* number : {&pairs, &seed, &noise}) {
         if (!*number) {
@@ -272,7 +272,7 @@ int runCatalogueScene(const Args& args)
     const std::string name = args.get("scene");
     const auto range = args.number("range", kDefaultRangeM, -kMaxRangeM, kMaxRangeM);
     const auto bearing = args.number("bearing", 0.0, -kMaxBearingDeg, kMaxBearingDeg);
-    const auto seed = args.number("seed", 1, 0, kMaxSeed);
+    const auto seed = args.number("seed", 1, 0, kMaxSimSeed);
     const sim::Rig defaults;
     const auto pitch = args.number("pitch", defaults.pitchDeg, -kMaxTiltDeg, kMaxTiltDeg);
     const auto roll = args.number("roll", defaults.rollDeg, -kMaxTiltDeg, kMaxTiltDeg);

@@ -28,16 +28,10 @@
 namespace ugv::tool {
 namespace {
 
-constexpr const char* kCommand = "soak";
+constexpr const char* kSoakCommand = "soak";
 constexpr int kExitTargetMissed = 3;
 constexpr int kServiceCpu = 0;
 constexpr int kLoadCpu = 1;
-
-int fail(const Error& error)
-{
-    std::cerr << "ugvsense soak: error: " << error.message() << '\n';
-    return 1;
-}
 
 struct Window {
     double endS = 0.0;
@@ -220,7 +214,7 @@ int report(const Args& args, const SoakPlan& plan, const service::RunResult& run
         std::ofstream out(args.get("json"));
         out << soakJson(run, windows, memory, plan.load);
         if (!out) {
-            return fail(Error{args.get("json"), "cannot write the file", "check the folder"});
+            return reportError(kSoakCommand, Error{args.get("json"), "cannot write the file", "check the folder"});
         }
     }
     if (windows.size() < 2) {
@@ -243,7 +237,7 @@ int report(const Args& args, const SoakPlan& plan, const service::RunResult& run
 
 int runSoak(int argc, char** argv)
 {
-    Args args(kCommand,
+    Args args(kSoakCommand,
               "--recording REC [--minutes M] [--rate FPS] [--sample-s S] [--load-other-core] [--json OUT]\n"
               "  [--max-rss-growth-kb KB] [--config FILE]\n"
               "  Replays REC (looping) at FPS through the real service, its tasks on CPU 0, for M minutes; every S\n"
@@ -259,28 +253,28 @@ int runSoak(int argc, char** argv)
                {"json", "OUT", "write the windows and the service's report as JSON", false},
                {"max-rss-growth-kb", "KB", "exit 3 when the RSS grew more than this after warm-up", false},
                {"config", "FILE", "service config (default: built-in defaults)", false}});
-    if (const auto exit = parseOrExit(args, argc, argv, kCommand)) {
+    if (const auto exit = parseOrExit(args, argc, argv, kSoakCommand)) {
         return *exit;
     }
     const auto plan = readPlan(args);
     if (!plan) {
-        return reportUsageError(kCommand, plan.error());
+        return reportUsageError(kSoakCommand, plan.error());
     }
     OtherCoreLoad load;
     if (plan->load) {
         if (auto started = load.start(kLoadCpu, plan->minutes * 60.0); !started) {
-            return fail(started.error());
+            return reportError(kSoakCommand, started.error());
         }
     }
     Sampler sampler(plan->sampleS, plan->rate);
     auto run = soakOnce(args, *plan, sampler);
     if (!run) {
-        return fail(run.error());
+        return reportError(kSoakCommand, run.error());
     }
     sampler.finish();
     if (plan->load && !load.running()) {
-        return fail(Error{"stress-ng", "the load on the other core ended before the soak did",
-                          "run `stress-ng --cpu 1 --taskset 1 --timeout 10s` alone to see why"});
+        return reportError(kSoakCommand, Error{"stress-ng", "the load on the other core ended before the soak did",
+                                               "run `stress-ng --cpu 1 --taskset 1 --timeout 10s` alone to see why"});
     }
     return report(args, *plan, *run, sampler.windows());
 }

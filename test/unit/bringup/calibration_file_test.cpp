@@ -7,7 +7,12 @@
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 
+#include "run_command.hpp"
+
 namespace {
+
+using ugv::test::readText;
+using ugv::test::writeText;
 
 using ugv::adapters::loadCalibration;
 using ugv::adapters::saveCalibration;
@@ -40,17 +45,6 @@ StereoCalibration makeFull()
     c.pairsUsed = 13;
     c.pairsRejected = 1;
     return c;
-}
-
-std::string readText(const std::filesystem::path& path)
-{
-    std::ifstream in(path);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void writeText(const std::filesystem::path& path, const std::string& text)
-{
-    std::ofstream(path) << text;
 }
 
 /// Saves a valid full calibration, applies `edit` to its text and loads it; returns the error message.

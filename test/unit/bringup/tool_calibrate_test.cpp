@@ -17,6 +17,9 @@
 #include "ugv/hal/recording.hpp"
 namespace {
 
+using ugv::test::readText;
+using ugv::test::writeText;
+
 using ToolRun = ugv::test::CommandRun;
 
 /// The built `ugvsense` with `args`.
@@ -33,12 +36,6 @@ std::filesystem::path tempDir(const std::string& name)
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
-}
-
-std::string readText(const std::filesystem::path& path)
-{
-    std::ifstream in(path);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 TEST(ToolCalibrate, RenderedPairsCalibrateWriteFileAndJsonThenRectify)
@@ -121,11 +118,6 @@ TEST(ToolCalibrate, HelpExitsZero)
 
 // Issue 22: hostile input through the commands, as a user gives it. Each is refused with exit status 1 (no crash)
 // and a message naming the file and the line or key.
-
-void writeText(const std::filesystem::path& path, const std::string& text)
-{
-    std::ofstream(path) << text;
-}
 
 constexpr const char* kRectifiedCalibration = "%YAML:1.0\n---\nschema_version: 1\nrectified: 1\nimage_width: 640\n"
                                               "image_height: 480\nfx: 500.\nfy: 500.\ncx: 320.\ncy: 240.\n"

@@ -18,6 +18,8 @@
 #include "ugv/tool/eval_suite.hpp"
 namespace {
 
+using ugv::test::readText;
+
 using ToolRun = ugv::test::CommandRun;
 
 /// The built `ugvsense` with `args`.
@@ -29,14 +31,6 @@ ToolRun run(const std::string& args)
 bool contains(const std::string& text, const std::string& part)
 {
     return text.find(part) != std::string::npos;
-}
-
-std::string readText(const std::filesystem::path& path)
-{
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
 }
 
 /// A pole 3 m ahead rendered by `ugvsense sim` into a fresh folder, plus a copy of its calibration without the

@@ -16,8 +16,8 @@ namespace {
 using std::chrono::milliseconds;
 using std::chrono::nanoseconds;
 
-constexpr std::uint32_t kWidth = 16;
-constexpr std::uint32_t kHeight = 4;
+constexpr std::uint32_t kFrameWidth = 16;
+constexpr std::uint32_t kFrameHeight = 4;
 
 /// A clock that only moves when the camera sleeps (or the test advances it); it records every sleep.
 struct FakeClock {
@@ -48,12 +48,12 @@ protected:
     /// Frames with the given sequences and left stamps [ms]; right = left + 1 ms; pixel value = index.
     void record(const std::vector<std::uint64_t>& seqs, const std::vector<std::int64_t>& stampsMs)
     {
-        auto writer = RecordingWriter::create(path_, kWidth, kHeight, "calib: 1\n");
+        auto writer = RecordingWriter::create(path_, kFrameWidth, kFrameHeight, "calib: 1\n");
         ASSERT_TRUE(writer.has_value());
-        Image<std::uint8_t> image(kWidth, kHeight);
+        Image<std::uint8_t> image(kFrameWidth, kFrameHeight);
         for (std::size_t k = 0; k < seqs.size(); ++k) {
-            for (int y = 0; y < static_cast<int>(kHeight); ++y) {
-                for (int x = 0; x < static_cast<int>(kWidth); ++x) {
+            for (int y = 0; y < static_cast<int>(kFrameHeight); ++y) {
+                for (int x = 0; x < static_cast<int>(kFrameWidth); ++x) {
                     image.view().at(x, y) = static_cast<std::uint8_t>(k);
                 }
             }

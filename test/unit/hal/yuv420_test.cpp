@@ -16,8 +16,8 @@
 namespace ugv::hal {
 namespace {
 
-constexpr int kWidth = 64; // per camera
-constexpr int kHeight = 48;
+constexpr int kCameraWidth = 64; // per camera
+constexpr int kCameraHeight = 48;
 constexpr std::size_t kPad = 24; // bytes of padding at each row's end, as drivers align strides
 
 /// A colourful BGR image: gradients in each channel and blocks of saturated colour.
@@ -89,43 +89,43 @@ cv::Mat matOf(const Image<BgrPixel>& image)
 
 TEST(Yuv420ToBgr, AStridedBufferConvertsAsOpenCvsPackedConversionAndLooksLikeTheOriginal)
 {
-    const cv::Mat original = colourful(kWidth, kHeight, 0);
+    const cv::Mat original = colourful(kCameraWidth, kCameraHeight, 0);
     const cv::Mat i420 = toI420(original);
-    const Buffer buffer = strided(i420, kWidth, kHeight);
-    Yuv420ToBgr sut(kWidth, kHeight);
-    Image<BgrPixel> out(kWidth, kHeight);
+    const Buffer buffer = strided(i420, kCameraWidth, kCameraHeight);
+    Yuv420ToBgr sut(kCameraWidth, kCameraHeight);
+    Image<BgrPixel> out(kCameraWidth, kCameraHeight);
 
     ASSERT_TRUE(sut.convert(buffer.view(), 0, out.view()));
 
     EXPECT_EQ(cv::norm(matOf(out), fromI420(i420), cv::NORM_INF), 0.0);
     // And it is the original colours (chroma at half resolution: a small error on colour edges only).
-    EXPECT_LT(cv::norm(matOf(out), original, cv::NORM_L1) / (kWidth * kHeight * 3.0), 6.0);
+    EXPECT_LT(cv::norm(matOf(out), original, cv::NORM_L1) / (kCameraWidth * kCameraHeight * 3.0), 6.0);
 }
 
 TEST(Yuv420ToBgr, EachHalfOfASideBySideBufferIsItsOwnCamerasImage)
 {
-    const cv::Mat left = colourful(kWidth, kHeight, 0);
-    const cv::Mat right = colourful(kWidth, kHeight, 1);
+    const cv::Mat left = colourful(kCameraWidth, kCameraHeight, 0);
+    const cv::Mat right = colourful(kCameraWidth, kCameraHeight, 1);
     cv::Mat both;
     cv::hconcat(left, right, both);
-    const Buffer buffer = strided(toI420(both), 2 * kWidth, kHeight);
-    Yuv420ToBgr sut(kWidth, kHeight);
-    Image<BgrPixel> out(kWidth, kHeight);
+    const Buffer buffer = strided(toI420(both), 2 * kCameraWidth, kCameraHeight);
+    Yuv420ToBgr sut(kCameraWidth, kCameraHeight);
+    Image<BgrPixel> out(kCameraWidth, kCameraHeight);
 
-    ASSERT_TRUE(sut.convert(buffer.view(), kWidth, out.view()));
-    const cv::Mat rightHalf = fromI420(toI420(both))(cv::Rect(kWidth, 0, kWidth, kHeight));
+    ASSERT_TRUE(sut.convert(buffer.view(), kCameraWidth, out.view()));
+    const cv::Mat rightHalf = fromI420(toI420(both))(cv::Rect(kCameraWidth, 0, kCameraWidth, kCameraHeight));
     EXPECT_EQ(cv::norm(matOf(out), rightHalf, cv::NORM_INF), 0.0);
-    EXPECT_LT(cv::norm(matOf(out), right, cv::NORM_L1) / (kWidth * kHeight * 3.0), 6.0);
+    EXPECT_LT(cv::norm(matOf(out), right, cv::NORM_L1) / (kCameraWidth * kCameraHeight * 3.0), 6.0);
 
     ASSERT_TRUE(sut.convert(buffer.view(), 0, out.view()));
-    EXPECT_LT(cv::norm(matOf(out), left, cv::NORM_L1) / (kWidth * kHeight * 3.0), 6.0);
+    EXPECT_LT(cv::norm(matOf(out), left, cv::NORM_L1) / (kCameraWidth * kCameraHeight * 3.0), 6.0);
 }
 
 TEST(Yuv420ToBgr, ConvertingFramesAllocatesNothing)
 {
-    const Buffer buffer = strided(toI420(colourful(kWidth, kHeight, 2)), kWidth, kHeight);
-    Yuv420ToBgr sut(kWidth, kHeight);
-    Image<BgrPixel> out(kWidth, kHeight);
+    const Buffer buffer = strided(toI420(colourful(kCameraWidth, kCameraHeight, 2)), kCameraWidth, kCameraHeight);
+    Yuv420ToBgr sut(kCameraWidth, kCameraHeight);
+    Image<BgrPixel> out(kCameraWidth, kCameraHeight);
     ASSERT_TRUE(sut.convert(buffer.view(), 0, out.view())); // OpenCV's first call may set itself up
 
     const ugv::test::AllocationScope scope; // every thread: OpenCV may convert on its workers
@@ -137,10 +137,10 @@ TEST(Yuv420ToBgr, ConvertingFramesAllocatesNothing)
 
 TEST(Yuv420ToBgr, BadArgumentsAreRefusedAndNothingIsWritten)
 {
-    const Buffer buffer = strided(toI420(colourful(kWidth, kHeight, 0)), kWidth, kHeight);
-    Yuv420ToBgr sut(kWidth, kHeight);
-    Image<BgrPixel> out(kWidth, kHeight);
-    Image<BgrPixel> small(kWidth - 2, kHeight);
+    const Buffer buffer = strided(toI420(colourful(kCameraWidth, kCameraHeight, 0)), kCameraWidth, kCameraHeight);
+    Yuv420ToBgr sut(kCameraWidth, kCameraHeight);
+    Image<BgrPixel> out(kCameraWidth, kCameraHeight);
+    Image<BgrPixel> small(kCameraWidth - 2, kCameraHeight);
     out.view().at(0, 0) = BgrPixel{1, 2, 3};
 
     EXPECT_FALSE(sut.convert(buffer.view(), 1, out.view()));  // an odd column splits a chroma sample
@@ -150,8 +150,8 @@ TEST(Yuv420ToBgr, BadArgumentsAreRefusedAndNothingIsWritten)
     noChroma.u = nullptr;
     EXPECT_FALSE(sut.convert(noChroma, 0, out.view()));
     EXPECT_EQ(out.view().at(0, 0).b, 1);
-    Yuv420ToBgr odd(kWidth - 1, kHeight);
-    Image<BgrPixel> oddOut(kWidth - 1, kHeight);
+    Yuv420ToBgr odd(kCameraWidth - 1, kCameraHeight);
+    Image<BgrPixel> oddOut(kCameraWidth - 1, kCameraHeight);
     EXPECT_FALSE(odd.convert(buffer.view(), 0, oddOut.view()));
 }
 

@@ -54,6 +54,10 @@ private:
 /// for usage errors, which callers return from main.
 int reportUsageError(const std::string& command, const Error& error);
 
+/// Prints `error.message()` prefixed with "ugvsense COMMAND: error: " to stderr; returns the exit code 1 of a
+/// subcommand that failed at run time (bad input, a device or file it could not use).
+int reportError(const std::string& command, const Error& error);
+
 /// Whether a subcommand takes positional arguments (a TOPIC, an action) besides its options.
 enum class Positionals : bool { Refused, Allowed };
 

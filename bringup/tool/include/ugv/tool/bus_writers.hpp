@@ -16,6 +16,7 @@
 #include "ugv/ipc/dds_bus.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
+#include "ugv/tool/args.hpp"
 #include "ugv/tool/bus_options.hpp"
 
 namespace ugv::tool::bus {
@@ -28,9 +29,6 @@ inline constexpr auto kRefusedWriteTimeout = std::chrono::seconds(30); ///< a wr
 // Adelaide, the MAGIC 2010 site: where the senders' vehicles drive and their objects stand.
 inline constexpr double kSiteLat = -34.9285;
 inline constexpr double kSiteLon = 138.6007;
-
-/// Prints "ugvsense COMMAND: error: ..." and returns 1 (the job failed).
-int fail(const std::string& command, const Error& error);
 
 /// Sleeps until `until` in short slices; false when a signal stopped it first.
 bool sleepUntil(Clock::time_point until);

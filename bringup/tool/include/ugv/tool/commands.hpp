@@ -22,4 +22,11 @@ int runCorrelateEval(int argc, char** argv);
 int runListen(int argc, char** argv);
 int runBusSend(int argc, char** argv);
 
+/// Bad lines of a JSON-lines input (bus-send, correlate) printed one by one; the rest are counted.
+inline constexpr int kMaxReportedLines = 50;
+
+/// The limits of the scenario options of correlate-sim and correlate-eval --sweep.
+inline constexpr double kMaxScenarioDurationS = 7.0 * 24.0 * 3600.0;
+inline constexpr double kMaxScenarioSeed = 1e15; ///< exact in a double (and in the truth file's JSON number)
+
 } // namespace ugv::tool
