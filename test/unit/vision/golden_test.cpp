@@ -27,6 +27,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "mat_view.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/vision/census_sgm.hpp"
 #include "ugv/vision/ground_mismatch.hpp"
@@ -38,6 +39,8 @@
 
 namespace ugv::vision {
 namespace {
+
+using ugv::test::view;
 
 /// 64-bit FNV-1a.
 class Fnv1a {
@@ -116,11 +119,6 @@ cv::Mat texture(int width, int height, std::uint64_t seed)
     return out;
 }
 
-ConstImageViewU8 view(const cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
-}
-
 ImageViewU8 mutableView(cv::Mat& m)
 {
     return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
@@ -175,9 +173,9 @@ constexpr std::uint64_t kObstacleVerifier = 0x6a1c8d77f504be07ULL;
 
 TEST(Golden, CensusSgmDisparityIsTheSameOnEveryTarget)
 {
-    constexpr int kWidth = 320;
-    constexpr int kHeight = 96;
-    const cv::Mat left = texture(kWidth, kHeight, 1);
+    constexpr int kTextureWidth = 320;
+    constexpr int kTextureHeight = 96;
+    const cv::Mat left = texture(kTextureWidth, kTextureHeight, 1);
     const cv::Mat right = rightView(left, 2);
     for (const int paths : {3, 5}) {
         std::uint64_t hashes[2] = {};
@@ -186,15 +184,15 @@ TEST(Golden, CensusSgmDisparityIsTheSameOnEveryTarget)
             config.numDisparities = 64;
             config.paths = paths;
             config.simd = simd;
-            auto sut = CensusSgm::create(config, cv::Size(kWidth, kHeight));
+            auto sut = CensusSgm::create(config, cv::Size(kTextureWidth, kTextureHeight));
             ASSERT_TRUE(sut.has_value()) << sut.error().message();
-            cv::Mat disp(kHeight, kWidth, CV_16SC1, cv::Scalar(0));
+            cv::Mat disp(kTextureHeight, kTextureWidth, CV_16SC1, cv::Scalar(0));
             ASSERT_TRUE(sut->match(view(left), view(right), disp));
             Fnv1a hash;
             hash.addMat(disp);
             hashes[simd ? 0 : 1] = hash.value();
             // The scene is matched at all (a hash of an all-invalid map would prove little).
-            EXPECT_GT(cv::countNonZero(disp > 0), kWidth * kHeight / 2) << "paths " << paths;
+            EXPECT_GT(cv::countNonZero(disp > 0), kTextureWidth * kTextureHeight / 2) << "paths " << paths;
         }
         EXPECT_EQ(hashes[0], hashes[1]) << "SIMD and scalar reference differ, paths " << paths;
         printHash(paths == 3 ? "kCensusSgm3Paths" : "kCensusSgm5Paths", hashes[0]);

@@ -11,11 +11,14 @@
 #include <opencv2/core.hpp>
 
 #include "alloc_counter.hpp"
+#include "mat_view.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
 
 namespace {
+
+using ugv::test::view16;
 
 using ugv::vision::GroundEstimator;
 using ugv::vision::GroundEstimatorConfig;
@@ -25,7 +28,7 @@ using ugv::vision::Mount;
 
 constexpr int kWidth = 640;
 constexpr int kHeight = 248;
-constexpr int kY0 = 232;
+constexpr int kRoiY0 = 232;
 constexpr double kPitchTolDeg = 0.3;
 constexpr double kHeightTolM = 0.02;
 const ugv::vision::RectifiedProjection kProj{546.0, 546.0, 319.5, 239.5, 0.30};
@@ -37,14 +40,9 @@ GroundEstimatorConfig makeConfig(double smoothing = 0.5)
     c.mount = Mount{0.59, 0.0, 0.0};
     c.width = kWidth;
     c.height = kHeight;
-    c.y0 = kY0;
+    c.y0 = kRoiY0;
     c.smoothing = smoothing;
     return c;
-}
-
-ugv::ImageView<const std::int16_t> view(const cv::Mat& m)
-{
-    return {m.ptr<std::int16_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
 }
 
 /// SGBM-like CV_16S disparity of the ground of `mount`, + Gaussian noise, a fraction of random outliers, and a
@@ -57,7 +55,7 @@ cv::Mat syntheticDisparity(const Mount& mount, double noisePx, double outlierFra
     cv::Mat disparity(kHeight, kWidth, CV_16SC1);
     for (int r = 0; r < kHeight; ++r) {
         for (int x = 0; x < kWidth; ++x) {
-            double d = plane.at(x, kY0 + r) + rng.gaussian(noisePx);
+            double d = plane.at(x, kRoiY0 + r) + rng.gaussian(noisePx);
             if (obstacle && x >= 200 && x < 360 && r < 120) {
                 d = 546.0 * 0.30 / 3.0; // fronto-parallel object at 3 m
             }
@@ -78,7 +76,7 @@ TEST(GroundEstimator, RecoversPitchedPlaneFromNoisyDisparityWithOutliersAndObsta
     auto sut = GroundEstimator::create(makeConfig(1.0));
     ASSERT_TRUE(sut.has_value());
 
-    const ugv::vision::GroundEstimate& e = sut->update(view(disparity));
+    const ugv::vision::GroundEstimate& e = sut->update(view16(disparity));
 
     ASSERT_TRUE(e.reliable);
     EXPECT_EQ(e.reason, GroundFallbackReason::None);
@@ -95,13 +93,13 @@ TEST(GroundEstimator, TracksAThreeDegreePitchStepWithinAFewFrames)
     const cv::Mat level = syntheticDisparity({0.59, 0.0, 0.0}, 0.3, 0.05, true, 2);
     const cv::Mat bump = syntheticDisparity({0.59, 3.0, 0.0}, 0.3, 0.05, true, 3);
     for (int i = 0; i < 5; ++i) {
-        ASSERT_TRUE(sut->update(view(level)).reliable);
+        ASSERT_TRUE(sut->update(view16(level)).reliable);
     }
     EXPECT_NEAR(sut->estimate().plane.pitchDeg(), 0.0, kPitchTolDeg);
 
     int framesToTrack = -1;
     for (int i = 1; i <= 10; ++i) {
-        const ugv::vision::GroundEstimate& e = sut->update(view(bump));
+        const ugv::vision::GroundEstimate& e = sut->update(view16(bump));
         ASSERT_TRUE(e.reliable) << "frame " << i;
         if (framesToTrack < 0 && std::abs(e.plane.pitchDeg() - 3.0) < kPitchTolDeg) {
             framesToTrack = i;
@@ -129,7 +127,7 @@ TEST(GroundEstimator, RecoversPitchedRigsFromSimulatorDisparity)
         cv::Mat disparity(kHeight, kWidth, CV_16SC1);
         for (int r = 0; r < kHeight; ++r) {
             for (int x = 0; x < kWidth; ++x) {
-                const float d = frame->disparity.at<float>(kY0 + r, x);
+                const float d = frame->disparity.at<float>(kRoiY0 + r, x);
                 disparity.at<std::int16_t>(r, x) = d > 0.0F ? static_cast<std::int16_t>(cvRound(d * 16.0F)) : -16;
             }
         }
@@ -139,7 +137,7 @@ TEST(GroundEstimator, RecoversPitchedRigsFromSimulatorDisparity)
         auto sut = GroundEstimator::create(config);
         ASSERT_TRUE(sut.has_value());
 
-        const ugv::vision::GroundEstimate& e = sut->update(view(disparity));
+        const ugv::vision::GroundEstimate& e = sut->update(view16(disparity));
 
         ASSERT_TRUE(e.reliable) << "pitch " << mount.pitchDeg << " reason " << static_cast<int>(e.reason);
         EXPECT_NEAR(e.plane.pitchDeg(), mount.pitchDeg, kPitchTolDeg);
@@ -162,7 +160,7 @@ TEST(GroundEstimator, LocksOnWhenTheConfiguredMountIsOffByTenDegreesFiveDegreesO
         auto sut = GroundEstimator::create(config);
         ASSERT_TRUE(sut.has_value());
 
-        const ugv::vision::GroundEstimate& e = sut->update(view(disparity));
+        const ugv::vision::GroundEstimate& e = sut->update(view16(disparity));
 
         ASSERT_TRUE(e.reliable) << "configured " << configured.heightM << " m, pitch " << configured.pitchDeg
                                 << ", roll " << configured.rollDeg << ": reason " << static_cast<int>(e.reason);
@@ -186,23 +184,23 @@ TEST(GroundEstimator, FallsBackToConfiguredPlaneFlagged)
     };
 
     const cv::Mat invalid(kHeight, kWidth, CV_16SC1, cv::Scalar(-16));
-    expectFallback(sut->update(view(invalid)), GroundFallbackReason::TooFewCandidates);
+    expectFallback(sut->update(view16(invalid)), GroundFallbackReason::TooFewCandidates);
 
     cv::Mat garbage(kHeight, kWidth, CV_16SC1);
     cv::RNG rng(9);
     rng.fill(garbage, cv::RNG::UNIFORM, -16, 16 * 128);
-    expectFallback(sut->update(view(garbage)), GroundFallbackReason::TooFewInliers);
+    expectFallback(sut->update(view16(garbage)), GroundFallbackReason::TooFewInliers);
 
     // Roll 10 deg: a clean plane, but outside the 8 deg band.
     const cv::Mat rolled = syntheticDisparity({0.59, 0.0, 10.0}, 0.2, 0.0, false, 4);
-    expectFallback(sut->update(view(rolled)), GroundFallbackReason::OutOfBand);
+    expectFallback(sut->update(view16(rolled)), GroundFallbackReason::OutOfBand);
 
     const cv::Mat small(kHeight - 1, kWidth, CV_16SC1, cv::Scalar(0));
-    expectFallback(sut->update(view(small)), GroundFallbackReason::WrongInput);
+    expectFallback(sut->update(view16(small)), GroundFallbackReason::WrongInput);
 
     // Recovery after a fallback.
     const cv::Mat good = syntheticDisparity({0.59, 1.0, 0.0}, 0.2, 0.0, false, 5);
-    EXPECT_TRUE(sut->update(view(good)).reliable);
+    EXPECT_TRUE(sut->update(view16(good)).reliable);
 }
 
 TEST(GroundEstimator, RejectsInvalidConfigs)
@@ -231,7 +229,7 @@ TEST(GroundEstimator, UpdateAllocatesNothingOver300Frames)
 
     const ugv::test::AllocationScope scope;
     for (int i = 0; i < 300; ++i) {
-        reliable += sut->update(view(i % 10 == 9 ? invalid : a)).reliable ? 1 : 0;
+        reliable += sut->update(view16(i % 10 == 9 ? invalid : a)).reliable ? 1 : 0;
     }
     EXPECT_EQ(scope.count(), 0U);
     EXPECT_EQ(reliable, 270);

@@ -14,12 +14,15 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "mat_view.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/ground_warp.hpp"
 
 namespace {
+
+using ugv::test::view;
 
 using ugv::vision::GroundLabel;
 using ugv::vision::GroundMismatch;
@@ -29,15 +32,6 @@ using ugv::vision::WarpSpan;
 
 constexpr int kY0 = 232; // ROI = bottom 248 rows of 480
 constexpr std::uint8_t kNoGt = 255;
-
-ugv::ConstImageViewU8 view(const cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
-}
-ugv::ImageViewU8 view(cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
-}
 
 /// Ground-truth labels on the RIGHT image grid (where the mismatch labels live): each left pixel is splatted to
 /// x - d, the nearest surface (largest disparity) wins; unseen right pixels get kNoGt.

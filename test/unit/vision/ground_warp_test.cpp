@@ -12,11 +12,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "mat_view.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
 
 namespace {
+
+using ugv::test::view;
 
 using ugv::vision::DisparityPlane;
 using ugv::vision::GroundWarpStatus;
@@ -30,15 +33,6 @@ cv::Mat randomImage(int width, int height, std::uint64_t seed)
     cv::RNG rng(seed);
     rng.fill(image, cv::RNG::UNIFORM, 0, 256);
     return image;
-}
-
-ugv::ConstImageViewU8 view(const cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
-}
-ugv::ImageViewU8 view(cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
 }
 
 /// Small disparities (0.3..~4 px) so that narrow images still have valid pixels; a != 0 (roll).

@@ -17,18 +17,18 @@
 namespace ugv::vision {
 namespace {
 
-constexpr RectifiedProjection kProjection{546.0, 546.0, 319.5, 239.5, 0.30};
-constexpr Rect kRoi{0, 232, 640, 248}; // Rectifier default ROI for 640x480 (top fraction 0.5, margin 8)
-const GroundPlane kGround = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0});
+constexpr RectifiedProjection kDetectorProjection{546.0, 546.0, 319.5, 239.5, 0.30};
+constexpr Rect kDetectorRoi{0, 232, 640, 248}; // Rectifier default ROI for 640x480 (top fraction 0.5, margin 8)
+const GroundPlane kDetectorGround = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0});
 
 ObstacleDetector makeDetector()
 {
-    auto result = ObstacleDetector::create(DetectorConfig{}, kProjection, kRoi, kGround);
+    auto result = ObstacleDetector::create(DetectorConfig{}, kDetectorProjection, kDetectorRoi, kDetectorGround);
     EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
     return std::move(result).value();
 }
 
-sim::RenderResult renderScene(const char* name, double rangeM, double bearingDeg, std::uint64_t seed = 11)
+sim::RenderResult renderDetectorScene(const char* name, double rangeM, double bearingDeg, std::uint64_t seed = 11)
 {
     auto scene = sim::makeScene(name, rangeM, bearingDeg, sim::GroundTexture::Asphalt, seed);
     EXPECT_TRUE(scene.has_value());
@@ -37,9 +37,10 @@ sim::RenderResult renderScene(const char* name, double rangeM, double bearingDeg
     return std::move(result).value();
 }
 
-ConstImageViewU8 roiView(const cv::Mat& image)
+ConstImageViewU8 detectorRoiView(const cv::Mat& image)
 {
-    return {image.ptr<std::uint8_t>(kRoi.y), image.cols, kRoi.height, static_cast<std::ptrdiff_t>(image.step[0])};
+    return {image.ptr<std::uint8_t>(kDetectorRoi.y), image.cols, kDetectorRoi.height,
+            static_cast<std::ptrdiff_t>(image.step[0])};
 }
 
 void expectAllUnknown(const ObstacleSectors& s)
@@ -54,13 +55,14 @@ void expectAllUnknown(const ObstacleSectors& s)
 TEST(ObstacleDetector, CreateRejectsInvalidSetup)
 {
     DetectorConfig badMargin;
-    badMargin.marginRows = kRoi.height;
+    badMargin.marginRows = kDetectorRoi.height;
     DetectorConfig badMatcher;
     badMatcher.matcher.numDisparities = 20;
 
-    EXPECT_FALSE(ObstacleDetector::create(badMargin, kProjection, kRoi, kGround).has_value());
-    EXPECT_FALSE(ObstacleDetector::create(badMatcher, kProjection, kRoi, kGround).has_value());
-    EXPECT_FALSE(ObstacleDetector::create(DetectorConfig{}, kProjection, kRoi, GroundPlane{}).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(badMargin, kDetectorProjection, kDetectorRoi, kDetectorGround).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(badMatcher, kDetectorProjection, kDetectorRoi, kDetectorGround).has_value());
+    EXPECT_FALSE(
+        ObstacleDetector::create(DetectorConfig{}, kDetectorProjection, kDetectorRoi, GroundPlane{}).has_value());
 }
 
 TEST(ObstacleDetector, DetectsPolesInTheRightSectorWithinRangeTolerance)
@@ -68,9 +70,9 @@ TEST(ObstacleDetector, DetectsPolesInTheRightSectorWithinRangeTolerance)
     auto sut = makeDetector();
     for (const double rangeM : {2.0, 4.0, 6.0, 8.0}) {
         for (const double bearingDeg : {0.0, -12.0}) {
-            const auto frame = renderScene("pole", rangeM, bearingDeg);
+            const auto frame = renderDetectorScene("pole", rangeM, bearingDeg);
 
-            const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 5U, 77);
+            const ObstacleSectors& out = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 5U, 77);
 
             ASSERT_EQ(sut.status(), DetectorStatus::Ok);
             EXPECT_EQ(out.sequence, 5U);
@@ -105,7 +107,7 @@ TEST(ObstacleDetector, EmptyGroundHasNoRedOrBlueSectors)
         ASSERT_TRUE(scene.has_value());
         const auto frame = sim::render(scene.value()).value();
 
-        const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+        const ObstacleSectors& out = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
 
         int clear = 0;
         for (int i = 0; i < out.count; ++i) {
@@ -139,7 +141,7 @@ TEST(ObstacleDetector, MatcherFillInAtTheHorizonIsNotAnObstacle)
         ASSERT_TRUE(scene.has_value());
         const auto frame = sim::render(scene.value()).value();
 
-        const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+        const ObstacleSectors& out = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
 
         for (int i = 0; i < out.count; ++i) {
             const Sector& s = out.sectors[static_cast<std::size_t>(i)];
@@ -162,7 +164,7 @@ TEST(ObstacleDetector, SpeedBumpPitchIsTrackedFromTheFirstFrame)
     scene->rig.pitchDeg = 3.0;
     const auto frame = sim::render(scene.value()).value();
 
-    const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    const ObstacleSectors& out = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
 
     ASSERT_EQ(sut.status(), DetectorStatus::Ok);
     EXPECT_TRUE(sut.groundEstimate().reliable);
@@ -178,19 +180,19 @@ TEST(ObstacleDetector, SpeedBumpPitchIsTrackedFromTheFirstFrame)
 TEST(ObstacleDetector, MismatchLabelsMarkThePoleOnTheLeftGrid)
 {
     auto sut = makeDetector();
-    const auto frame = renderScene("pole", 4.0, 0.0);
+    const auto frame = renderDetectorScene("pole", 4.0, 0.0);
 
-    (void)sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
 
     const ConstImageViewU8 labels = sut.labels();
-    ASSERT_EQ(labels.width(), kRoi.width);
+    ASSERT_EQ(labels.width(), kDetectorRoi.width);
     int positive = 0;
     int onPole = 0;
     for (int y = 0; y < labels.height(); ++y) {
         for (int x = 0; x < labels.width(); ++x) {
             if (labels.at(x, y) == static_cast<std::uint8_t>(GroundLabel::Positive)) {
                 ++positive;
-                const auto truth = static_cast<sim::Label>(frame.labels.at<std::uint8_t>(kRoi.y + y, x));
+                const auto truth = static_cast<sim::Label>(frame.labels.at<std::uint8_t>(kDetectorRoi.y + y, x));
                 onPole += truth == sim::Label::Positive ? 1 : 0;
             }
         }
@@ -211,12 +213,12 @@ std::int64_t tickingClock() noexcept
 TEST(ObstacleDetector, EveryStageIsTimedWithTheClockItIsGivenAndNoneWithout)
 {
     auto sut = makeDetector();
-    const auto frame = renderScene("pole", 4.0, 0.0);
-    (void)sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    const auto frame = renderDetectorScene("pole", 4.0, 0.0);
+    (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
     EXPECT_EQ(sut.stageTimes().totalNs(), 0); // no clock given: vision reads none
 
     sut.setStageClock(&tickingClock);
-    (void)sut.process(roiView(frame.left), roiView(frame.right), 2U, 0);
+    (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 2U, 0);
 
     const VisionStageTimes& t = sut.stageTimes();
     for (const VisionStage once :
@@ -225,10 +227,10 @@ TEST(ObstacleDetector, EveryStageIsTimedWithTheClockItIsGivenAndNoneWithout)
         EXPECT_EQ(t[once], 1) << stageName(once);
     }
     for (const VisionStage perRow : {VisionStage::Cost, VisionStage::Aggregate, VisionStage::LeftRight}) {
-        EXPECT_EQ(t[perRow], kRoi.height) << stageName(perRow); // the census matcher's row loop
+        EXPECT_EQ(t[perRow], kDetectorRoi.height) << stageName(perRow); // the census matcher's row loop
     }
 
-    (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 3U, 0); // the overload path
+    (void)sut.processGroundOnly(detectorRoiView(frame.left), detectorRoiView(frame.right), 3U, 0); // the overload path
     EXPECT_EQ(sut.stageTimes()[VisionStage::Warp], 1);
     EXPECT_EQ(sut.stageTimes()[VisionStage::Mismatch], 1);
     EXPECT_EQ(sut.stageTimes()[VisionStage::Sectors], 1);
@@ -241,7 +243,7 @@ TEST(ObstacleDetector, BlackSaturatedAndTexturelessFramesAreUnknown)
     for (const int grey : {0, 128, 255}) {
         const cv::Mat flat(480, 640, CV_8UC1, cv::Scalar(grey));
 
-        const ObstacleSectors& out = sut.process(roiView(flat), roiView(flat), 3U, 0);
+        const ObstacleSectors& out = sut.process(detectorRoiView(flat), detectorRoiView(flat), 3U, 0);
 
         EXPECT_EQ(sut.status(), DetectorStatus::Ok);
         expectAllUnknown(out);
@@ -251,18 +253,18 @@ TEST(ObstacleDetector, BlackSaturatedAndTexturelessFramesAreUnknown)
 TEST(ObstacleDetector, WrongSizeGivesErrorStatusAndAllUnknown)
 {
     auto sut = makeDetector();
-    const auto frame = renderScene("empty", 5.0, 0.0);
-    (void)sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    const auto frame = renderDetectorScene("empty", 5.0, 0.0);
+    (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
     const cv::Mat small(100, 320, CV_8UC1, cv::Scalar(90));
 
     const ObstacleSectors& out =
-        sut.process(ConstImageViewU8(small.data, small.cols, small.rows), roiView(frame.right), 2U, 9);
+        sut.process(ConstImageViewU8(small.data, small.cols, small.rows), detectorRoiView(frame.right), 2U, 9);
 
     EXPECT_EQ(sut.status(), DetectorStatus::WrongInputSize);
     EXPECT_TRUE(out.degraded);
     EXPECT_EQ(out.sequence, 2U);
     expectAllUnknown(out);
-    (void)sut.process(roiView(frame.left), ConstImageViewU8{}, 3U, 9);
+    (void)sut.process(detectorRoiView(frame.left), ConstImageViewU8{}, 3U, 9);
     EXPECT_EQ(sut.status(), DetectorStatus::WrongInputSize);
 }
 
@@ -272,13 +274,14 @@ TEST(ObstacleDetector, ADetectorOverARectifierRunsOnThatRectifiersRoi)
 {
     DetectorConfig config;
     config.marginRows = 12;
-    const StereoCalibration calib = makeRectifiedCalibration(cv::Size(640, 480), kProjection.fx, kProjection.fy,
-                                                             kProjection.cx, kProjection.cy, kProjection.baselineM);
+    const StereoCalibration calib =
+        makeRectifiedCalibration(cv::Size(640, 480), kDetectorProjection.fx, kDetectorProjection.fy,
+                                 kDetectorProjection.cx, kDetectorProjection.cy, kDetectorProjection.baselineM);
     auto rectifier = Rectifier::create(calib, roiRectifierConfig(config, 0.6)).value();
     ASSERT_EQ(rectifier.roi().y, 288 - 12);
     ASSERT_EQ(rectifier.roi().height, 480 - 276);
-    auto sut = ObstacleDetector::create(config, rectifier, kGround).value();
-    const auto frame = renderScene("pole", 4.0, 0.0);
+    auto sut = ObstacleDetector::create(config, rectifier, kDetectorGround).value();
+    const auto frame = renderDetectorScene("pole", 4.0, 0.0);
     const auto view = [](const cv::Mat& image) { return ConstImageViewU8(image.data, image.cols, image.rows); };
 
     ASSERT_EQ(rectifier.rectify(view(frame.left), view(frame.right)), RectifyStatus::Ok);
@@ -292,7 +295,7 @@ TEST(ObstacleDetector, ADetectorOverARectifierRunsOnThatRectifiersRoi)
                  got.state == SectorState::Obstacle && std::abs(got.rangeM - 4.0F) < 0.5F;
     }
     EXPECT_GT(found, 0);
-    (void)sut.process(roiView(frame.left), roiView(frame.right), 2U, 0);
+    (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 2U, 0);
     EXPECT_EQ(sut.status(), DetectorStatus::WrongInputSize);
 }
 
@@ -301,8 +304,8 @@ TEST(ObstacleDetector, ADetectorOverARectifierRunsOnThatRectifiersRoi)
 /// the same frames (documented in roi_matcher.hpp).
 TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
 {
-    const auto a = renderScene("pole", 3.0, 5.0);
-    const auto b = renderScene("box", 4.0, -8.0);
+    const auto a = renderDetectorScene("pole", 3.0, 5.0);
+    const auto b = renderDetectorScene("box", 4.0, -8.0);
     // 300 frames of the default matcher; for an OpenCV mode 60 frames show the equality (a long sanitizer run
     // otherwise).
     int frames = 300;
@@ -321,16 +324,17 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
         DetectorConfig config;
         config.matcher.mode = mode;
         config.matcher.groundRange = ranged;
-        auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
-        auto matcher = RoiMatcher::create(config.matcher, cv::Size(kRoi.width, kRoi.height)).value();
-        (void)sut.process(roiView(a.left), roiView(a.right), 0U, 0);
-        (void)matcher.match(roiView(a.left), roiView(a.right));
+        auto sut = ObstacleDetector::create(config, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+        auto matcher = RoiMatcher::create(config.matcher, cv::Size(kDetectorRoi.width, kDetectorRoi.height)).value();
+        (void)sut.process(detectorRoiView(a.left), detectorRoiView(a.right), 0U, 0);
+        (void)matcher.match(detectorRoiView(a.left), detectorRoiView(a.right));
 
         const std::size_t detectorAllocations = countFrames([&](const sim::RenderResult& frame, int i) {
-            (void)sut.process(roiView(frame.left), roiView(frame.right), static_cast<std::uint64_t>(i), i);
+            (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), static_cast<std::uint64_t>(i),
+                              i);
         });
         const std::size_t matcherAllocations = countFrames([&](const sim::RenderResult& frame, int) {
-            (void)matcher.match(roiView(frame.left), roiView(frame.right));
+            (void)matcher.match(detectorRoiView(frame.left), detectorRoiView(frame.right));
         });
 
         std::printf("[ MEASURED ] matcher mode %d%s, %d frames: detector %zu allocations (%.1f per frame), bare "
@@ -368,16 +372,16 @@ TEST(ObstacleDetector, GroundRangeFollowsThePreviousFramesReliableGround)
 {
     DetectorConfig config;
     config.matcher.groundRange = true;
-    auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
-    const auto frame = renderScene("pole", 4.0, 0.0);
+    auto sut = ObstacleDetector::create(config, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+    const auto frame = renderDetectorScene("pole", 4.0, 0.0);
 
-    const ObstacleSectors first = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    const ObstacleSectors first = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
     const double firstSearched = sut.searchedFraction();
     const bool reliable = sut.groundEstimate().reliable;
-    const ObstacleSectors second = sut.process(roiView(frame.left), roiView(frame.right), 2U, 0);
+    const ObstacleSectors second = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 2U, 0);
     const double secondSearched = sut.searchedFraction();
-    (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 3U, 0);
-    (void)sut.process(roiView(frame.left), roiView(frame.right), 4U, 0);
+    (void)sut.processGroundOnly(detectorRoiView(frame.left), detectorRoiView(frame.right), 3U, 0);
+    (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 4U, 0);
     const double afterGroundOnly = sut.searchedFraction();
 
     std::printf("[ MEASURED ] pole at 4 m, default rig: %.1f %% of the cost cells searched with the ground range; "
@@ -398,10 +402,10 @@ TEST(ObstacleDetector, NearRowsAtHalfResolutionFromTheConfiguredGroundsDisparity
     // are matched at half resolution, so (248 - 146 + 8 + (146 + 8) / 8) / 248 of the cost cells are searched.
     DetectorConfig config;
     config.halfResolutionMinGroundPx = 48.0;
-    auto sut = ObstacleDetector::create(config, kProjection, kRoi, kGround).value();
+    auto sut = ObstacleDetector::create(config, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
     for (const double rangeM : {2.0, 4.0}) {
-        const auto frame = renderScene("pole", rangeM, 0.0);
-        const ObstacleSectors& out = sut.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+        const auto frame = renderDetectorScene("pole", rangeM, 0.0);
+        const ObstacleSectors& out = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
         ASSERT_EQ(sut.status(), DetectorStatus::Ok);
         const double nearest = nearestInTruthSectors(out, frame.sectors);
         std::printf("[ MEASURED ] pole %.0f m, near rows at half resolution: range %.3f m\n", rangeM, nearest);
@@ -409,20 +413,21 @@ TEST(ObstacleDetector, NearRowsAtHalfResolutionFromTheConfiguredGroundsDisparity
     }
     EXPECT_NEAR(sut.searchedFraction(), (248.0 - 146.0 + 8.0 + (146.0 + 8.0) / 8.0) / 248.0, 1e-9);
 
-    const auto frame = renderScene("pole", 3.0, 0.0);
+    const auto frame = renderDetectorScene("pole", 3.0, 0.0);
     const test::AllocationScope scope;
     for (int i = 0; i < 20; ++i) {
-        (void)sut.process(roiView(frame.left), roiView(frame.right), 2U + static_cast<std::uint64_t>(i), 0);
+        (void)sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 2U + static_cast<std::uint64_t>(i),
+                          0);
     }
     EXPECT_EQ(scope.count(), 0U);
 
     DetectorConfig negative;
     negative.halfResolutionMinGroundPx = -1.0;
-    EXPECT_FALSE(ObstacleDetector::create(negative, kProjection, kRoi, kGround).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(negative, kDetectorProjection, kDetectorRoi, kDetectorGround).has_value());
     DetectorConfig none; // a threshold no row reaches: every row at full resolution
     none.halfResolutionMinGroundPx = 500.0;
-    auto full = ObstacleDetector::create(none, kProjection, kRoi, kGround).value();
-    (void)full.process(roiView(frame.left), roiView(frame.right), 1U, 0);
+    auto full = ObstacleDetector::create(none, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+    (void)full.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
     EXPECT_EQ(full.searchedFraction(), 1.0);
 }
 
@@ -431,9 +436,10 @@ TEST(ObstacleDetector, GroundOnlyPathFindsObstaclesIsNeverClearAndIsFlaggedDegra
     auto sut = makeDetector();
     for (const char* name : {"box", "pole", "barrier"}) {
         for (const double rangeM : {2.0, 4.0}) {
-            const auto frame = renderScene(name, rangeM, 5.0);
+            const auto frame = renderDetectorScene(name, rangeM, 5.0);
 
-            const ObstacleSectors& out = sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 9U, 3);
+            const ObstacleSectors& out =
+                sut.processGroundOnly(detectorRoiView(frame.left), detectorRoiView(frame.right), 9U, 3);
 
             ASSERT_EQ(sut.status(), DetectorStatus::Ok);
             EXPECT_TRUE(out.degraded);
@@ -446,8 +452,9 @@ TEST(ObstacleDetector, GroundOnlyPathFindsObstaclesIsNeverClearAndIsFlaggedDegra
         }
     }
     // Empty ground: nothing red or blue.
-    const auto empty = renderScene("empty", 5.0, 0.0);
-    const ObstacleSectors& out = sut.processGroundOnly(roiView(empty.left), roiView(empty.right), 1U, 0);
+    const auto empty = renderDetectorScene("empty", 5.0, 0.0);
+    const ObstacleSectors& out =
+        sut.processGroundOnly(detectorRoiView(empty.left), detectorRoiView(empty.right), 1U, 0);
     for (int i = 0; i < out.count; ++i) {
         const DangerClass d = out.sectors[static_cast<std::size_t>(i)].danger;
         EXPECT_TRUE(d != DangerClass::Red && d != DangerClass::Blue) << "sector " << i;
@@ -457,12 +464,13 @@ TEST(ObstacleDetector, GroundOnlyPathFindsObstaclesIsNeverClearAndIsFlaggedDegra
 TEST(ObstacleDetector, GroundOnlyPathAllocatesNothingOverHundredsOfFrames)
 {
     auto sut = makeDetector();
-    const auto frame = renderScene("box", 3.0, 0.0);
-    (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), 0U, 0);
+    const auto frame = renderDetectorScene("box", 3.0, 0.0);
+    (void)sut.processGroundOnly(detectorRoiView(frame.left), detectorRoiView(frame.right), 0U, 0);
 
     const ugv::test::ThreadAllocationScope scope;
     for (int k = 1; k <= 300; ++k) {
-        (void)sut.processGroundOnly(roiView(frame.left), roiView(frame.right), static_cast<std::uint64_t>(k), k);
+        (void)sut.processGroundOnly(detectorRoiView(frame.left), detectorRoiView(frame.right),
+                                    static_cast<std::uint64_t>(k), k);
     }
     EXPECT_EQ(scope.count(), 0U);
 }

@@ -12,30 +12,30 @@
 namespace ugv::vision {
 namespace {
 
-constexpr int kWidth = 160;
-constexpr int kHeight = 40;
-constexpr int kY0 = 300;                          ///< full-frame row of the ROI's first row
-constexpr int kGroundD = 10;                      ///< [px] the ground plane's disparity everywhere
-constexpr DisparityPlane kGround{0.0, 0.0, 10.0}; ///< d_g = 10
-constexpr int kObstacleD = 30;                    ///< [px]
-constexpr int kBoxX0 = 70;                        ///< columns [70, 100) of the left image hold the "obstacle"
+constexpr int kVerifierWidth = 160;
+constexpr int kVerifierHeight = 40;
+constexpr int kY0 = 300;                                   ///< full-frame row of the ROI's first row
+constexpr int kGroundD = 10;                               ///< [px] the ground plane's disparity everywhere
+constexpr DisparityPlane kGroundDisparity{0.0, 0.0, 10.0}; ///< d_g = 10
+constexpr int kObstacleD = 30;                             ///< [px]
+constexpr int kBoxX0 = 70;                                 ///< columns [70, 100) of the left image hold the "obstacle"
 constexpr int kBoxX1 = 100;
 constexpr std::int16_t kInvalid = -16;
 
 ObstacleVerifierConfig config()
 {
     ObstacleVerifierConfig c;
-    c.width = kWidth;
-    c.height = kHeight;
+    c.width = kVerifierWidth;
+    c.height = kVerifierHeight;
     return c;
 }
 
 /// A textured scene: the left image is random texture; the right image shows it at the ground disparity except
 /// the box columns, which it shows at kObstacleD when `withObstacle` (a real near surface).
 struct Pair {
-    Image<std::uint8_t> left{kWidth, kHeight};
-    Image<std::uint8_t> right{kWidth, kHeight};
-    Image<std::int16_t> disparity{kWidth, kHeight};
+    Image<std::uint8_t> left{kVerifierWidth, kVerifierHeight};
+    Image<std::uint8_t> right{kVerifierWidth, kVerifierHeight};
+    Image<std::int16_t> disparity{kVerifierWidth, kVerifierHeight};
 };
 
 Pair makePair(bool withObstacle, bool textured = true)
@@ -45,10 +45,10 @@ Pair makePair(bool withObstacle, bool textured = true)
     std::uniform_int_distribution<int> grey(20, 235);
     // Per image row one texture for the ground and one for the box's own surface; the left image shows the box
     // over its columns when `withObstacle`, the right image shows each surface at its own disparity.
-    constexpr int kTexture = kWidth + 64;
+    constexpr int kTexture = kVerifierWidth + 64;
     std::vector<std::uint8_t> ground(kTexture);
     std::vector<std::uint8_t> box(kTexture);
-    for (int y = 0; y < kHeight; ++y) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
         for (std::size_t i = 0; i < ground.size(); ++i) {
             ground[i] = textured ? static_cast<std::uint8_t>(grey(rng)) : std::uint8_t{128};
             box[i] = textured ? static_cast<std::uint8_t>(grey(rng)) : std::uint8_t{128};
@@ -56,17 +56,17 @@ Pair makePair(bool withObstacle, bool textured = true)
         std::uint8_t* l = p.left.view().row(y);
         std::uint8_t* r = p.right.view().row(y);
         const auto inBox = [withObstacle](int xl) { return withObstacle && xl >= kBoxX0 && xl < kBoxX1; };
-        for (int x = 0; x < kWidth; ++x) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             l[x] = inBox(x) ? box[static_cast<std::size_t>(x)] : ground[static_cast<std::size_t>(x + 40)];
         }
-        for (int xr = 0; xr < kWidth; ++xr) {
+        for (int xr = 0; xr < kVerifierWidth; ++xr) {
             // Right pixel xr sees the left pixel xr + d of the surface in front there (the box occludes).
             const int near = xr + kObstacleD;
             r[xr] = inBox(near) ? box[static_cast<std::size_t>(near)]
                                 : ground[static_cast<std::size_t>(xr + kGroundD + 40)];
         }
         std::int16_t* d = p.disparity.view().row(y);
-        for (int x = 0; x < kWidth; ++x) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             d[x] = static_cast<std::int16_t>(16 * ((x >= kBoxX0 && x < kBoxX1) ? kObstacleD : kGroundD));
         }
     }
@@ -76,7 +76,7 @@ Pair makePair(bool withObstacle, bool textured = true)
 int countInvalidInBox(ImageView<const std::int16_t> d)
 {
     int n = 0;
-    for (int y = 0; y < kHeight; ++y) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
         for (int x = kBoxX0; x < kBoxX1; ++x) {
             n += d.row(y)[x] < 0 ? 1 : 0;
         }
@@ -113,11 +113,11 @@ TEST(ObstacleVerifier, KeepsAnObstacleTheImagesShow)
     const Pair p = makePair(true);
     auto sut = ObstacleVerifier::create(config()).value();
 
-    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0), VerifyStatus::Ok);
 
     // The window straddles the box edge for hw = 3 columns on each side; the interior must all stand.
     int interiorRejected = 0;
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
             interiorRejected += sut.disparity().row(y)[x] < 0 ? 1 : 0;
         }
@@ -132,9 +132,9 @@ TEST(ObstacleVerifier, RejectsAnObstacleDisparityTheGroundExplains)
     const Pair p = makePair(false);
     auto sut = ObstacleVerifier::create(config()).value();
 
-    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0), VerifyStatus::Ok);
 
-    const int analysable = (kHeight - 4) * (kBoxX1 - kBoxX0); // rows whose window fits
+    const int analysable = (kVerifierHeight - 4) * (kBoxX1 - kBoxX0); // rows whose window fits
     EXPECT_GE(countInvalidInBox(sut.disparity()), analysable * 95 / 100);
     EXPECT_GE(sut.counts().rejected, analysable * 95 / 100);
 }
@@ -144,10 +144,10 @@ TEST(ObstacleVerifier, LeavesGroundPixelsAlone)
     const Pair p = makePair(false);
     auto sut = ObstacleVerifier::create(config()).value();
 
-    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0), VerifyStatus::Ok);
 
-    for (int y = 0; y < kHeight; ++y) {
-        for (int x = 0; x < kWidth; ++x) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             if (x < kBoxX0 || x >= kBoxX1) {
                 ASSERT_EQ(sut.disparity().row(y)[x], 16 * kGroundD) << x << "," << y;
             }
@@ -160,10 +160,10 @@ TEST(ObstacleVerifier, TexturelessOffGroundPixelsBecomeInvalidNeverGround)
     const Pair p = makePair(false, false);
     auto sut = ObstacleVerifier::create(config()).value();
 
-    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0), VerifyStatus::Ok);
 
     EXPECT_GT(sut.counts().undecided, 0);
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0; x < kBoxX1; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y; // unknown, not ground support
         }
@@ -178,27 +178,27 @@ Pair makeFaintSurface(int groundD, int surfaceD, int amplitude)
     std::mt19937 rng(11);
     std::uniform_int_distribution<int> grey(20, 235);
     std::uniform_int_distribution<int> faint(60 - amplitude, 60 + amplitude);
-    constexpr int kTexture = kWidth + 128;
+    constexpr int kTexture = kVerifierWidth + 128;
     std::vector<std::uint8_t> ground(kTexture);
     std::vector<std::uint8_t> surface(kTexture);
     const auto inBox = [](int xl) { return xl >= kBoxX0 && xl < kBoxX1; };
-    for (int y = 0; y < kHeight; ++y) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
         for (std::size_t i = 0; i < ground.size(); ++i) {
             ground[i] = static_cast<std::uint8_t>(grey(rng));
             surface[i] = static_cast<std::uint8_t>(faint(rng));
         }
         std::uint8_t* l = p.left.view().row(y);
         std::uint8_t* r = p.right.view().row(y);
-        for (int x = 0; x < kWidth; ++x) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             l[x] = inBox(x) ? surface[static_cast<std::size_t>(x)] : ground[static_cast<std::size_t>(x + 60)];
         }
-        for (int xr = 0; xr < kWidth; ++xr) {
+        for (int xr = 0; xr < kVerifierWidth; ++xr) {
             const int onSurface = xr + surfaceD;
             r[xr] = inBox(onSurface) ? surface[static_cast<std::size_t>(onSurface)]
                                      : ground[static_cast<std::size_t>(xr + groundD + 60)];
         }
         std::int16_t* d = p.disparity.view().row(y);
-        for (int x = 0; x < kWidth; ++x) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             d[x] = static_cast<std::int16_t>(16 * (inBox(x) ? surfaceD : groundD));
         }
     }
@@ -216,12 +216,12 @@ TEST(ObstacleVerifier, FaintSurfaceBelowTheGroundIsKeptAboveItIsUndecided)
 
     const Pair drop = makeFaintSurface(30, 10, 4);
     ASSERT_EQ(sut.run(drop.left.view(), drop.right.view(), drop.disparity.view(), ground, kY0), VerifyStatus::Ok);
-    EXPECT_LT(countInvalidInBox(sut.disparity()), (kBoxX1 - kBoxX0) * kHeight / 10);
+    EXPECT_LT(countInvalidInBox(sut.disparity()), (kBoxX1 - kBoxX0) * kVerifierHeight / 10);
 
     const Pair near = makeFaintSurface(30, 50, 4);
     ASSERT_EQ(sut.run(near.left.view(), near.right.view(), near.disparity.view(), ground, kY0), VerifyStatus::Ok);
     // Inside the box, where the window holds only the faint surface (the edges see the textured ground too).
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
         }
@@ -236,8 +236,8 @@ Pair withFlatBand(Pair p, double sigma)
     std::mt19937 rng(5);
     std::normal_distribution<double> noise(0.0, sigma);
     const auto grey = [&] { return static_cast<std::uint8_t>(std::clamp(std::lround(128.0 + noise(rng)), 0L, 255L)); };
-    for (int y = 0; y < kHeight; ++y) {
-        for (int x = 110; x < kWidth; ++x) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
+        for (int x = 110; x < kVerifierWidth; ++x) {
             p.left.view().row(y)[x] = grey();
             p.right.view().row(y)[x - 30] = grey();
         }
@@ -257,12 +257,12 @@ TEST(ObstacleVerifier, TheContrastAWindowNeedsFollowsTheCamerasNoise)
     ASSERT_EQ(sut.run(quiet.left.view(), quiet.right.view(), quiet.disparity.view(), ground, kY0), VerifyStatus::Ok);
     EXPECT_NEAR(sut.noiseSigma(), 0.4F, 0.15F);
     EXPECT_NEAR(sut.requiredContrast(), 2.5F * sut.noiseSigma(), 1e-4F); // about 1 grey
-    EXPECT_LT(countInvalidInBox(sut.disparity()), (kBoxX1 - kBoxX0) * kHeight / 10);
+    EXPECT_LT(countInvalidInBox(sut.disparity()), (kBoxX1 - kBoxX0) * kVerifierHeight / 10);
 
     const Pair noisy = withFlatBand(makeFaintSurface(30, 50, 4), 2.0);
     ASSERT_EQ(sut.run(noisy.left.view(), noisy.right.view(), noisy.disparity.view(), ground, kY0), VerifyStatus::Ok);
     EXPECT_FLOAT_EQ(sut.requiredContrast(), config().minContrast); // 2.5 x 2 = 5: at most minContrast (3)
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
         }
@@ -276,14 +276,14 @@ TEST(ObstacleVerifier, BelowTheGroundTheDisparityIsReestimated)
     auto sut = ObstacleVerifier::create(config()).value();
     const DisparityPlane ground{0.0, 0.0, 30.0};
     Pair wall = makeFaintSurface(30, 27, 60);
-    for (int y = 0; y < kHeight; ++y) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
         for (int x = kBoxX0; x < kBoxX1; ++x) {
             wall.disparity.view().row(y)[x] = static_cast<std::int16_t>(16 * 27 - 24);
         }
     }
     ASSERT_EQ(sut.run(wall.left.view(), wall.right.view(), wall.disparity.view(), ground, kY0), VerifyStatus::Ok);
     EXPECT_GT(sut.counts().refined, 0);
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0 + 8; x < kBoxX1 - 8; ++x) {
             ASSERT_NEAR(sut.disparity().row(y)[x], 16 * 27, 4) << x << "," << y;
         }
@@ -302,9 +302,9 @@ TEST(ObstacleVerifier, BelowTheGroundDisparityTheGroundExplainsIsRejected)
     // All ground, but the matcher put a strip 3 px below it: no disparity in [d - 1, d_g - 1/2] explains the
     // images better than the ground, so the strip is invalid (never a drop).
     const Pair p = makePair(false);
-    Image<std::int16_t> disparity(kWidth, kHeight);
-    for (int y = 0; y < kHeight; ++y) {
-        for (int x = 0; x < kWidth; ++x) {
+    Image<std::int16_t> disparity(kVerifierWidth, kVerifierHeight);
+    for (int y = 0; y < kVerifierHeight; ++y) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             disparity.view().row(y)[x] = p.disparity.view().row(y)[x];
         }
         for (int x = kBoxX0; x < kBoxX1; ++x) {
@@ -312,9 +312,9 @@ TEST(ObstacleVerifier, BelowTheGroundDisparityTheGroundExplainsIsRejected)
         }
     }
     auto sut = ObstacleVerifier::create(config()).value();
-    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), disparity.view(), kGround, kY0), VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(p.left.view(), p.right.view(), disparity.view(), kGroundDisparity, kY0), VerifyStatus::Ok);
     EXPECT_EQ(sut.counts().refined, 0);
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0; x < kBoxX1; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
         }
@@ -330,9 +330,9 @@ TEST(ObstacleVerifier, BelowTheGroundOnWeakTextureTheBestOfManyCostsDoesNotBeatT
     Pair p = makeFaintSurface(30, 30, 2); // the "surface" lies on the ground: all of it is floor
     std::mt19937 rng(5);
     std::normal_distribution<double> noise(0.0, 3.0);
-    for (int y = 0; y < kHeight; ++y) {
+    for (int y = 0; y < kVerifierHeight; ++y) {
         std::uint8_t* r = p.right.view().row(y);
-        for (int x = 0; x < kWidth; ++x) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             r[x] = static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::lround(r[x] + noise(rng))), 0, 255));
         }
         for (int x = kBoxX0; x < kBoxX1; ++x) {
@@ -343,38 +343,40 @@ TEST(ObstacleVerifier, BelowTheGroundOnWeakTextureTheBestOfManyCostsDoesNotBeatT
     ASSERT_EQ(sut.run(p.left.view(), p.right.view(), p.disparity.view(), DisparityPlane{0.0, 0.0, 30.0}, kY0),
               VerifyStatus::Ok);
     int kept = 0;
-    for (int y = 2; y < kHeight - 2; ++y) {
+    for (int y = 2; y < kVerifierHeight - 2; ++y) {
         for (int x = kBoxX0; x < kBoxX1; ++x) {
             kept += sut.disparity().row(y)[x] >= 0 ? 1 : 0;
         }
     }
-    EXPECT_LE(kept, (kBoxX1 - kBoxX0) * (kHeight - 4) / 50) << "of " << (kBoxX1 - kBoxX0) * (kHeight - 4);
+    EXPECT_LE(kept, (kBoxX1 - kBoxX0) * (kVerifierHeight - 4) / 50)
+        << "of " << (kBoxX1 - kBoxX0) * (kVerifierHeight - 4);
 }
 
 TEST(ObstacleVerifier, WrongInputSizeGivesAllInvalid)
 {
     const Pair p = makePair(true);
-    Image<std::uint8_t> small(kWidth - 1, kHeight);
+    Image<std::uint8_t> small(kVerifierWidth - 1, kVerifierHeight);
     auto sut = ObstacleVerifier::create(config()).value();
 
-    EXPECT_EQ(sut.run(small.view(), p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::WrongInputSize);
-    for (int y = 0; y < kHeight; ++y) {
-        for (int x = 0; x < kWidth; ++x) {
+    EXPECT_EQ(sut.run(small.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0),
+              VerifyStatus::WrongInputSize);
+    for (int y = 0; y < kVerifierHeight; ++y) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid);
         }
     }
-    EXPECT_EQ(sut.run({}, p.right.view(), p.disparity.view(), kGround, kY0), VerifyStatus::WrongInputSize);
+    EXPECT_EQ(sut.run({}, p.right.view(), p.disparity.view(), kGroundDisparity, kY0), VerifyStatus::WrongInputSize);
 }
 
 TEST(ObstacleVerifier, RunAllocatesNothingOverHundredsOfFrames)
 {
     const Pair p = makePair(true);
     auto sut = ObstacleVerifier::create(config()).value();
-    (void)sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0);
+    (void)sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0);
 
     const ugv::test::ThreadAllocationScope scope;
     for (int i = 0; i < 300; ++i) {
-        (void)sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGround, kY0);
+        (void)sut.run(p.left.view(), p.right.view(), p.disparity.view(), kGroundDisparity, kY0);
     }
     EXPECT_EQ(scope.count(), 0U);
 }

@@ -9,8 +9,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "mat_view.hpp"
 
 namespace {
+
+using ugv::test::view;
 
 using ugv::ConstImageViewU8;
 using ugv::ImageViewU8;
@@ -47,11 +50,6 @@ cv::Mat makeTexture(int seed)
     cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0); // bilinear-friendly texture
     cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
     return smooth;
-}
-
-ConstImageViewU8 view(const cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step)};
 }
 
 ImageViewU8 mutableView(cv::Mat& m)

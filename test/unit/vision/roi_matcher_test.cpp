@@ -22,10 +22,10 @@ constexpr int kFirstRow = 240; // analysed rows (the simulator's ground-truth RO
 // texture defeats SGBM (measured: 60 % bad-1px in rows 240..259); those points lie beyond the sector builder's
 // maxRangeM (12 m) and are ignored there. The full-ROI figure is printed too.
 constexpr int kEvalRow = 260;
-constexpr int kWidth = 640;
+constexpr int kImageWidth = 640;
 constexpr int kRoiHeight = 480 - kRoiY;
 
-sim::RenderResult renderScene(const char* name, double rangeM, double bearingDeg)
+sim::RenderResult renderMatcherScene(const char* name, double rangeM, double bearingDeg)
 {
     auto scene = sim::makeScene(name, rangeM, bearingDeg, sim::GroundTexture::Asphalt, 7);
     EXPECT_TRUE(scene.has_value());
@@ -34,14 +34,14 @@ sim::RenderResult renderScene(const char* name, double rangeM, double bearingDeg
     return std::move(result).value();
 }
 
-ConstImageViewU8 roiView(const cv::Mat& image)
+ConstImageViewU8 matcherRoiView(const cv::Mat& image)
 {
     return {image.ptr<std::uint8_t>(kRoiY), image.cols, image.rows - kRoiY, static_cast<std::ptrdiff_t>(image.step[0])};
 }
 
 RoiMatcher makeMatcher(const RoiMatcherConfig& config = {})
 {
-    auto result = RoiMatcher::create(config, cv::Size(kWidth, kRoiHeight));
+    auto result = RoiMatcher::create(config, cv::Size(kImageWidth, kRoiHeight));
     EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
     return std::move(result).value();
 }
@@ -59,11 +59,11 @@ TEST(RoiMatcher, CreateRejectsInvalidConfig)
     RoiMatcherConfig nanMargin;
     nanMargin.groundRangeMarginDeg = std::nan("");
 
-    EXPECT_FALSE(RoiMatcher::create(notMultipleOf16, cv::Size(kWidth, kRoiHeight)).has_value());
-    EXPECT_FALSE(RoiMatcher::create(evenBlock, cv::Size(kWidth, kRoiHeight)).has_value());
-    EXPECT_FALSE(RoiMatcher::create(negativeUniqueness, cv::Size(kWidth, kRoiHeight)).has_value());
-    EXPECT_FALSE(RoiMatcher::create(noDrop, cv::Size(kWidth, kRoiHeight)).has_value());
-    EXPECT_FALSE(RoiMatcher::create(nanMargin, cv::Size(kWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(notMultipleOf16, cv::Size(kImageWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(evenBlock, cv::Size(kImageWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(negativeUniqueness, cv::Size(kImageWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(noDrop, cv::Size(kImageWidth, kRoiHeight)).has_value());
+    EXPECT_FALSE(RoiMatcher::create(nanMargin, cv::Size(kImageWidth, kRoiHeight)).has_value());
     EXPECT_FALSE(RoiMatcher::create(RoiMatcherConfig{}, cv::Size(100, kRoiHeight)).has_value()); // width <= D
 }
 
@@ -109,10 +109,10 @@ Agreement agreement(const cv::Mat& disp16, const cv::Mat& gt, const cv::Mat& lab
 
 TEST(RoiMatcher, EmptyGroundAgreesWithGroundTruth)
 {
-    const auto frame = renderScene("empty", 5.0, 0.0);
+    const auto frame = renderMatcherScene("empty", 5.0, 0.0);
     auto sut = makeMatcher();
 
-    const MatchStatus status = sut.match(roiView(frame.left), roiView(frame.right));
+    const MatchStatus status = sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right));
 
     ASSERT_EQ(status, MatchStatus::Ok);
     const Agreement a = agreement(sut.disparity16(), frame.disparity, frame.labels, 0);
@@ -126,10 +126,10 @@ TEST(RoiMatcher, EmptyGroundAgreesWithGroundTruth)
 
 TEST(RoiMatcher, PoleAtFiveMetresWithinHalfPixel)
 {
-    const auto frame = renderScene("pole", 5.0, 0.0);
+    const auto frame = renderMatcherScene("pole", 5.0, 0.0);
     auto sut = makeMatcher();
 
-    ASSERT_EQ(sut.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
+    ASSERT_EQ(sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
 
     std::vector<double> errors;
     for (int y = kFirstRow; y < frame.disparity.rows; ++y) {
@@ -154,12 +154,12 @@ TEST(RoiMatcher, PoleAtFiveMetresWithinHalfPixel)
 
 TEST(RoiMatcher, WrongSizeMarksAllInvalid)
 {
-    const auto frame = renderScene("empty", 5.0, 0.0);
+    const auto frame = renderMatcherScene("empty", 5.0, 0.0);
     auto sut = makeMatcher();
-    ASSERT_EQ(sut.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
+    ASSERT_EQ(sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
     const cv::Mat small(100, 100, CV_8UC1, cv::Scalar(0));
 
-    const MatchStatus status = sut.match(ConstImageViewU8(small.data, 100, 100), roiView(frame.right));
+    const MatchStatus status = sut.match(ConstImageViewU8(small.data, 100, 100), matcherRoiView(frame.right));
 
     EXPECT_EQ(status, MatchStatus::WrongInputSize);
     double maxValue = 0.0;
@@ -169,11 +169,11 @@ TEST(RoiMatcher, WrongSizeMarksAllInvalid)
 
 TEST(RoiMatcher, ToFloatConvertsAndRejectsWrongBuffers)
 {
-    const auto frame = renderScene("empty", 5.0, 0.0);
+    const auto frame = renderMatcherScene("empty", 5.0, 0.0);
     auto sut = makeMatcher();
-    ASSERT_EQ(sut.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
-    cv::Mat out(kRoiHeight, kWidth, CV_32FC1);
-    cv::Mat wrong(kRoiHeight, kWidth, CV_16SC1);
+    ASSERT_EQ(sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
+    cv::Mat out(kRoiHeight, kImageWidth, CV_32FC1);
+    cv::Mat wrong(kRoiHeight, kImageWidth, CV_16SC1);
 
     bool converted = false;
     std::size_t allocations = 0;
@@ -194,14 +194,14 @@ TEST(RoiMatcher, ToFloatConvertsAndRejectsWrongBuffers)
 
 TEST(RoiMatcher, AllModesMatchTheGround)
 {
-    const auto frame = renderScene("empty", 5.0, 0.0);
+    const auto frame = renderMatcherScene("empty", 5.0, 0.0);
     for (const MatcherMode mode :
          {MatcherMode::CensusSgm, MatcherMode::Sgbm, MatcherMode::Sgbm3Way, MatcherMode::Hh4}) {
         RoiMatcherConfig config;
         config.mode = mode;
         auto sut = makeMatcher(config);
 
-        ASSERT_EQ(sut.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
+        ASSERT_EQ(sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
 
         const Agreement a = agreement(sut.disparity16(), frame.disparity, frame.labels, 0);
         std::printf("[ MEASURED ] mode %d: density %.3f, bad-1px %.4f\n", static_cast<int>(mode), a.density, a.bad1);
@@ -223,9 +223,9 @@ TEST(RoiMatcher, NearRowsAtHalfResolutionAgreeWithTheTruthLikeFullResolution)
     auto full = makeMatcher();
     const int seam = kRoiY + kRoiHeight - kHalfRows;
     for (const char* scene : {"empty", "pole"}) {
-        const auto frame = renderScene(scene, 2.0, 0.0);
-        ASSERT_EQ(half.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
-        ASSERT_EQ(full.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
+        const auto frame = renderMatcherScene(scene, 2.0, 0.0);
+        ASSERT_EQ(half.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
+        ASSERT_EQ(full.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
         for (const int label : {0, 1}) { // ground, positive obstacle
             if (label == 1 && std::string(scene) == "empty") {
                 continue;
@@ -255,10 +255,10 @@ TEST(RoiMatcher, NearRowsAtHalfResolutionAgreeWithTheTruthLikeFullResolution)
         (kRoiHeight - kHalfRows + RoiMatcher::kHalfOverlapRows + (kHalfRows + RoiMatcher::kHalfOverlapRows) / 8.0) /
             kRoiHeight,
         1e-9);
-    const auto frame = renderScene("pole", 4.0, 0.0);
+    const auto frame = renderMatcherScene("pole", 4.0, 0.0);
     const test::AllocationScope scope;
     for (int i = 0; i < 5; ++i) {
-        (void)half.match(roiView(frame.left), roiView(frame.right));
+        (void)half.match(matcherRoiView(frame.left), matcherRoiView(frame.right));
     }
     EXPECT_EQ(scope.count(), 0U);
 }
@@ -270,7 +270,7 @@ TEST(RoiMatcher, HalfResolutionRowsNeedTheCensusMatcherAndAnEvenCountThatFits)
         config.halfResolutionRows = rows;
         config.mode = mode;
         config.numDisparities = disparities;
-        return RoiMatcher::create(config, cv::Size(kWidth, kRoiHeight));
+        return RoiMatcher::create(config, cv::Size(kImageWidth, kRoiHeight));
     };
     EXPECT_TRUE(make(120, MatcherMode::CensusSgm, 128).has_value());
     EXPECT_FALSE(make(121, MatcherMode::CensusSgm, 128).has_value());        // odd
@@ -287,18 +287,18 @@ TEST(RoiMatcher, HalfResolutionRowsNeedTheCensusMatcherAndAnEvenCountThatFits)
 /// OpenCV 4.6: the test measures and prints the count per call, and checks that it is the same every frame.
 TEST(RoiMatcher, AllocationsPerMatch)
 {
-    const auto frame = renderScene("pole", 4.0, 0.0);
+    const auto frame = renderMatcherScene("pole", 4.0, 0.0);
     for (const MatcherMode mode : {MatcherMode::CensusSgm, MatcherMode::Sgbm, MatcherMode::Sgbm3Way}) {
         RoiMatcherConfig config;
         config.mode = mode;
         auto sut = makeMatcher(config);
-        ASSERT_EQ(sut.match(roiView(frame.left), roiView(frame.right)), MatchStatus::Ok);
+        ASSERT_EQ(sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right)), MatchStatus::Ok);
         constexpr int kFrames = 10;
         std::vector<std::size_t> counts;
 
         for (int i = 0; i < kFrames; ++i) {
             const test::AllocationScope scope;
-            (void)sut.match(roiView(frame.left), roiView(frame.right));
+            (void)sut.match(matcherRoiView(frame.left), matcherRoiView(frame.right));
             counts.push_back(scope.count());
         }
 

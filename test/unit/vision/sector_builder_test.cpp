@@ -10,21 +10,25 @@
 #include <opencv2/core.hpp>
 
 #include "alloc_counter.hpp"
+#include "mat_view.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 
 namespace ugv::vision {
 namespace {
 
+using ugv::test::view;
+using ugv::test::view16;
+
 constexpr RectifiedProjection kProjection{546.0, 546.0, 319.5, 239.5, 0.30};
 constexpr double kHeightM = 0.59;
 constexpr Rect kRoi{0, 232, 640, 248};
-constexpr int kFirstRow = 240;
+constexpr int kFirstAnalysedRow = 240;
 constexpr double kFb = 546.0 * 0.30;
 
 SectorBuilder makeBuilder(const SectorBuilderConfig& config = {})
 {
-    auto result = SectorBuilder::create(config, kProjection, kRoi, kFirstRow);
+    auto result = SectorBuilder::create(config, kProjection, kRoi, kFirstAnalysedRow);
     EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
     return std::move(result).value();
 }
@@ -95,15 +99,6 @@ int sectorOf(const ObstacleSectors& s, double bearingDeg)
     return -1;
 }
 
-ConstImageViewU8 view(const cv::Mat& m)
-{
-    return {m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
-}
-ImageView<const std::int16_t> view16(const cv::Mat& m)
-{
-    return {m.ptr<std::int16_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0])};
-}
-
 TEST(SectorBuilder, CreateRejectsInvalidConfigAndGeometry)
 {
     SectorBuilderConfig tooManySectors;
@@ -111,10 +106,10 @@ TEST(SectorBuilder, CreateRejectsInvalidConfigAndGeometry)
     SectorBuilderConfig badPercentile;
     badPercentile.rangePercentile = 1.0F;
 
-    EXPECT_FALSE(SectorBuilder::create(tooManySectors, kProjection, kRoi, kFirstRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(badPercentile, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(tooManySectors, kProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(badPercentile, kProjection, kRoi, kFirstAnalysedRow).has_value());
     EXPECT_FALSE(SectorBuilder::create({}, kProjection, kRoi, kRoi.y - 1).has_value());
-    EXPECT_FALSE(SectorBuilder::create({}, RectifiedProjection{}, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create({}, RectifiedProjection{}, kRoi, kFirstAnalysedRow).has_value());
 }
 
 TEST(SectorBuilder, CreateRejectsInvalidClearRule)
@@ -124,8 +119,8 @@ TEST(SectorBuilder, CreateRejectsInvalidClearRule)
     SectorBuilderConfig negativeVotes;
     negativeVotes.minClearFarVotes = -1;
 
-    EXPECT_FALSE(SectorBuilder::create(noClearRange, kProjection, kRoi, kFirstRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(negativeVotes, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noClearRange, kProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(negativeVotes, kProjection, kRoi, kFirstAnalysedRow).has_value());
 }
 
 TEST(SectorBuilder, CreateRejectsInvalidDropRule)
@@ -133,7 +128,7 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     const auto rejected = [](void (*set)(SectorBuilderConfig&)) {
         SectorBuilderConfig c;
         set(c);
-        return !SectorBuilder::create(c, kProjection, kRoi, kFirstRow).has_value();
+        return !SectorBuilder::create(c, kProjection, kRoi, kFirstAnalysedRow).has_value();
     };
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropDepthM = 0.0F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropGapM = -0.1F; }));
@@ -300,15 +295,15 @@ TEST(SectorBuilder, CreateRejectsInvalidFaceRule)
     SectorBuilderConfig noTallVotes;
     noTallVotes.minTallVotes = 0;
 
-    EXPECT_FALSE(SectorBuilder::create(noFace, kProjection, kRoi, kFirstRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(faceAboveTop, kProjection, kRoi, kFirstRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(noTallVotes, kProjection, kRoi, kFirstRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noFace, kProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(faceAboveTop, kProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noTallVotes, kProjection, kRoi, kFirstAnalysedRow).has_value());
     for (const auto set : {+[](SectorBuilderConfig& c) { c.faceSupportRangeM = 0.0F; },
                            +[](SectorBuilderConfig& c) { c.minFaceSupport = 0; },
                            +[](SectorBuilderConfig& c) { c.minFarTallVotes = 0; }}) {
         SectorBuilderConfig c;
         set(c);
-        EXPECT_FALSE(SectorBuilder::create(c, kProjection, kRoi, kFirstRow).has_value());
+        EXPECT_FALSE(SectorBuilder::create(c, kProjection, kRoi, kFirstAnalysedRow).has_value());
     }
 }
 
@@ -838,7 +833,7 @@ void expectMatchesGroundTruth(const char* name, double rangeM, double bearingDeg
     // Qualifying ground-truth hits per sector (bearing of the hit point, level rig: x = depth).
     std::array<int, kMaxSectors> support{};
     const float binDeg = 60.7F / 64.0F;
-    for (int y = kFirstRow; y < frame.labels.rows; ++y) {
+    for (int y = kFirstAnalysedRow; y < frame.labels.rows; ++y) {
         for (int u = 0; u < frame.labels.cols; ++u) {
             const std::uint8_t l = frame.labels.at<std::uint8_t>(y, u);
             const float h = frame.height.at<float>(y, u);
