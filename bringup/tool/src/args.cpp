@@ -122,16 +122,16 @@ Result<double, Error> Args::wholeNumber(const std::string& name, double fallback
     return value;
 }
 
-int reportUsageError(const std::string& command, const Error& error)
-{
-    std::cerr << "ugvsense " << command << ": error: " << error.message() << '\n';
-    return 2;
-}
-
 int reportError(const std::string& command, const Error& error)
 {
     std::cerr << "ugvsense " << command << ": error: " << error.message() << '\n';
     return 1;
+}
+
+int reportUsageError(const std::string& command, const Error& error)
+{
+    (void)reportError(command, error);
+    return 2;
 }
 
 std::optional<int> parseOrExit(Args& args, int argc, char** argv, const std::string& command, Positionals positionals)

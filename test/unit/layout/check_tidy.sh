@@ -31,6 +31,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # The unity files, one per target of this share, and their compile database: one line per unity file, "N PATH".
 if ! units=$(python3 "$(dirname "$0")/tidy_units.py" "$db" "$src" "$folder" "$share" "$work"); then
+    echo "FAIL: tidy_units.py could not make the unity files from $db (its error above): rebuild to refresh the database"
     exit 1
 fi
 if [ -z "$units" ]; then
@@ -42,22 +43,22 @@ ours="^$src/(platform|hal|rt|vision|ipc|correlator|bringup)/([a-z_]+/)?(include|
 status=0 files=0 targets=0
 while read -r count unit; do
     files=$((files + count)) targets=$((targets + 1))
+    mapfile -t sources < <(grep -oE '"/[^"]+"' "$unit" | tr -d '"')
     # Our headers, and this unity file's own sources wherever they sit (rt/alloc_counter/ is not under src/).
-    filter="$ours|^($(grep -oE '"/[^"]+"' "$unit" | tr -d '"' | sed 's/[.+]/\\&/g' | paste -sd'|'))\$"
-    if ! out=$("$tidy" -p "$work" --quiet --config-file="$src/.clang-tidy" --checks=-bugprone-suspicious-include --header-filter="$filter" "$unit" 2>&1); then
+    filter="$ours|^($(printf '%s\n' "${sources[@]}" | sed 's/[.+]/\\&/g' | paste -sd'|'))\$"
+    if ! out=$("$tidy" -p "$work" --quiet --config-file="$src/.clang-tidy" --checks=-bugprone-suspicious-include \
+        --header-filter="$filter" "$unit" 2>&1); then
         status=1
     fi
     # Print the findings (clang-tidy also prints how many warnings it suppressed in other files: not ours).
     grep -vE '^[0-9]+ warnings? (and [0-9]+ errors? )?generated\.$|^Suppressed [0-9]+ warnings|^Use -header-filter|^Error while processing' <<<"$out" || true
-done <<<"$units"
-# bugprone-suspicious-include, as a grep: a .cpp (or .c, .cc, .cxx) file included by our code.
-while read -r unit; do
-    for f in $(grep -oE '"/[^"]+"' "$unit" | tr -d '"'); do
+    # bugprone-suspicious-include, as a grep: a .cpp (or .c, .cc, .cxx) file included by one of these sources.
+    for f in "${sources[@]}"; do
         found=$(grep -nE '^\s*#\s*include\s*[<"][^>"]+\.(c|cc|cpp|cxx)[>"]' "$f") || continue
         sed "s|^|$f:|; s|\$|  error: suspicious #include of a source file [bugprone-suspicious-include]|" <<<"$found"
         status=1
     done
-done < <(cut -d' ' -f2 <<<"$units")
+done <<<"$units"
 echo "clang-tidy: $files translation units of $folder/ (share $share) in $targets unity file(s):" \
     "$([ $status -eq 0 ] && echo clean || echo 'findings above')"
 if [ $status -ne 0 ]; then
