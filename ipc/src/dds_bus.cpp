@@ -35,7 +35,7 @@ struct TopicSpec {
     const char* shortName;
     const char* suffix; ///< our topics and ROS 2's graph: the whole name; ROS 2 ones: after rt/<ns>/
     bool ros;           ///< in the default partition (the only one ROS 2 reads)
-    bool reliable;      ///< for ROS 2 topics: BusConfig::rosReliable chooses
+    bool reliable;      ///< the readers'; writers: reliable, or for ROS 2 topics BusConfig::rosReliable
     bool transientLocal;
     bool keepAll;
     int depth;          ///< keep-last depth
@@ -45,8 +45,8 @@ struct TopicSpec {
 // Why these QoS (ipc/README.md): sensor-like streams are best effort, keep last 1 (a late sample is worse than
 // none; a consumer wants the newest); the correlator's inputs must all arrive and be replayed to a late or
 // restarted ground station (reliable, transient local, keep all); states (health, the correlated list) reach a
-// late joiner as their latest value (transient local, keep last 1). The ROS 2 writers' reliability is
-// BusConfig::rosReliable (reliable matches every reader); the table's best effort is their readers'.
+// late joiner as their latest value (transient local, keep last 1). Writers are reliable (it matches every reader;
+// why for best-effort topics: Bus::makeWriter), the ROS 2 ones as BusConfig::rosReliable says.
 constexpr std::array<TopicSpec, kTopicCount> kTopics{{
     {"sectors", "ugvsense/sectors", false, false, false, false, 1},
     {"health", "ugvsense/health", false, true, true, false, 1},
@@ -449,7 +449,11 @@ Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
     const TopicSpec& s = spec(id);
     fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
     TopicSpec chosen = s;
-    chosen.reliable = s.ros && !s.graph ? config_.rosReliable : s.reliable;
+    // Our best-effort topics are written reliable too; their readers stay best effort, so nothing is acknowledged or
+    // repaired for them. Fast DDS 2.9.1's best-effort writer sends each sample to a reader on the same host twice,
+    // over shared memory and over UDP loopback: it keeps the reader's UDP locators (fixed after 2.9.1 upstream,
+    // eProsima/Fast-DDS#3655). Its reliable writer drops them. Measured: README "Secured bus".
+    chosen.reliable = s.ros && !s.graph ? config_.rosReliable : true;
     applyCommon(q, chosen);
     if (chosen.reliable) {
         q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100'000'000);

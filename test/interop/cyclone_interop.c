@@ -1253,7 +1253,8 @@ int main(int argc, char** argv)
     const dds_entity_t scans = makeReader(pp, &sensor_msgs_msg_dds__LaserScan__desc, r.scanTopic, reliable);
     const dds_entity_t clearScans = makeReader(pp, &sensor_msgs_msg_dds__LaserScan__desc, r.clearTopic, reliable);
     const dds_entity_t clouds = makeReader(pp, &sensor_msgs_msg_dds__PointCloud2__desc, r.cloudTopic, reliable);
-    // ugvsense/sectors is written best effort: only a best-effort reader matches it. 0 stands for "not made".
+    // ugvsense/sectors read best effort, as our own readers do (its writer is reliable: either kind matches). 0 stands
+    // for "not made".
     const bool ours = usesOurTopics(&o);
     const dds_entity_t sectors =
         ours ? makeReader(pp, &ugvsense_msg_ObstacleSectors_desc, "ugvsense/sectors", false) : 0;

@@ -7,9 +7,9 @@
 /// Topics and QoS (why: ipc/README.md):
 ///
 ///   topic                          type                       QoS
-///   ugvsense/sectors               ObstacleSectors            best effort, volatile, keep last 1
+///   ugvsense/sectors               ObstacleSectors            best effort, volatile, keep last 1 (writer: reliable)
 ///   ugvsense/health                ServiceHealth              reliable, transient local, keep last 1
-///   ugvsense/pose                  VehiclePose                best effort, volatile, keep last 8
+///   ugvsense/pose                  VehiclePose                best effort, volatile, keep last 8 (writer: reliable)
 ///   ugvsense/ooi/observations      OoiObservation             reliable, transient local, keep all
 ///   ugvsense/ooi/uav               UavObservation             reliable, transient local, keep all
 ///   ugvsense/ooi/confirmations     ConfirmationState          reliable, transient local, keep all
