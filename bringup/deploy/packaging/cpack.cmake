@@ -22,7 +22,9 @@ set(CPACK_DEBIAN_PACKAGE_SECTION misc)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 # Libraries from dpkg-shlibdeps; iox-roudi (a program, not linked) and adduser (postinst) by hand.
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser, iceoryx (>= 2.0)")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "openssl") # ugvsense-make-security (the secured bus's files)
+# openssl: ugvsense-make-security (the secured bus's files); fastdds-tools: `fastdds shm clean` before each start of
+# ugvsensed (the shared memory of a killed run).
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "openssl, fastdds-tools")
 if(CMAKE_CROSSCOMPILING)
     # dpkg-shlibdeps cannot read the sysroot (an extract has no package database): the libraries by name, as
     # dpkg-shlibdeps gives them for the native package (bookworm's names are the same on every architecture).
