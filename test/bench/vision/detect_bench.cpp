@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
+#include "test_rig.hpp"
 #include "ugv/platform/clock.hpp"
 #include "ugv/rt/latency_histogram.hpp"
 #include "ugv/sim/renderer.hpp"
@@ -31,7 +32,7 @@ namespace {
 using namespace ugv;
 using namespace ugv::vision;
 
-constexpr RectifiedProjection kProjection{546.0, 546.0, 319.5, 239.5, 0.30};
+using ugv::test::kRigProjection;
 constexpr Rect kRoi{0, 232, 640, 248};
 
 const sim::RenderResult& frame()
@@ -118,7 +119,7 @@ void BM_DetectorPipeline(benchmark::State& state)
     config.matcher.groundRange = state.range(1) != 0;
     config.halfResolutionMinGroundPx = static_cast<double>(state.range(2));
     auto sut =
-        ObstacleDetector::create(config, kProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0})).value();
+        ObstacleDetector::create(config, kRigProjection, kRoi, GroundPlane::fromMount(Mount{0.59, 0.0, 0.0})).value();
     sut.setStageClock(&ugv::MonotonicClock::nowNs);
     std::uint64_t sequence = 0;
     FrameTimes times;
@@ -159,7 +160,7 @@ void BM_SectorBuilder(benchmark::State& state)
 {
     auto matcher = RoiMatcher::create(RoiMatcherConfig{}, cv::Size(kRoi.width, kRoi.height)).value();
     (void)matcher.match(roiView(frame().left), roiView(frame().right));
-    auto sut = SectorBuilder::create(SectorBuilderConfig{}, kProjection, kRoi, kRoi.y + 8).value();
+    auto sut = SectorBuilder::create(SectorBuilderConfig{}, kRigProjection, kRoi, kRoi.y + 8).value();
     const GroundPlane ground = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0});
     for (auto _ : state) {
         benchmark::DoNotOptimize(sut.build(matcher.disparityView(), {}, ground, 1U, 0));
@@ -176,7 +177,7 @@ void BM_ObstacleVerifier(benchmark::State& state)
     config.height = kRoi.height;
     config.simd = state.range(0) != 0;
     auto sut = ObstacleVerifier::create(config).value();
-    const DisparityPlane ground = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0}).disparityPlane(kProjection);
+    const DisparityPlane ground = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0}).disparityPlane(kRigProjection);
     for (auto _ : state) {
         benchmark::DoNotOptimize(
             sut.run(roiView(frame().left), roiView(frame().right), matcher.disparityView(), ground, kRoi.y));

@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "test_rig.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_estimator.hpp"
@@ -26,11 +27,11 @@ namespace {
 constexpr int kWidth = 640;
 constexpr int kRoiHeight = 248;
 constexpr int kY0 = 480 - kRoiHeight;
-const ugv::vision::RectifiedProjection kProj{546.0, 546.0, 319.5, 239.5, 0.30};
+using ugv::test::kRigProjection;
 
 ugv::vision::DisparityPlane groundPlane()
 {
-    return ugv::vision::GroundPlane::fromMount({0.59, 1.0, 1.0}).disparityPlane(kProj);
+    return ugv::vision::GroundPlane::fromMount({0.59, 1.0, 1.0}).disparityPlane(kRigProjection);
 }
 
 cv::Mat texture(std::uint64_t seed)
@@ -187,7 +188,8 @@ void BM_SectorBuild(benchmark::State& state)
         }
         return out;
     }();
-    auto sut = ugv::vision::SectorBuilder::create({}, kProj, ugv::Rect{0, kY0, kWidth, kRoiHeight}, kY0 + 8).value();
+    auto sut =
+        ugv::vision::SectorBuilder::create({}, kRigProjection, ugv::Rect{0, kY0, kWidth, kRoiHeight}, kY0 + 8).value();
     const ugv::vision::GroundPlane ground = ugv::vision::GroundPlane::fromMount({0.59, 0.0, 0.0});
     const ugv::ImageView<const std::int16_t> in{d16.ptr<std::int16_t>(), kWidth, kRoiHeight,
                                                 static_cast<std::ptrdiff_t>(d16.step)};
@@ -209,7 +211,7 @@ void BM_GroundEstimatorUpdate(benchmark::State& state)
         }
     }
     ugv::vision::GroundEstimatorConfig config;
-    config.projection = kProj;
+    config.projection = kRigProjection;
     config.mount = {0.59, 0.0, 0.0};
     config.width = kWidth;
     config.height = kRoiHeight;

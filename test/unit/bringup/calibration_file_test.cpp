@@ -8,6 +8,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "run_command.hpp"
+#include "test_rig.hpp"
 
 namespace {
 
@@ -25,20 +26,12 @@ std::filesystem::path tempPath(const std::string& name)
     return dir / name;
 }
 
+/// The tests' distorted pair with everything a calibration file holds.
 StereoCalibration makeFull()
 {
-    StereoCalibration c;
-    c.imageSize = cv::Size(640, 480);
-    c.K1 = (cv::Mat_<double>(3, 3) << 540, 0, 322, 0, 541, 238, 0, 0, 1);
-    c.K2 = (cv::Mat_<double>(3, 3) << 545, 0, 318, 0, 544, 243, 0, 0, 1);
-    c.D1 = (cv::Mat_<double>(1, 5) << -0.12, 0.05, 0.001, -0.0005, 0);
-    c.D2 = (cv::Mat_<double>(1, 5) << -0.10, 0.04, -0.0007, 0.0003, 0);
-    cv::Rodrigues(cv::Vec3d(0.01, -0.02, 0.005), c.R);
-    c.T = (cv::Mat_<double>(3, 1) << -0.12, 0.002, 0.001);
+    StereoCalibration c = ugv::test::distortedCalibration();
     c.E = cv::Mat::eye(3, 3, CV_64F);
     c.F = cv::Mat::eye(3, 3, CV_64F);
-    cv::stereoRectify(c.K1, c.D1, c.K2, c.D2, c.imageSize, c.R, c.T, c.R1, c.R2, c.P1, c.P2, c.Q,
-                      cv::CALIB_ZERO_DISPARITY, 0.0);
     c.rmsPx = 0.21;
     c.epipolarPx = 0.26;
     c.rectifiedDyPx = 0.12;

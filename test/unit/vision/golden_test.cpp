@@ -28,6 +28,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "mat_view.hpp"
+#include "test_rig.hpp"
 #include "ugv/platform/image_view.hpp"
 #include "ugv/vision/census_sgm.hpp"
 #include "ugv/vision/ground_mismatch.hpp"
@@ -337,12 +338,7 @@ TEST(Golden, ObstacleVerifierIsTheSameOnEveryTarget)
 /// A rig with distortion and a small rotation, rectification given directly (no stereoRectify).
 StereoCalibration goldenCalibration()
 {
-    StereoCalibration c;
-    c.imageSize = cv::Size(640, 480);
-    c.K1 = (cv::Mat_<double>(3, 3) << 540, 0, 322, 0, 541, 238, 0, 0, 1);
-    c.K2 = (cv::Mat_<double>(3, 3) << 545, 0, 318, 0, 544, 243, 0, 0, 1);
-    c.D1 = (cv::Mat_<double>(1, 5) << -0.12, 0.05, 0.001, -0.0005, 0);
-    c.D2 = (cv::Mat_<double>(1, 5) << -0.10, 0.04, -0.0007, 0.0003, 0);
+    StereoCalibration c = ugv::test::distortedIntrinsics();
     c.R1 = (cv::Mat_<double>(3, 3) << 0.99995, -0.005, 0.00866, 0.00504, 0.99998, -0.00433, -0.00864, 0.00437, 0.99995);
     c.R2 = (cv::Mat_<double>(3, 3) << 0.99998, 0.003, -0.00612, -0.00297, 0.99999, 0.00285, 0.00613, -0.00283, 0.99998);
     c.P1 = (cv::Mat_<double>(3, 4) << 530, 0, 320.5, 0, 0, 530, 240.25, 0, 0, 0, 1, 0);

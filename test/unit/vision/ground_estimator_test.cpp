@@ -12,6 +12,7 @@
 
 #include "alloc_counter.hpp"
 #include "mat_view.hpp"
+#include "test_rig.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 #include "ugv/vision/ground_plane.hpp"
@@ -31,12 +32,12 @@ constexpr int kHeight = 248;
 constexpr int kRoiY0 = 232;
 constexpr double kPitchTolDeg = 0.3;
 constexpr double kHeightTolM = 0.02;
-const ugv::vision::RectifiedProjection kProj{546.0, 546.0, 319.5, 239.5, 0.30};
+using ugv::test::kRigProjection;
 
 GroundEstimatorConfig makeConfig(double smoothing = 0.5)
 {
     GroundEstimatorConfig c;
-    c.projection = kProj;
+    c.projection = kRigProjection;
     c.mount = Mount{0.59, 0.0, 0.0};
     c.width = kWidth;
     c.height = kHeight;
@@ -50,7 +51,7 @@ GroundEstimatorConfig makeConfig(double smoothing = 0.5)
 cv::Mat syntheticDisparity(const Mount& mount, double noisePx, double outlierFraction, bool obstacle,
                            std::uint64_t seed)
 {
-    const ugv::vision::DisparityPlane plane = GroundPlane::fromMount(mount).disparityPlane(kProj);
+    const ugv::vision::DisparityPlane plane = GroundPlane::fromMount(mount).disparityPlane(kRigProjection);
     cv::RNG rng(seed);
     cv::Mat disparity(kHeight, kWidth, CV_16SC1);
     for (int r = 0; r < kHeight; ++r) {

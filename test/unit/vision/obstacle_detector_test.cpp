@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "alloc_counter.hpp"
+#include "test_rig.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
@@ -17,13 +18,13 @@
 namespace ugv::vision {
 namespace {
 
-constexpr RectifiedProjection kDetectorProjection{546.0, 546.0, 319.5, 239.5, 0.30};
+using ugv::test::kRigProjection;
 constexpr Rect kDetectorRoi{0, 232, 640, 248}; // Rectifier default ROI for 640x480 (top fraction 0.5, margin 8)
 const GroundPlane kDetectorGround = GroundPlane::fromMount(Mount{0.59, 0.0, 0.0});
 
 ObstacleDetector makeDetector()
 {
-    auto result = ObstacleDetector::create(DetectorConfig{}, kDetectorProjection, kDetectorRoi, kDetectorGround);
+    auto result = ObstacleDetector::create(DetectorConfig{}, kRigProjection, kDetectorRoi, kDetectorGround);
     EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
     return std::move(result).value();
 }
@@ -59,10 +60,9 @@ TEST(ObstacleDetector, CreateRejectsInvalidSetup)
     DetectorConfig badMatcher;
     badMatcher.matcher.numDisparities = 20;
 
-    EXPECT_FALSE(ObstacleDetector::create(badMargin, kDetectorProjection, kDetectorRoi, kDetectorGround).has_value());
-    EXPECT_FALSE(ObstacleDetector::create(badMatcher, kDetectorProjection, kDetectorRoi, kDetectorGround).has_value());
-    EXPECT_FALSE(
-        ObstacleDetector::create(DetectorConfig{}, kDetectorProjection, kDetectorRoi, GroundPlane{}).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(badMargin, kRigProjection, kDetectorRoi, kDetectorGround).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(badMatcher, kRigProjection, kDetectorRoi, kDetectorGround).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(DetectorConfig{}, kRigProjection, kDetectorRoi, GroundPlane{}).has_value());
 }
 
 TEST(ObstacleDetector, DetectsPolesInTheRightSectorWithinRangeTolerance)
@@ -275,8 +275,8 @@ TEST(ObstacleDetector, ADetectorOverARectifierRunsOnThatRectifiersRoi)
     DetectorConfig config;
     config.marginRows = 12;
     const StereoCalibration calib =
-        makeRectifiedCalibration(cv::Size(640, 480), kDetectorProjection.fx, kDetectorProjection.fy,
-                                 kDetectorProjection.cx, kDetectorProjection.cy, kDetectorProjection.baselineM);
+        makeRectifiedCalibration(cv::Size(640, 480), kRigProjection.fx, kRigProjection.fy, kRigProjection.cx,
+                                 kRigProjection.cy, kRigProjection.baselineM);
     auto rectifier = Rectifier::create(calib, roiRectifierConfig(config, 0.6)).value();
     ASSERT_EQ(rectifier.roi().y, 288 - 12);
     ASSERT_EQ(rectifier.roi().height, 480 - 276);
@@ -324,7 +324,7 @@ TEST(ObstacleDetector, ThreeHundredFramesAllocateNothing)
         DetectorConfig config;
         config.matcher.mode = mode;
         config.matcher.groundRange = ranged;
-        auto sut = ObstacleDetector::create(config, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+        auto sut = ObstacleDetector::create(config, kRigProjection, kDetectorRoi, kDetectorGround).value();
         auto matcher = RoiMatcher::create(config.matcher, cv::Size(kDetectorRoi.width, kDetectorRoi.height)).value();
         (void)sut.process(detectorRoiView(a.left), detectorRoiView(a.right), 0U, 0);
         (void)matcher.match(detectorRoiView(a.left), detectorRoiView(a.right));
@@ -372,7 +372,7 @@ TEST(ObstacleDetector, GroundRangeFollowsThePreviousFramesReliableGround)
 {
     DetectorConfig config;
     config.matcher.groundRange = true;
-    auto sut = ObstacleDetector::create(config, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+    auto sut = ObstacleDetector::create(config, kRigProjection, kDetectorRoi, kDetectorGround).value();
     const auto frame = renderDetectorScene("pole", 4.0, 0.0);
 
     const ObstacleSectors first = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
@@ -402,7 +402,7 @@ TEST(ObstacleDetector, NearRowsAtHalfResolutionFromTheConfiguredGroundsDisparity
     // are matched at half resolution, so (248 - 146 + 8 + (146 + 8) / 8) / 248 of the cost cells are searched.
     DetectorConfig config;
     config.halfResolutionMinGroundPx = 48.0;
-    auto sut = ObstacleDetector::create(config, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+    auto sut = ObstacleDetector::create(config, kRigProjection, kDetectorRoi, kDetectorGround).value();
     for (const double rangeM : {2.0, 4.0}) {
         const auto frame = renderDetectorScene("pole", rangeM, 0.0);
         const ObstacleSectors& out = sut.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
@@ -423,10 +423,10 @@ TEST(ObstacleDetector, NearRowsAtHalfResolutionFromTheConfiguredGroundsDisparity
 
     DetectorConfig negative;
     negative.halfResolutionMinGroundPx = -1.0;
-    EXPECT_FALSE(ObstacleDetector::create(negative, kDetectorProjection, kDetectorRoi, kDetectorGround).has_value());
+    EXPECT_FALSE(ObstacleDetector::create(negative, kRigProjection, kDetectorRoi, kDetectorGround).has_value());
     DetectorConfig none; // a threshold no row reaches: every row at full resolution
     none.halfResolutionMinGroundPx = 500.0;
-    auto full = ObstacleDetector::create(none, kDetectorProjection, kDetectorRoi, kDetectorGround).value();
+    auto full = ObstacleDetector::create(none, kRigProjection, kDetectorRoi, kDetectorGround).value();
     (void)full.process(detectorRoiView(frame.left), detectorRoiView(frame.right), 1U, 0);
     EXPECT_EQ(full.searchedFraction(), 1.0);
 }

@@ -10,9 +10,11 @@
 
 #include "alloc_counter.hpp"
 #include "mat_view.hpp"
+#include "test_rig.hpp"
 
 namespace {
 
+using ugv::test::distortedCalibration;
 using ugv::test::view;
 
 using ugv::ConstImageViewU8;
@@ -24,22 +26,6 @@ using ugv::vision::StereoCalibration;
 
 constexpr int kWidth = 640;
 constexpr int kHeight = 480;
-
-/// A plausible rig with distortion and a small rotation between the cameras.
-StereoCalibration makeCalibration()
-{
-    StereoCalibration c;
-    c.imageSize = cv::Size(kWidth, kHeight);
-    c.K1 = (cv::Mat_<double>(3, 3) << 540, 0, 322, 0, 541, 238, 0, 0, 1);
-    c.K2 = (cv::Mat_<double>(3, 3) << 545, 0, 318, 0, 544, 243, 0, 0, 1);
-    c.D1 = (cv::Mat_<double>(1, 5) << -0.12, 0.05, 0.001, -0.0005, 0);
-    c.D2 = (cv::Mat_<double>(1, 5) << -0.10, 0.04, -0.0007, 0.0003, 0);
-    cv::Rodrigues(cv::Vec3d(0.01, -0.02, 0.005), c.R);
-    c.T = (cv::Mat_<double>(3, 1) << -0.12, 0.002, 0.001);
-    cv::stereoRectify(c.K1, c.D1, c.K2, c.D2, c.imageSize, c.R, c.T, c.R1, c.R2, c.P1, c.P2, c.Q,
-                      cv::CALIB_ZERO_DISPARITY, 0.0);
-    return c;
-}
 
 cv::Mat makeTexture(int seed)
 {
@@ -59,7 +45,7 @@ ImageViewU8 mutableView(cv::Mat& m)
 
 TEST(Rectifier, DefaultRoiIsBottomHalfPlusMargin)
 {
-    const auto sut = Rectifier::create(makeCalibration(), RectifierConfig{});
+    const auto sut = Rectifier::create(distortedCalibration(), RectifierConfig{});
     ASSERT_TRUE(sut.has_value()) << sut.error().message();
     constexpr ugv::Rect kExpected{0, kHeight / 2 - 8, kWidth, kHeight / 2 + 8};
     EXPECT_EQ(sut->roi(), kExpected);
@@ -69,8 +55,8 @@ TEST(Rectifier, DefaultRoiIsBottomHalfPlusMargin)
 
 TEST(Rectifier, TheLeftCameraAloneGivesTheSameRowsAsThePair)
 {
-    auto pair = Rectifier::create(makeCalibration(), RectifierConfig{});
-    auto single = Rectifier::create(makeCalibration(), RectifierConfig{});
+    auto pair = Rectifier::create(distortedCalibration(), RectifierConfig{});
+    auto single = Rectifier::create(distortedCalibration(), RectifierConfig{});
     ASSERT_TRUE(pair.has_value() && single.has_value());
     const cv::Mat left = makeTexture(1);
     const cv::Mat right = makeTexture(2);
@@ -95,7 +81,7 @@ TEST(Rectifier, AColourLeftImageGivesInEachChannelWhatTheGreyPathGivesThatChanne
     // Three different textures as the B, G and R planes: each rectified channel must be the grey path's result on
     // that plane (the same rows and tables; OpenCV's remap and ours agree to the bit, as the reference test shows
     // within one grey level).
-    auto sut = Rectifier::create(makeCalibration(), RectifierConfig{});
+    auto sut = Rectifier::create(distortedCalibration(), RectifierConfig{});
     ASSERT_TRUE(sut.has_value());
     const std::vector<cv::Mat> planes = {makeTexture(1), makeTexture(2), makeTexture(3)};
     cv::Mat bgr;
@@ -125,7 +111,7 @@ TEST(Rectifier, AColourLeftImageGivesInEachChannelWhatTheGreyPathGivesThatChanne
 
 TEST(Rectifier, MatchesReferenceRemapOnFloatMapsInRoiRows)
 {
-    const StereoCalibration calib = makeCalibration();
+    const StereoCalibration calib = distortedCalibration();
     auto sut = Rectifier::create(calib, RectifierConfig{});
     ASSERT_TRUE(sut.has_value()) << sut.error().message();
     const cv::Mat left = makeTexture(1);
@@ -159,14 +145,14 @@ TEST(Rectifier, FullFrameOptionCoversTheImage)
 {
     RectifierConfig config;
     config.fullFrame = true;
-    const auto sut = Rectifier::create(makeCalibration(), config);
+    const auto sut = Rectifier::create(distortedCalibration(), config);
     ASSERT_TRUE(sut.has_value());
     EXPECT_EQ(sut->roi(), (ugv::Rect{0, 0, kWidth, kHeight}));
 }
 
 TEST(Rectifier, WrongInputSizeReturnsErrorAndLeavesOutputs)
 {
-    auto sut = Rectifier::create(makeCalibration(), RectifierConfig{});
+    auto sut = Rectifier::create(distortedCalibration(), RectifierConfig{});
     ASSERT_TRUE(sut.has_value());
     const cv::Mat small(kHeight - 2, kWidth, CV_8UC1, cv::Scalar(7));
     const cv::Mat good = makeTexture(3);
@@ -214,7 +200,7 @@ TEST(Rectifier, IdentityPathCopiesRoiRowsBitExact)
 
 TEST(Rectifier, ProjectionComesFromP1P2)
 {
-    const StereoCalibration calib = makeCalibration();
+    const StereoCalibration calib = distortedCalibration();
     const auto sut = Rectifier::create(calib, RectifierConfig{});
     ASSERT_TRUE(sut.has_value());
     EXPECT_DOUBLE_EQ(sut->projection().fx, calib.P1.at<double>(0, 0));
@@ -229,8 +215,8 @@ TEST(Rectifier, CreateRejectsBadCalibrationAndMargin)
     EXPECT_FALSE(Rectifier::create(empty, RectifierConfig{}).has_value());
     RectifierConfig badMargin;
     badMargin.roiMarginRows = -1;
-    EXPECT_FALSE(Rectifier::create(makeCalibration(), badMargin).has_value());
-    StereoCalibration noSize = makeCalibration();
+    EXPECT_FALSE(Rectifier::create(distortedCalibration(), badMargin).has_value());
+    StereoCalibration noSize = distortedCalibration();
     noSize.imageSize = cv::Size(0, kHeight);
     EXPECT_FALSE(Rectifier::create(noSize, RectifierConfig{}).has_value());
 }
@@ -241,7 +227,7 @@ TEST(Rectifier, RoiTopFractionMovesTheRoi)
     config.roiTopFraction = 0.4;
     config.roiMarginRows = 4;
 
-    const auto sut = Rectifier::create(makeCalibration(), config);
+    const auto sut = Rectifier::create(distortedCalibration(), config);
 
     ASSERT_TRUE(sut.has_value());
     EXPECT_EQ(sut->roi().y, static_cast<int>(std::lround(kHeight * 0.4)) - 4);
@@ -253,7 +239,7 @@ TEST(Rectifier, CreateRejectsBadRoiFraction)
     for (const double fraction : {-0.1, 1.0, std::nan("")}) {
         RectifierConfig config;
         config.roiTopFraction = fraction;
-        const auto result = Rectifier::create(makeCalibration(), config);
+        const auto result = Rectifier::create(distortedCalibration(), config);
         ASSERT_FALSE(result.has_value()) << fraction;
         EXPECT_NE(result.error().what.find("roiTopFraction"), std::string::npos);
     }
@@ -262,7 +248,7 @@ TEST(Rectifier, CreateRejectsBadRoiFraction)
 TEST(Rectifier, RectifyAllocatesNothingOver300Frames)
 {
     constexpr int kFrames = 300;
-    auto sut = Rectifier::create(makeCalibration(), RectifierConfig{});
+    auto sut = Rectifier::create(distortedCalibration(), RectifierConfig{});
     ASSERT_TRUE(sut.has_value());
     const cv::Mat left = makeTexture(6);
     const cv::Mat right = makeTexture(7);

@@ -11,6 +11,7 @@
 
 #include "alloc_counter.hpp"
 #include "mat_view.hpp"
+#include "test_rig.hpp"
 #include "ugv/sim/renderer.hpp"
 #include "ugv/sim/scene.hpp"
 
@@ -20,7 +21,7 @@ namespace {
 using ugv::test::view;
 using ugv::test::view16;
 
-constexpr RectifiedProjection kProjection{546.0, 546.0, 319.5, 239.5, 0.30};
+using ugv::test::kRigProjection;
 constexpr double kHeightM = 0.59;
 constexpr Rect kRoi{0, 232, 640, 248};
 constexpr int kFirstAnalysedRow = 240;
@@ -28,7 +29,7 @@ constexpr double kFb = 546.0 * 0.30;
 
 SectorBuilder makeBuilder(const SectorBuilderConfig& config = {})
 {
-    auto result = SectorBuilder::create(config, kProjection, kRoi, kFirstAnalysedRow);
+    auto result = SectorBuilder::create(config, kRigProjection, kRoi, kFirstAnalysedRow);
     EXPECT_TRUE(result.has_value()) << (result.has_value() ? "" : result.error().message());
     return std::move(result).value();
 }
@@ -39,7 +40,7 @@ const GroundPlane kGround = GroundPlane::fromMount(Mount{kHeightM, 0.0, 0.0});
 cv::Mat groundDisparity()
 {
     cv::Mat d16(kRoi.height, kRoi.width, CV_16SC1, cv::Scalar(-16));
-    const DisparityPlane plane = kGround.disparityPlane(kProjection);
+    const DisparityPlane plane = kGround.disparityPlane(kRigProjection);
     for (int v = 0; v < kRoi.height; ++v) {
         for (int u = 0; u < kRoi.width; ++u) {
             const double d = plane.at(u, v + kRoi.y);
@@ -54,12 +55,12 @@ cv::Mat groundDisparity()
 /// Pixel column of a camera-frame lateral offset X [m] (right positive) at depth Z [m].
 int column(double xM, double zM)
 {
-    return static_cast<int>(std::lround(kProjection.cx + kProjection.fx * xM / zM));
+    return static_cast<int>(std::lround(kRigProjection.cx + kRigProjection.fx * xM / zM));
 }
 /// ROI row of a point at height z [m] above the ground at depth Z [m] (level camera).
 int roiRow(double zUp, double zM)
 {
-    return static_cast<int>(std::lround(kProjection.cy + kProjection.fy * (kHeightM - zUp) / zM)) - kRoi.y;
+    return static_cast<int>(std::lround(kRigProjection.cy + kRigProjection.fy * (kHeightM - zUp) / zM)) - kRoi.y;
 }
 
 /// A fronto-parallel box face at depth Z, lateral [x0, x1] (camera X, right positive), from the ground up to top.
@@ -77,8 +78,8 @@ void paintFace(cv::Mat& d16, double zM, double x0, double x1, double top)
 void paintSunkenGround(cv::Mat& d16, double depthM, double z0, double z1, double halfWidth)
 {
     for (int v = 0; v < d16.rows; ++v) {
-        const double dy = v + kRoi.y - kProjection.cy;
-        const double z = dy > 0.0 ? kProjection.fy * (kHeightM + depthM) / dy : 1e9;
+        const double dy = v + kRoi.y - kRigProjection.cy;
+        const double z = dy > 0.0 ? kRigProjection.fy * (kHeightM + depthM) / dy : 1e9;
         if (z < z0 || z > z1) {
             continue;
         }
@@ -106,9 +107,9 @@ TEST(SectorBuilder, CreateRejectsInvalidConfigAndGeometry)
     SectorBuilderConfig badPercentile;
     badPercentile.rangePercentile = 1.0F;
 
-    EXPECT_FALSE(SectorBuilder::create(tooManySectors, kProjection, kRoi, kFirstAnalysedRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(badPercentile, kProjection, kRoi, kFirstAnalysedRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create({}, kProjection, kRoi, kRoi.y - 1).has_value());
+    EXPECT_FALSE(SectorBuilder::create(tooManySectors, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(badPercentile, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create({}, kRigProjection, kRoi, kRoi.y - 1).has_value());
     EXPECT_FALSE(SectorBuilder::create({}, RectifiedProjection{}, kRoi, kFirstAnalysedRow).has_value());
 }
 
@@ -119,8 +120,8 @@ TEST(SectorBuilder, CreateRejectsInvalidClearRule)
     SectorBuilderConfig negativeVotes;
     negativeVotes.minClearFarVotes = -1;
 
-    EXPECT_FALSE(SectorBuilder::create(noClearRange, kProjection, kRoi, kFirstAnalysedRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(negativeVotes, kProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noClearRange, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(negativeVotes, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
 }
 
 TEST(SectorBuilder, CreateRejectsInvalidDropRule)
@@ -128,7 +129,7 @@ TEST(SectorBuilder, CreateRejectsInvalidDropRule)
     const auto rejected = [](void (*set)(SectorBuilderConfig&)) {
         SectorBuilderConfig c;
         set(c);
-        return !SectorBuilder::create(c, kProjection, kRoi, kFirstAnalysedRow).has_value();
+        return !SectorBuilder::create(c, kRigProjection, kRoi, kFirstAnalysedRow).has_value();
     };
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropDepthM = 0.0F; }));
     EXPECT_TRUE(rejected([](SectorBuilderConfig& c) { c.minDropGapM = -0.1F; }));
@@ -295,15 +296,15 @@ TEST(SectorBuilder, CreateRejectsInvalidFaceRule)
     SectorBuilderConfig noTallVotes;
     noTallVotes.minTallVotes = 0;
 
-    EXPECT_FALSE(SectorBuilder::create(noFace, kProjection, kRoi, kFirstAnalysedRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(faceAboveTop, kProjection, kRoi, kFirstAnalysedRow).has_value());
-    EXPECT_FALSE(SectorBuilder::create(noTallVotes, kProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noFace, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(faceAboveTop, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
+    EXPECT_FALSE(SectorBuilder::create(noTallVotes, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
     for (const auto set : {+[](SectorBuilderConfig& c) { c.faceSupportRangeM = 0.0F; },
                            +[](SectorBuilderConfig& c) { c.minFaceSupport = 0; },
                            +[](SectorBuilderConfig& c) { c.minFarTallVotes = 0; }}) {
         SectorBuilderConfig c;
         set(c);
-        EXPECT_FALSE(SectorBuilder::create(c, kProjection, kRoi, kFirstAnalysedRow).has_value());
+        EXPECT_FALSE(SectorBuilder::create(c, kRigProjection, kRoi, kFirstAnalysedRow).has_value());
     }
 }
 
@@ -475,7 +476,7 @@ SectorBuilderConfig profileOnly()
 /// negative (the second cue a row-profile drop needs).
 cv::Mat labelsBelowGround(const cv::Mat& d16)
 {
-    const ugv::vision::DisparityPlane plane = kGround.disparityPlane(kProjection);
+    const ugv::vision::DisparityPlane plane = kGround.disparityPlane(kRigProjection);
     cv::Mat labels(d16.size(), CV_8UC1, cv::Scalar(0));
     for (int v = 0; v < d16.rows; ++v) {
         for (int u = 0; u < d16.cols; ++u) {
@@ -538,9 +539,9 @@ TEST(SectorBuilder, ARowProfileDropNeedsTheSecondCueAndIsNeverClearWithoutIt)
 /// error spread over a patch of road gives (its disparity follows the ground's, d = d_g - offset).
 void paintOffsetPatch(cv::Mat& d16, double z0, double z1, double halfWidth, double offsetPx)
 {
-    const DisparityPlane plane = kGround.disparityPlane(kProjection);
+    const DisparityPlane plane = kGround.disparityPlane(kRigProjection);
     for (int v = roiRow(0.0, z1); v <= roiRow(0.0, z0); ++v) {
-        const double z = kProjection.fy * kHeightM / (v + kRoi.y - kProjection.cy);
+        const double z = kRigProjection.fy * kHeightM / (v + kRoi.y - kRigProjection.cy);
         for (int u = column(-halfWidth, z); u <= column(halfWidth, z); ++u) {
             const double d = plane.at(u + kRoi.x, v + kRoi.y) - offsetPx;
             d16.at<std::int16_t>(v, u) = static_cast<std::int16_t>(std::lround(d * 16.0));
@@ -614,7 +615,7 @@ TEST(SectorBuilder, AFarWallIsFoundAboveABlendedOrThinnedBottomRow)
     cv::Mat wall = groundDisparity();
     paintFarWall(wall, 7.0, 8.0);
     const int bottom = roiRow(kHeightM - 8.0 * kHeightM / 7.0, 8.0);
-    const DisparityPlane plane = kGround.disparityPlane(kProjection);
+    const DisparityPlane plane = kGround.disparityPlane(kRigProjection);
 
     cv::Mat blended = wall.clone();
     cv::Mat thinned = wall.clone();
@@ -714,7 +715,7 @@ TEST(SectorBuilder, IsolatedOutliersNeitherCreateNorMoveObstacles)
 
     const ObstacleSectors& s = sut.sectors();
     EXPECT_NEAR(s.sectors[static_cast<std::size_t>(sectorOf(s, 0.0))].rangeM, 4.0, 0.04);
-    const auto bearingOf = [](double u) { return std::atan2(kProjection.cx - u, kProjection.fx) * 180.0 / M_PI; };
+    const auto bearingOf = [](double u) { return std::atan2(kRigProjection.cx - u, kRigProjection.fx) * 180.0 / M_PI; };
     EXPECT_EQ(s.sectors[static_cast<std::size_t>(sectorOf(s, bearingOf(100.0)))].state, SectorState::Clear);
     // As many stray votes as a mesh fence's wires give: not an obstacle, but no longer Clear either.
     EXPECT_EQ(s.sectors[static_cast<std::size_t>(sectorOf(s, bearingOf(560.0)))].state, SectorState::Unknown);
@@ -759,7 +760,8 @@ TEST(SectorBuilder, LabelsOnlyModeNeedsLabelsAndUnlabelledVotesForbidClear)
 TEST(SectorBuilder, TheSectorsOfAFrameDoNotDependOnTheFramesBefore)
 {
     cv::Mat before = groundDisparity();
-    const DisparityPlane lower = GroundPlane::fromMount(Mount{kHeightM + 0.15, 0.0, 0.0}).disparityPlane(kProjection);
+    const DisparityPlane lower =
+        GroundPlane::fromMount(Mount{kHeightM + 0.15, 0.0, 0.0}).disparityPlane(kRigProjection);
     for (int v = 0; v < kRoi.height; ++v) {
         for (int u = 0; u < kRoi.width; ++u) {
             const double d = lower.at(u, v + kRoi.y);
@@ -839,7 +841,7 @@ void expectMatchesGroundTruth(const char* name, double rangeM, double bearingDeg
             const float h = frame.height.at<float>(y, u);
             if ((l == 1 && h > 0.10F) || (l == 2 && h < -0.02F)) { // the simulator's qualifying hits
                 const double z = frame.depth.at<float>(y, u);
-                const double bearing = std::atan2(-(u - kProjection.cx) * z / kProjection.fx, z) * 180.0 / M_PI;
+                const double bearing = std::atan2(-(u - kRigProjection.cx) * z / kRigProjection.fx, z) * 180.0 / M_PI;
                 const int s = static_cast<int>(std::floor((bearing + 60.7 / 2.0) / binDeg));
                 if (s >= 0 && s < 64) {
                     ++support[static_cast<std::size_t>(s)];
