@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 host (see README "Quick start"):
 #   toolchain/host.sh run    install missing packages, build (release), run the main job on the embedded default
-#   toolchain/host.sh test   install missing packages, build (release, asan, tsan), run every test with a summary
+#   toolchain/host.sh test   install missing packages, build (release, asan, tsan, fuzz), run every test with a summary
 #   toolchain/host.sh deps   only install the Debian packages
 #   toolchain/host.sh build  only configure and build the release preset
 #   toolchain/host.sh package  build the release preset and the Debian package (build/release/package/*.deb)
-# Environment: UGV_SHARED_DATA (real test data, default ../shared/data), UGV_SKIP_ASAN=1, UGV_SKIP_TSAN=1 (test: skip that preset).
+# Environment: UGV_SHARED_DATA (real test data, default ../shared/data), UGV_SKIP_ASAN=1, UGV_SKIP_TSAN=1,
+# UGV_SKIP_FUZZ=1 (test: skip that preset).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -84,6 +85,7 @@ run_main_job() {
 sanitizer_presets() {
     if [ "${UGV_SKIP_ASAN:-0}" != 1 ]; then echo asan; fi
     if [ "${UGV_SKIP_TSAN:-0}" != 1 ]; then echo tsan; fi
+    if [ "${UGV_SKIP_FUZZ:-0}" != 1 ]; then echo fuzz; fi
 }
 
 run_tests() {
@@ -133,6 +135,10 @@ run_tests() {
     if [ "${UGV_SKIP_TSAN:-0}" != 1 ]; then
         echo "== tsan (thread sanitizer): the unit tests that start threads (platform, rt, the service)"
         ctest --preset tsan -j "$(nproc)" || status=1
+    fi
+    if [ "${UGV_SKIP_FUZZ:-0}" != 1 ]; then
+        echo "== fuzz (libFuzzer, coverage-guided, ASan + UBSan): 5 s of each target from its kept corpus"
+        bash toolchain/fuzz.sh --seconds 5 || status=1
     fi
     return $status
 }
