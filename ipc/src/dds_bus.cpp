@@ -1,5 +1,9 @@
 #include "ugv/ipc/dds_bus.hpp"
 
+#include <ifaddrs.h>
+#include <net/if.h>
+#include <netinet/in.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -363,6 +367,31 @@ bool parseTopic(const std::string& name, const BusConfig& config, TopicId& out)
     return false;
 }
 
+namespace {
+
+/// The IPv4 addresses of the interfaces that are up, sorted (loopback too): what Fast DDS reads when it makes its
+/// unicast locators. False when the system would not list them.
+bool upIpv4Addresses(std::vector<std::uint32_t>& out)
+{
+    ifaddrs* list = nullptr;
+    if (::getifaddrs(&list) != 0) {
+        return false;
+    }
+    out.clear();
+    for (const ifaddrs* a = list; a != nullptr; a = a->ifa_next) {
+        if (a->ifa_addr != nullptr && a->ifa_addr->sa_family == AF_INET && (a->ifa_flags & IFF_UP) != 0U) {
+            sockaddr_in in{};
+            std::memcpy(&in, a->ifa_addr, sizeof in);
+            out.push_back(in.sin_addr.s_addr);
+        }
+    }
+    ::freeifaddrs(list);
+    std::sort(out.begin(), out.end());
+    return true;
+}
+
+} // namespace
+
 Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
 {
     if (auto ok = validate(config, "dds"); !ok) {
@@ -398,7 +427,24 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
         bus->rosSubscriber_ == nullptr) {
         return Unexpected(Error{"dds", "cannot create the publishers and subscribers", "a bug or out of memory"});
     }
+    upIpv4Addresses(bus->startAddresses_);
+    bus->lastAddresses_ = bus->startAddresses_;
     return bus;
+}
+
+bool Bus::networkInterfacesChanged()
+{
+    const auto t = std::chrono::steady_clock::now();
+    if (t < nextInterfaceCheck_) {
+        return false;
+    }
+    nextInterfaceCheck_ = t + kInterfaceCheckPeriod;
+    std::vector<std::uint32_t> now;
+    if (!upIpv4Addresses(now) || now == lastAddresses_) {
+        return false;
+    }
+    lastAddresses_ = std::move(now);
+    return lastAddresses_ != startAddresses_;
 }
 
 Bus::~Bus()

@@ -3,6 +3,7 @@
 #include <cctype>
 
 #include "ugv/ipc/dds_convert.hpp"
+#include "ugv/platform/log.hpp"
 #include "ugv/service/frame_pipeline.hpp"
 
 namespace ugv::service {
@@ -77,6 +78,7 @@ Result<std::unique_ptr<DdsBridge>, Error> DdsBridge::create(ipc::dds::Bus& bus, 
     b->negativesOut_ = *negatives;
     b->healthOut_ = *health;
     b->poseIn_ = *pose;
+    b->bus_ = &bus;
     b->securedBus_ = bus.config().security.enabled ? &bus : nullptr;
     b->health_.vehicle(config.vehicleId);
     return b;
@@ -140,6 +142,10 @@ void DdsBridge::idle() noexcept
             lastHealthNs_ = now;
             publishHealth(now);
         }
+        if (bus_->networkInterfacesChanged()) {
+            interfaceChanges_.fetch_add(1, std::memory_order_relaxed);
+            UGV_LOG(Ipc, Warn) << ipc::dds::kInterfaceChangeWarning;
+        }
     } catch (...) {
         writeFailures_.fetch_add(1, std::memory_order_relaxed);
     }
@@ -173,7 +179,7 @@ DdsBridgeStats DdsBridge::stats() const noexcept
     return {framesSent_.load(std::memory_order_relaxed),    writeFailures_.load(std::memory_order_relaxed),
             posesUsed_.load(std::memory_order_relaxed),     posesForeign_.load(std::memory_order_relaxed),
             posesRejected_.load(std::memory_order_relaxed), posesImpersonated_.load(std::memory_order_relaxed),
-            stalePoses_.load(std::memory_order_relaxed)};
+            stalePoses_.load(std::memory_order_relaxed),    interfaceChanges_.load(std::memory_order_relaxed)};
 }
 
 } // namespace ugv::service

@@ -92,12 +92,13 @@ std::string formatBusReport(const RunResult& r)
             line, sizeof(line),
             "dds: %llu frame(s) sent (sectors, two LaserScans, PointCloud2), %llu write failure(s); poses %llu "
             "used, %llu of other vehicles, %llu refused, %llu in this vehicle's name by another participant; %llu "
-            "frame(s) with a stale or no pose\n",
+            "frame(s) with a stale or no pose; %llu network interface change(s) (restart to use a new link)\n",
             static_cast<unsigned long long>(r.bus->framesSent), static_cast<unsigned long long>(r.bus->writeFailures),
             static_cast<unsigned long long>(r.bus->posesUsed), static_cast<unsigned long long>(r.bus->posesForeign),
             static_cast<unsigned long long>(r.bus->posesRejected),
             static_cast<unsigned long long>(r.bus->posesImpersonated),
-            static_cast<unsigned long long>(r.bus->stalePoses));
+            static_cast<unsigned long long>(r.bus->stalePoses),
+            static_cast<unsigned long long>(r.bus->interfaceChanges));
         out += line;
     }
     if (r.correlator) {

@@ -239,6 +239,13 @@ graph::Gid_ rosGid(const eprosima::fastrtps::rtps::GUID_t& guid);
 
 class WriterIdentities;
 
+/// What the service and the tools say when Bus::networkInterfacesChanged().
+constexpr const char* kInterfaceChangeWarning =
+    "network interfaces changed since the DDS bus started (a link came up, went down or got a new address): "
+    "Fast DDS 2.9 goes on with the addresses of its start, so the team bus may reach no one over the new link "
+    "(fix: restart this process, e.g. systemctl restart ugvsensed, once the link is up; or start it after the "
+    "link: the unit waits for network-online.target)";
+
 class Bus {
 public:
     /// The participant (domain, name, transports, discovery) and its publishers and subscribers.
@@ -288,6 +295,14 @@ public:
     /// a participant write only in its own), or "" when unknown (an open bus, or a writer not discovered).
     /// Thread-safe (discovery runs on Fast DDS's threads).
     [[nodiscard]] std::string writerIdentity(const eprosima::fastdds::dds::SampleInfo& info) const;
+    /// True when the network interfaces' IPv4 addresses changed since the last check and differ from those up when
+    /// the participant started. Fast DDS 2.9 keeps using the addresses of its start: a radio link that comes up
+    /// later, or a new DHCP address, carries nothing until the process restarts. Setting the participant's QoS
+    /// again makes it announce the new addresses, but not its readers' and writers' (measured: a reader made before
+    /// its link came up was still announced at 127.0.0.1 and received nothing; README "On the DDS bus"), so the
+    /// callers say so and name the fix. Call it on every turn of the owner thread's loop (not a real-time one): it
+    /// looks at most once a second (kInterfaceCheckPeriod: one getifaddrs()).
+    bool networkInterfacesChanged();
 
 private:
     Bus() = default;
@@ -314,6 +329,10 @@ private:
     std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
     std::unique_ptr<WriterIdentities> identities_;           ///< writer GUID -> identity, from discovery
     eprosima::fastdds::dds::DataWriter* graphOut_ = nullptr; ///< ros_discovery_info, made by announceRosNode()
+    static constexpr std::chrono::seconds kInterfaceCheckPeriod{1};
+    std::vector<std::uint32_t> startAddresses_; ///< the interfaces' IPv4 addresses when the participant started
+    std::vector<std::uint32_t> lastAddresses_;  ///< at the last check
+    std::chrono::steady_clock::time_point nextInterfaceCheck_{};
 };
 
 // ---- template bodies ----

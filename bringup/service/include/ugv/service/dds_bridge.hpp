@@ -31,6 +31,7 @@ struct DdsBridgeStats {
     std::uint64_t posesRejected = 0;     ///< malformed poses refused
     std::uint64_t posesImpersonated = 0; ///< secured bus: poses naming this vehicle written by another participant
     std::uint64_t stalePoses = 0;        ///< frames sent with a stale or no pose
+    std::uint64_t interfaceChanges = 0;  ///< network interface changes seen (the bus needs a restart to use them)
 };
 
 class DdsBridge final : public BusSink {
@@ -59,6 +60,7 @@ private:
     ipc::dds::Writer<ipc::dds::ros::PointCloud2_> negativesOut_;
     ipc::dds::Writer<ipc::dds::msg::ServiceHealth> healthOut_;
     ipc::dds::Reader<ipc::dds::msg::VehiclePose> poseIn_;
+    ipc::dds::Bus* bus_ = nullptr;              ///< watched for network interface changes (idle())
     const ipc::dds::Bus* securedBus_ = nullptr; ///< the bus when secured: whose partition a pose came from
     PoseHistory poses_;
     ipc::dds::msg::ObstacleSectors sectors_;
@@ -78,6 +80,7 @@ private:
     std::atomic<std::uint64_t> posesRejected_{0};
     std::atomic<std::uint64_t> posesImpersonated_{0};
     std::atomic<std::uint64_t> stalePoses_{0};
+    std::atomic<std::uint64_t> interfaceChanges_{0};
 };
 
 /// The ROS 2 namespace of the config: dds.ros_namespace, else vehicle_id's letters, digits and _ (ugv-1 -> ugv1).
