@@ -157,6 +157,9 @@ Result<RunResult, Error> runCorrelatorOnly(const adapters::ServiceConfig& config
             systemd.watchdog();
             lastPingNs = now;
         }
+        if (bus.networkInterfacesChanged()) { // a station's link that came up after the start (vehicles: DdsBridge)
+            UGV_LOG(Ipc, Warn) << ipc::dds::kInterfaceChangeWarning;
+        }
         sleepMs(kMonitorPoll);
     }
     systemd.stopping();
