@@ -432,21 +432,6 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
     return bus;
 }
 
-bool Bus::networkInterfacesChanged()
-{
-    const auto t = std::chrono::steady_clock::now();
-    if (t < nextInterfaceCheck_) {
-        return false;
-    }
-    nextInterfaceCheck_ = t + kInterfaceCheckPeriod;
-    std::vector<std::uint32_t> now;
-    if (!upIpv4Addresses(now) || now == lastAddresses_) {
-        return false;
-    }
-    lastAddresses_ = std::move(now);
-    return lastAddresses_ != startAddresses_;
-}
-
 Bus::~Bus()
 {
     if (participant_ != nullptr) {
@@ -486,7 +471,7 @@ Result<fdds::Topic*, Error> Bus::topic(TopicId id, MakeType make)
     return t;
 }
 
-Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
+Result<fdds::DataWriter*, Error> Bus::createWriter(TopicId id, MakeType make)
 {
     const auto t = topic(id, make);
     if (!t) {
@@ -514,7 +499,7 @@ Result<fdds::DataWriter*, Error> Bus::makeWriter(TopicId id, MakeType make)
     return w;
 }
 
-Result<fdds::DataReader*, Error> Bus::makeReader(TopicId id, MakeType make)
+Result<fdds::DataReader*, Error> Bus::createReader(TopicId id, MakeType make)
 {
     const auto t = topic(id, make);
     if (!t) {
@@ -529,6 +514,80 @@ Result<fdds::DataReader*, Error> Bus::makeReader(TopicId id, MakeType make)
                                      "to read it?"));
     }
     return r;
+}
+
+Result<detail::Endpoint*, Error> Bus::makeWriter(TopicId id, MakeType make)
+{
+    auto w = createWriter(id, make);
+    if (!w) {
+        return Unexpected(w.error());
+    }
+    const std::unique_lock lock(endpointGuard_);
+    return &endpoints_.emplace_back(detail::Endpoint{&endpointGuard_, *w, nullptr, id, make});
+}
+
+Result<detail::Endpoint*, Error> Bus::makeReader(TopicId id, MakeType make)
+{
+    auto r = createReader(id, make);
+    if (!r) {
+        return Unexpected(r.error());
+    }
+    const std::unique_lock lock(endpointGuard_);
+    return &endpoints_.emplace_back(detail::Endpoint{&endpointGuard_, nullptr, *r, id, make});
+}
+
+NetworkChange Bus::followNetworkChanges()
+{
+    const auto t = std::chrono::steady_clock::now();
+    if (t < nextInterfaceCheck_) {
+        return NetworkChange::None;
+    }
+    nextInterfaceCheck_ = t + kInterfaceCheckPeriod;
+    std::vector<std::uint32_t> now;
+    if (!upIpv4Addresses(now) || now == lastAddresses_) {
+        return NetworkChange::None;
+    }
+    lastAddresses_ = std::move(now);
+    if (lastAddresses_ == startAddresses_) {
+        return NetworkChange::None;
+    }
+    const std::unique_lock lock(endpointGuard_);
+    if (auto renewed = renewEndpoints(); !renewed) {
+        networkError_ = renewed.error();
+        return NetworkChange::Failed; // the next change tries again
+    }
+    startAddresses_ = lastAddresses_;
+    return NetworkChange::Followed;
+}
+
+Result<void, Error> Bus::renewEndpoints()
+{
+    // The participant reads the interfaces anew when its QoS is set (its own announcement then carries them); an
+    // endpoint takes the participant's addresses when it is made, so each is made again.
+    if (participant_->set_qos(participant_->get_qos()) != ReturnCode_t::RETCODE_OK) {
+        return Unexpected(Error{"dds domain " + std::to_string(config_.domainId),
+                                "the participant did not take the new network interfaces",
+                                "restart this process once the link is up"});
+    }
+    for (detail::Endpoint& e : endpoints_) {
+        const bool ros = spec(e.id).ros;
+        if (e.writer != nullptr) {
+            (void)(ros ? rosPublisher_ : publisher_)->delete_datawriter(e.writer);
+            auto w = createWriter(e.id, e.make);
+            e.writer = w ? *w : nullptr;
+            if (!w) {
+                return Unexpected(w.error());
+            }
+        } else {
+            (void)(ros ? rosSubscriber_ : subscriber_)->delete_datareader(e.reader);
+            auto r = createReader(e.id, e.make);
+            e.reader = r ? *r : nullptr;
+            if (!r) {
+                return Unexpected(r.error());
+            }
+        }
+    }
+    return rosNode_.empty() ? Result<void, Error>{} : writeRosNode();
 }
 
 graph::Gid_ rosGid(const rtps::GUID_t& guid)
@@ -558,26 +617,32 @@ Result<void, Error> Bus::announceRosNode(const std::string& nodeName)
         }
         graphOut_ = *w;
     }
+    const std::shared_lock lock(endpointGuard_);
+    rosNode_ = nodeName;
+    return writeRosNode();
+}
+
+Result<void, Error> Bus::writeRosNode()
+{
     graph::NodeEntitiesInfo_ node;
     node.node_namespace("/" + config_.rosNamespace);
-    node.node_name(nodeName);
-    std::vector<fdds::DataWriter*> writers;
-    std::vector<fdds::DataReader*> readers;
-    rosPublisher_->get_datawriters(writers);
-    rosSubscriber_->get_datareaders(readers);
-    for (const fdds::DataWriter* w : writers) {
-        if (w != graphOut_) {
-            node.writer_gid_seq().push_back(rosGid(w->guid()));
+    node.node_name(rosNode_);
+    for (const detail::Endpoint& e : endpoints_) {
+        if (!spec(e.id).ros || &e == graphOut_) {
+            continue;
         }
-    }
-    for (const fdds::DataReader* r : readers) {
-        node.reader_gid_seq().push_back(rosGid(r->guid()));
+        if (e.writer != nullptr) {
+            node.writer_gid_seq().push_back(rosGid(e.writer->guid()));
+        } else {
+            node.reader_gid_seq().push_back(rosGid(e.reader->guid()));
+        }
     }
     graph::ParticipantEntitiesInfo_ info;
     info.gid(rosGid(participant_->guid()));
     info.node_entities_info_seq().push_back(std::move(node));
-    if (!graphOut_->write(&info)) {
-        return Unexpected(Error{where, "the sample was refused", "a bug, or see the Fast DDS messages above"});
+    if (!graphOut_->writer->write(&info)) {
+        return Unexpected(Error{"dds topic ros_discovery_info", "the sample was refused",
+                                "a bug, or see the Fast DDS messages above"});
     }
     return {};
 }

@@ -142,9 +142,15 @@ void DdsBridge::idle() noexcept
             lastHealthNs_ = now;
             publishHealth(now);
         }
-        if (bus_->networkInterfacesChanged()) {
+        if (const ipc::dds::NetworkChange change = bus_->followNetworkChanges();
+            change != ipc::dds::NetworkChange::None) {
             interfaceChanges_.fetch_add(1, std::memory_order_relaxed);
-            UGV_LOG(Ipc, Warn) << ipc::dds::kInterfaceChangeWarning;
+            if (change == ipc::dds::NetworkChange::Followed) {
+                UGV_LOG(Ipc, Info) << ipc::dds::kNetworkFollowedNote;
+            } else {
+                UGV_LOG(Ipc, Error) << "network interfaces changed, and the DDS bus could not follow: "
+                                    << bus_->lastNetworkError().message();
+            }
         }
     } catch (...) {
         writeFailures_.fetch_add(1, std::memory_order_relaxed);

@@ -92,7 +92,7 @@ std::string formatBusReport(const RunResult& r)
             line, sizeof(line),
             "dds: %llu frame(s) sent (sectors, two LaserScans, PointCloud2), %llu write failure(s); poses %llu "
             "used, %llu of other vehicles, %llu refused, %llu in this vehicle's name by another participant; %llu "
-            "frame(s) with a stale or no pose; %llu network interface change(s) (restart to use a new link)\n",
+            "frame(s) with a stale or no pose; %llu network interface change(s) followed\n",
             static_cast<unsigned long long>(r.bus->framesSent), static_cast<unsigned long long>(r.bus->writeFailures),
             static_cast<unsigned long long>(r.bus->posesUsed), static_cast<unsigned long long>(r.bus->posesForeign),
             static_cast<unsigned long long>(r.bus->posesRejected),
@@ -157,8 +157,13 @@ Result<RunResult, Error> runCorrelatorOnly(const adapters::ServiceConfig& config
             systemd.watchdog();
             lastPingNs = now;
         }
-        if (bus.networkInterfacesChanged()) { // a station's link that came up after the start (vehicles: DdsBridge)
-            UGV_LOG(Ipc, Warn) << ipc::dds::kInterfaceChangeWarning;
+        // A station's link that came up after the start (vehicles: DdsBridge).
+        if (const ipc::dds::NetworkChange change = bus.followNetworkChanges();
+            change == ipc::dds::NetworkChange::Followed) {
+            UGV_LOG(Ipc, Info) << ipc::dds::kNetworkFollowedNote;
+        } else if (change == ipc::dds::NetworkChange::Failed) {
+            UGV_LOG(Ipc, Error) << "network interfaces changed, and the DDS bus could not follow: "
+                                << bus.lastNetworkError().message();
         }
         sleepMs(kMonitorPoll);
     }

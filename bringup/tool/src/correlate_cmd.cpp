@@ -191,9 +191,7 @@ int correlateFromDds(const Args& args, correlator::Mode mode, double period, dou
            (*duration <= 0.0 ||
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < *duration)) {
         (*live)->waitForInput(std::chrono::milliseconds(50));
-        if ((*bus)->networkInterfacesChanged()) {
-            std::cerr << "warning: " << ipc::dds::kInterfaceChangeWarning << '\n';
-        }
+        bus::followNetworkChanges(**bus);
         (*live)->poll(
             std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
                 .count());

@@ -354,9 +354,7 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
     eprosima::fastdds::dds::SampleInfo info;
     const bool secured = bus.config().security.enabled;
     while (!gStop.load() && (o.count == 0 || printed < o.count)) {
-        if (bus.networkInterfacesChanged()) {
-            std::cerr << "warning: " << dds::kInterfaceChangeWarning << '\n';
-        }
+        bus::followNetworkChanges(bus);
         auto slice = kPollSlice;
         if (o.timeoutS > 0.0) {
             const auto now = std::chrono::steady_clock::now();

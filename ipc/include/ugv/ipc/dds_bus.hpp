@@ -27,8 +27,10 @@
 /// the only one a ROS 2 node reads. Reliable writers send a heartbeat every 100 ms (Fast DDS's default is 3 s),
 /// so that a lost sample is repaired within a few hundred milliseconds on a lossy radio link.
 ///
-/// Thread-safety: Bus::create/writer/reader from one thread; a Writer or Reader is used by one thread at a time;
-/// different ones may be used concurrently (Fast DDS locks inside). RT-safe: no (Fast DDS allocates and locks).
+/// Thread-safety: Bus::create/writer/reader/followNetworkChanges from one thread; a Writer or Reader is used by one
+/// thread at a time; different ones may be used concurrently (Fast DDS locks inside), also while the owner thread
+/// follows a network change (each use holds the Bus's endpoint lock shared; a renewal holds it exclusively, waiting
+/// at most for the longest Reader::wait() in progress). RT-safe: no (Fast DDS allocates and locks).
 /// Keep it off the frame path: the service's DDS task (bringup/service/include/ugv/service/dds_bridge.hpp) is the only
 /// user there.
 
@@ -36,8 +38,10 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <optional>
+#include <shared_mutex>
 #include <string>
 #include <vector>
 
@@ -180,57 +184,84 @@ UGV_DDS_TOPIC(ros::PointCloud2_, ros::PointCloud2_PubSubType, RosNegatives);
 UGV_DDS_TOPIC(graph::ParticipantEntitiesInfo_, graph::ParticipantEntitiesInfo_PubSubType, RosGraph);
 #undef UGV_DDS_TOPIC
 
-/// A non-owning handle; valid while its Bus lives.
+namespace detail {
+/// A writer or a reader the Bus made. Handles point here, so that Bus::followNetworkChanges() can put a new Fast DDS
+/// entity behind them; `guard` (the Bus's) is held shared while the entity is used, exclusively while it is renewed.
+struct Endpoint {
+    std::shared_mutex* guard = nullptr;
+    eprosima::fastdds::dds::DataWriter* writer = nullptr; ///< a writer's entity, or null
+    eprosima::fastdds::dds::DataReader* reader = nullptr; ///< a reader's entity, or null
+    TopicId id = TopicId::Sectors;
+    eprosima::fastdds::dds::TopicDataType* (*make)() = nullptr; ///< the topic's type, should the topic be made again
+};
+} // namespace detail
+
+/// A non-owning handle; valid while its Bus lives (across Bus::followNetworkChanges()).
 template <class T>
 class Writer {
 public:
     Writer() = default;
-    explicit Writer(eprosima::fastdds::dds::DataWriter* writer) : writer_(writer) {}
+    explicit Writer(detail::Endpoint* endpoint) : e_(endpoint) {}
     // NOLINTBEGIN(cppcoreguidelines-pro-type-const-cast): Fast DDS 2.9's DataWriter::write takes a void* it only reads
     /// False when Fast DDS refused the sample (a full keep-all history past its blocking time, or no writer).
-    bool write(const T& sample) { return writer_ != nullptr && writer_->write(const_cast<T*>(&sample)); }
+    bool write(const T& sample)
+    {
+        const auto lock = shared();
+        return e_ != nullptr && e_->writer->write(const_cast<T*>(&sample));
+    }
     /// write() with the given source timestamp instead of this host's clock [ns since the epoch] (tests: a sender
     /// whose clock runs ahead).
     bool writeStamped(const T& sample, std::int64_t sourceNs)
     {
         const eprosima::fastrtps::Time_t stamp(static_cast<std::int32_t>(sourceNs / 1'000'000'000),
                                                static_cast<std::uint32_t>(sourceNs % 1'000'000'000));
-        return writer_ != nullptr &&
-               writer_->write_w_timestamp(const_cast<T*>(&sample), eprosima::fastdds::dds::HANDLE_NIL, stamp) ==
+        const auto lock = shared();
+        return e_ != nullptr &&
+               e_->writer->write_w_timestamp(const_cast<T*>(&sample), eprosima::fastdds::dds::HANDLE_NIL, stamp) ==
                    eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
     }
     // NOLINTEND(cppcoreguidelines-pro-type-const-cast)
     /// Readers matched now.
     [[nodiscard]] int matched() const;
-    /// The writer's RTPS GUID (its ROS 2 GID: rosGid()); unknown (zero) without a writer.
+    /// The writer's RTPS GUID (its ROS 2 GID: rosGid()); unknown (zero) without a writer. A new one after the Bus
+    /// followed a network change.
     [[nodiscard]] eprosima::fastrtps::rtps::GUID_t guid() const
     {
-        return writer_ != nullptr ? writer_->guid() : eprosima::fastrtps::rtps::GUID_t::unknown();
+        const auto lock = shared();
+        return e_ != nullptr ? e_->writer->guid() : eprosima::fastrtps::rtps::GUID_t::unknown();
     }
     /// Waits until every matched reliable reader acknowledged every sample written so far.
     bool waitForAcks(std::chrono::milliseconds timeout);
-    [[nodiscard]] bool valid() const noexcept { return writer_ != nullptr; }
+    [[nodiscard]] bool valid() const noexcept { return e_ != nullptr; }
 
 private:
-    eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+    [[nodiscard]] std::shared_lock<std::shared_mutex> shared() const
+    {
+        return e_ != nullptr ? std::shared_lock<std::shared_mutex>{*e_->guard} : std::shared_lock<std::shared_mutex>{};
+    }
+    detail::Endpoint* e_ = nullptr;
 };
 
-/// A non-owning handle; valid while its Bus lives.
+/// A non-owning handle; valid while its Bus lives (across Bus::followNetworkChanges()).
 template <class T>
 class Reader {
 public:
     Reader() = default;
-    explicit Reader(eprosima::fastdds::dds::DataReader* reader) : reader_(reader) {}
+    explicit Reader(detail::Endpoint* endpoint) : e_(endpoint) {}
     /// The next sample with data, if any (disposals and unregistrations are skipped). Never blocks.
     bool take(T& out, eprosima::fastdds::dds::SampleInfo* info = nullptr);
     /// Waits for unread data (true) or the timeout (false).
     bool wait(std::chrono::milliseconds timeout);
     /// Writers matched now.
     [[nodiscard]] int matched() const;
-    [[nodiscard]] bool valid() const noexcept { return reader_ != nullptr; }
+    [[nodiscard]] bool valid() const noexcept { return e_ != nullptr; }
 
 private:
-    eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+    [[nodiscard]] std::shared_lock<std::shared_mutex> shared() const
+    {
+        return e_ != nullptr ? std::shared_lock<std::shared_mutex>{*e_->guard} : std::shared_lock<std::shared_mutex>{};
+    }
+    detail::Endpoint* e_ = nullptr;
 };
 
 /// An RTPS GUID as ROS 2 Humble's rmw_fastrtps writes it into a Gid: the 12-byte prefix, the 4-byte entity id,
@@ -239,12 +270,18 @@ graph::Gid_ rosGid(const eprosima::fastrtps::rtps::GUID_t& guid);
 
 class WriterIdentities;
 
-/// What the service and the tools say when Bus::networkInterfacesChanged().
-constexpr const char* kInterfaceChangeWarning =
-    "network interfaces changed since the DDS bus started (a link came up, went down or got a new address): "
-    "Fast DDS 2.9 goes on with the addresses of its start, so the team bus may reach no one over the new link "
-    "(fix: restart this process, e.g. systemctl restart ugvsensed, once the link is up; or start it after the "
-    "link: the unit waits for network-online.target)";
+/// What Bus::followNetworkChanges() did.
+enum class NetworkChange : std::uint8_t {
+    None,     ///< the interfaces' addresses are those the endpoints were made with
+    Followed, ///< they changed: the participant reads them anew and every writer and reader was made again
+    Failed,   ///< they changed, and making the endpoints again failed (Bus::lastNetworkError() says why)
+};
+
+/// What the service and the tools say on NetworkChange::Followed.
+constexpr const char* kNetworkFollowedNote =
+    "network interfaces changed (a link came up, went down or got a new address): the DDS bus made its readers and "
+    "writers again on the new addresses (Fast DDS 2.9 keeps an endpoint's addresses of its start); samples kept for "
+    "late joiners start again from now";
 
 class Bus {
 public:
@@ -295,14 +332,19 @@ public:
     /// a participant write only in its own), or "" when unknown (an open bus, or a writer not discovered).
     /// Thread-safe (discovery runs on Fast DDS's threads).
     [[nodiscard]] std::string writerIdentity(const eprosima::fastdds::dds::SampleInfo& info) const;
-    /// True when the network interfaces' IPv4 addresses changed since the last check and differ from those up when
-    /// the participant started. Fast DDS 2.9 keeps using the addresses of its start: a radio link that comes up
-    /// later, or a new DHCP address, carries nothing until the process restarts. Setting the participant's QoS
-    /// again makes it announce the new addresses, but not its readers' and writers' (measured: a reader made before
-    /// its link came up was still announced at 127.0.0.1 and received nothing; README "On the DDS bus"), so the
-    /// callers say so and name the fix. Call it on every turn of the owner thread's loop (not a real-time one): it
-    /// looks at most once a second (kInterfaceCheckPeriod: one getifaddrs()).
-    bool networkInterfacesChanged();
+    /// Follows a change of the network interfaces' IPv4 addresses (a radio link that comes up after the start, a
+    /// new DHCP address, a link that goes down). Fast DDS 2.9 keeps using the addresses an entity was made with:
+    /// measured, a reader made before its link came up stayed announced at 127.0.0.1 and received nothing; setting
+    /// the participant's QoS again makes the participant announce the new addresses, but not its endpoints. So when
+    /// the addresses differ from those the endpoints were made with, this sets the participant's QoS again, deletes
+    /// every writer and reader made so far and makes each again with its QoS behind the same handles (their
+    /// histories start again: a transient-local writer's late joiners get only what it writes from then on), and
+    /// announces the ROS 2 node again with the new GIDs (README "On the DDS bus"; test system.late-link). Call it on
+    /// every turn of the owner thread's loop (not a real-time one): it looks at most once a second
+    /// (kInterfaceCheckPeriod: one getifaddrs()).
+    NetworkChange followNetworkChanges();
+    /// Why the last NetworkChange::Failed.
+    [[nodiscard]] const Error& lastNetworkError() const noexcept { return networkError_; }
 
 private:
     Bus() = default;
@@ -317,8 +359,16 @@ private:
     [[nodiscard]] Error wrongType(TopicId id) const;
     /// The topic of `id`, created with its type on first use.
     Result<eprosima::fastdds::dds::Topic*, Error> topic(TopicId id, MakeType make);
-    Result<eprosima::fastdds::dds::DataWriter*, Error> makeWriter(TopicId id, MakeType make);
-    Result<eprosima::fastdds::dds::DataReader*, Error> makeReader(TopicId id, MakeType make);
+    /// A new Fast DDS writer or reader of topic `id` with its QoS.
+    Result<eprosima::fastdds::dds::DataWriter*, Error> createWriter(TopicId id, MakeType make);
+    Result<eprosima::fastdds::dds::DataReader*, Error> createReader(TopicId id, MakeType make);
+    /// The same, kept as an endpoint that followNetworkChanges() renews.
+    Result<detail::Endpoint*, Error> makeWriter(TopicId id, MakeType make);
+    Result<detail::Endpoint*, Error> makeReader(TopicId id, MakeType make);
+    /// Deletes and makes again every endpoint (endpointGuard_ held exclusively).
+    Result<void, Error> renewEndpoints();
+    /// Writes ros_discovery_info for rosNode_ (endpointGuard_ held by the caller).
+    Result<void, Error> writeRosNode();
 
     BusConfig config_;
     eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
@@ -327,10 +377,14 @@ private:
     eprosima::fastdds::dds::Publisher* rosPublisher_ = nullptr;   ///< the default partition (ROS 2)
     eprosima::fastdds::dds::Subscriber* rosSubscriber_ = nullptr; ///< the default partition (ROS 2)
     std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
-    std::unique_ptr<WriterIdentities> identities_;           ///< writer GUID -> identity, from discovery
-    eprosima::fastdds::dds::DataWriter* graphOut_ = nullptr; ///< ros_discovery_info, made by announceRosNode()
+    std::unique_ptr<WriterIdentities> identities_; ///< writer GUID -> identity, from discovery
+    mutable std::shared_mutex endpointGuard_;      ///< shared: an endpoint in use; exclusive: the endpoints renewed
+    std::deque<detail::Endpoint> endpoints_;       ///< every writer and reader made (stable addresses: the handles')
+    detail::Endpoint* graphOut_ = nullptr;         ///< ros_discovery_info, made by announceRosNode()
+    std::string rosNode_;                          ///< the node announceRosNode() announced ("": none)
+    Error networkError_;
     static constexpr std::chrono::seconds kInterfaceCheckPeriod{1};
-    std::vector<std::uint32_t> startAddresses_; ///< the interfaces' IPv4 addresses when the participant started
+    std::vector<std::uint32_t> startAddresses_; ///< the interfaces' IPv4 addresses the endpoints were made with
     std::vector<std::uint32_t> lastAddresses_;  ///< at the last check
     std::chrono::steady_clock::time_point nextInterfaceCheck_{};
 };
@@ -341,7 +395,8 @@ template <class T>
 int Writer<T>::matched() const
 {
     eprosima::fastdds::dds::PublicationMatchedStatus status;
-    if (writer_ == nullptr || writer_->get_publication_matched_status(status) != ReturnCode_t::RETCODE_OK) {
+    const auto lock = shared();
+    if (e_ == nullptr || e_->writer->get_publication_matched_status(status) != ReturnCode_t::RETCODE_OK) {
         return 0;
     }
     return status.current_count;
@@ -352,18 +407,20 @@ bool Writer<T>::waitForAcks(std::chrono::milliseconds timeout)
 {
     const eprosima::fastrtps::Duration_t d(static_cast<std::int32_t>(timeout.count() / 1000),
                                            static_cast<std::uint32_t>((timeout.count() % 1000) * 1'000'000));
-    return writer_ != nullptr && writer_->wait_for_acknowledgments(d) == ReturnCode_t::RETCODE_OK;
+    const auto lock = shared();
+    return e_ != nullptr && e_->writer->wait_for_acknowledgments(d) == ReturnCode_t::RETCODE_OK;
 }
 
 template <class T>
 bool Reader<T>::take(T& out, eprosima::fastdds::dds::SampleInfo* info)
 {
-    if (reader_ == nullptr) {
+    const auto lock = shared();
+    if (e_ == nullptr) {
         return false;
     }
     eprosima::fastdds::dds::SampleInfo local;
     eprosima::fastdds::dds::SampleInfo& i = info != nullptr ? *info : local;
-    while (reader_->take_next_sample(&out, &i) == ReturnCode_t::RETCODE_OK) {
+    while (e_->reader->take_next_sample(&out, &i) == ReturnCode_t::RETCODE_OK) {
         if (i.valid_data) {
             return true;
         }
@@ -376,14 +433,16 @@ bool Reader<T>::wait(std::chrono::milliseconds timeout)
 {
     const eprosima::fastrtps::Duration_t d(static_cast<std::int32_t>(timeout.count() / 1000),
                                            static_cast<std::uint32_t>((timeout.count() % 1000) * 1'000'000));
-    return reader_ != nullptr && reader_->wait_for_unread_message(d);
+    const auto lock = shared();
+    return e_ != nullptr && e_->reader->wait_for_unread_message(d);
 }
 
 template <class T>
 int Reader<T>::matched() const
 {
     eprosima::fastdds::dds::SubscriptionMatchedStatus status;
-    if (reader_ == nullptr || reader_->get_subscription_matched_status(status) != ReturnCode_t::RETCODE_OK) {
+    const auto lock = shared();
+    if (e_ == nullptr || e_->reader->get_subscription_matched_status(status) != ReturnCode_t::RETCODE_OK) {
         return 0;
     }
     return status.current_count;

@@ -31,7 +31,7 @@ struct DdsBridgeStats {
     std::uint64_t posesRejected = 0;     ///< malformed poses refused
     std::uint64_t posesImpersonated = 0; ///< secured bus: poses naming this vehicle written by another participant
     std::uint64_t stalePoses = 0;        ///< frames sent with a stale or no pose
-    std::uint64_t interfaceChanges = 0;  ///< network interface changes seen (the bus needs a restart to use them)
+    std::uint64_t interfaceChanges = 0;  ///< network interface changes the bus followed (or failed to: logged)
 };
 
 class DdsBridge final : public BusSink {
@@ -60,7 +60,7 @@ private:
     ipc::dds::Writer<ipc::dds::ros::PointCloud2_> negativesOut_;
     ipc::dds::Writer<ipc::dds::msg::ServiceHealth> healthOut_;
     ipc::dds::Reader<ipc::dds::msg::VehiclePose> poseIn_;
-    ipc::dds::Bus* bus_ = nullptr;              ///< watched for network interface changes (idle())
+    ipc::dds::Bus* bus_ = nullptr;              ///< follows network interface changes (idle())
     const ipc::dds::Bus* securedBus_ = nullptr; ///< the bus when secured: whose partition a pose came from
     PoseHistory poses_;
     ipc::dds::msg::ObstacleSectors sectors_;

@@ -6,6 +6,7 @@
 /// (allocates).
 
 #include <cstdlib>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,18 @@ inline std::vector<OptionSpec> options()
          "holds identity_ca.cert.pem, cert.pem, key.pem, permissions_ca.cert.pem, governance.p7s, permissions.p7s",
          false},
         {"identity", "NAME", "the name in --security's certificate (its CN), default DIR's last folder name", false}};
+}
+
+/// Bus::followNetworkChanges() on a command's loop, saying on stderr what it did (`listen`, `correlate --from-dds`).
+inline void followNetworkChanges(ipc::dds::Bus& bus)
+{
+    const ipc::dds::NetworkChange change = bus.followNetworkChanges();
+    if (change == ipc::dds::NetworkChange::Followed) {
+        std::cerr << "note: " << ipc::dds::kNetworkFollowedNote << '\n';
+    } else if (change == ipc::dds::NetworkChange::Failed) {
+        std::cerr << "error: network interfaces changed, and the DDS bus could not follow: "
+                  << bus.lastNetworkError().message() << '\n';
+    }
 }
 
 /// --security DIR [--identity NAME]: the files of one participant (ipc::dds::securityFromFolder).
