@@ -406,11 +406,21 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
     if (config.security.enabled) {
         bus->identities_ = std::make_unique<WriterIdentities>();
     }
-    bus->participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
-        static_cast<fdds::DomainId_t>(config.domainId), *pq, bus->identities_.get(), fdds::StatusMask::none());
-    if (bus->participant_ == nullptr) {
-        return Unexpected(Error{"dds domain " + std::to_string(config.domainId), "cannot create the DDS participant",
-                                config.security.enabled
+    upIpv4Addresses(bus->startAddresses_);
+    bus->lastAddresses_ = bus->startAddresses_;
+    if (auto opened = bus->openParticipant(*pq); !opened) {
+        return Unexpected(opened.error());
+    }
+    return bus;
+}
+
+Result<void, Error> Bus::openParticipant(const fdds::DomainParticipantQos& qos)
+{
+    participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
+        static_cast<fdds::DomainId_t>(config_.domainId), qos, identities_.get(), fdds::StatusMask::none());
+    if (participant_ == nullptr) {
+        return Unexpected(Error{"dds domain " + std::to_string(config_.domainId), "cannot create the DDS participant",
+                                config_.security.enabled
                                     ? "check the dds.security files: the certificate signed by the identity CA, "
                                       "the permissions' subject equal to the certificate's, both documents signed "
                                       "by the permissions CA, and the Fast DDS messages above"
@@ -418,26 +428,38 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
     }
     fdds::PublisherQos pubq = fdds::PUBLISHER_QOS_DEFAULT;
     fdds::SubscriberQos subq = fdds::SUBSCRIBER_QOS_DEFAULT;
-    applyPartitions(config, pubq, subq);
-    bus->publisher_ = bus->participant_->create_publisher(pubq);
-    bus->subscriber_ = bus->participant_->create_subscriber(subq);
-    bus->rosPublisher_ = bus->participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-    bus->rosSubscriber_ = bus->participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-    if (bus->publisher_ == nullptr || bus->subscriber_ == nullptr || bus->rosPublisher_ == nullptr ||
-        bus->rosSubscriber_ == nullptr) {
+    applyPartitions(config_, pubq, subq);
+    publisher_ = participant_->create_publisher(pubq);
+    subscriber_ = participant_->create_subscriber(subq);
+    rosPublisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    rosSubscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    if (publisher_ == nullptr || subscriber_ == nullptr || rosPublisher_ == nullptr || rosSubscriber_ == nullptr) {
         return Unexpected(Error{"dds", "cannot create the publishers and subscribers", "a bug or out of memory"});
     }
-    upIpv4Addresses(bus->startAddresses_);
-    bus->lastAddresses_ = bus->startAddresses_;
-    return bus;
+    return {};
 }
 
-Bus::~Bus()
+void Bus::closeParticipant() noexcept
 {
     if (participant_ != nullptr) {
         participant_->delete_contained_entities();
         fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
     }
+    participant_ = nullptr;
+    publisher_ = nullptr;
+    subscriber_ = nullptr;
+    rosPublisher_ = nullptr;
+    rosSubscriber_ = nullptr;
+    topics_.fill(nullptr);
+    for (detail::Endpoint& e : endpoints_) {
+        e.writer = nullptr;
+        e.reader = nullptr;
+    }
+}
+
+Bus::~Bus()
+{
+    closeParticipant();
 }
 
 std::string Bus::writerIdentity(const fdds::SampleInfo& info) const
@@ -458,6 +480,9 @@ Error Bus::wrongType(TopicId id) const
 
 Result<fdds::Topic*, Error> Bus::topic(TopicId id, MakeType make)
 {
+    if (participant_ == nullptr) { // a renewal failed to make it again (lastNetworkError)
+        return Unexpected(topicError(id, "the DDS participant is gone", "restart this process once the link is up"));
+    }
     fdds::Topic*& t = topics_[static_cast<std::size_t>(id)];
     if (t == nullptr) {
         fdds::TypeSupport type(make());
@@ -523,7 +548,7 @@ Result<detail::Endpoint*, Error> Bus::makeWriter(TopicId id, MakeType make)
         return Unexpected(w.error());
     }
     const std::unique_lock lock(endpointGuard_);
-    return &endpoints_.emplace_back(detail::Endpoint{&endpointGuard_, *w, nullptr, id, make});
+    return &endpoints_.emplace_back(detail::Endpoint{&endpointGuard_, *w, nullptr, id, make, true});
 }
 
 Result<detail::Endpoint*, Error> Bus::makeReader(TopicId id, MakeType make)
@@ -533,7 +558,7 @@ Result<detail::Endpoint*, Error> Bus::makeReader(TopicId id, MakeType make)
         return Unexpected(r.error());
     }
     const std::unique_lock lock(endpointGuard_);
-    return &endpoints_.emplace_back(detail::Endpoint{&endpointGuard_, nullptr, *r, id, make});
+    return &endpoints_.emplace_back(detail::Endpoint{&endpointGuard_, nullptr, *r, id, make, false});
 }
 
 NetworkChange Bus::followNetworkChanges()
@@ -554,7 +579,8 @@ NetworkChange Bus::followNetworkChanges()
     const std::unique_lock lock(endpointGuard_);
     if (auto renewed = renewEndpoints(); !renewed) {
         networkError_ = renewed.error();
-        return NetworkChange::Failed; // the next change tries again
+        lastAddresses_.clear(); // the next check (a second later) tries again
+        return NetworkChange::Failed;
     }
     startAddresses_ = lastAddresses_;
     return NetworkChange::Followed;
@@ -562,29 +588,30 @@ NetworkChange Bus::followNetworkChanges()
 
 Result<void, Error> Bus::renewEndpoints()
 {
-    // The participant reads the interfaces anew when its QoS is set (its own announcement then carries them); an
-    // endpoint takes the participant's addresses when it is made, so each is made again.
-    if (participant_->set_qos(participant_->get_qos()) != ReturnCode_t::RETCODE_OK) {
-        return Unexpected(Error{"dds domain " + std::to_string(config_.domainId),
-                                "the participant did not take the new network interfaces",
-                                "restart this process once the link is up"});
+    // Made anew, the participant and its endpoints take the interfaces up now. Setting the participant's QoS again
+    // is not enough (its endpoints keep their addresses), and Fast DDS 2.9 then gives a second participant of the
+    // host the first one's ports on the new interfaces (measured: two processes announcing 10.80.0.1:55410).
+    auto pq = participantQos(config_);
+    if (!pq) {
+        return Unexpected(pq.error());
+    }
+    closeParticipant();
+    if (auto opened = openParticipant(*pq); !opened) {
+        return Unexpected(opened.error());
     }
     for (detail::Endpoint& e : endpoints_) {
-        const bool ros = spec(e.id).ros;
-        if (e.writer != nullptr) {
-            (void)(ros ? rosPublisher_ : publisher_)->delete_datawriter(e.writer);
+        if (e.writes) {
             auto w = createWriter(e.id, e.make);
-            e.writer = w ? *w : nullptr;
             if (!w) {
                 return Unexpected(w.error());
             }
+            e.writer = *w;
         } else {
-            (void)(ros ? rosSubscriber_ : subscriber_)->delete_datareader(e.reader);
             auto r = createReader(e.id, e.make);
-            e.reader = r ? *r : nullptr;
             if (!r) {
                 return Unexpected(r.error());
             }
+            e.reader = *r;
         }
     }
     return rosNode_.empty() ? Result<void, Error>{} : writeRosNode();
@@ -628,10 +655,10 @@ Result<void, Error> Bus::writeRosNode()
     node.node_namespace("/" + config_.rosNamespace);
     node.node_name(rosNode_);
     for (const detail::Endpoint& e : endpoints_) {
-        if (!spec(e.id).ros || &e == graphOut_) {
+        if (!spec(e.id).ros || &e == graphOut_ || (e.writer == nullptr && e.reader == nullptr)) {
             continue;
         }
-        if (e.writer != nullptr) {
+        if (e.writes) {
             node.writer_gid_seq().push_back(rosGid(e.writer->guid()));
         } else {
             node.reader_gid_seq().push_back(rosGid(e.reader->guid()));
@@ -640,7 +667,7 @@ Result<void, Error> Bus::writeRosNode()
     graph::ParticipantEntitiesInfo_ info;
     info.gid(rosGid(participant_->guid()));
     info.node_entities_info_seq().push_back(std::move(node));
-    if (!graphOut_->writer->write(&info)) {
+    if (graphOut_->writer == nullptr || !graphOut_->writer->write(&info)) {
         return Unexpected(Error{"dds topic ros_discovery_info", "the sample was refused",
                                 "a bug, or see the Fast DDS messages above"});
     }

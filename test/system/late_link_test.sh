@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A network link that comes up after the bus started (a vehicle's radio associating after boot, a new DHCP
 # address). Fast DDS 2.9 goes on with the addresses an endpoint was made with, so the bus follows the interfaces
-# (ipc::dds::Bus::followNetworkChanges: the participant reads them anew and every reader and writer is made again;
+# (ipc::dds::Bus::followNetworkChanges: the participant and every reader and writer are made again;
 # README "On the DDS bus"). Checked where a user meets it, each process started while its only link is down:
 #   - `ugvsense listen` in namespace A; 3 s later A's link comes up (an address, a multicast route) and a sender in
 #     namespace B, linked to it and up from the start, sends poses: the listener says it followed and receives them;
@@ -24,7 +24,7 @@ cleanup() {
 }
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -n 15 "$f"; done; exit 1; }
-followed="the DDS bus made its readers and writers again on the new addresses"
+followed="the DDS bus made its participant, readers and writers again on the new addresses"
 
 if ! ip netns add "$a" 2>/dev/null; then
     echo "SKIPPED: cannot create network namespaces here (needs root and CAP_NET_ADMIN)"; exit 0
@@ -38,9 +38,9 @@ pair() { # NS1 NS2 END1 END2 NET
     ip -n "$2" addr add "$5.2/24" dev "$4" && ip -n "$2" link set "$4" up &&
         ip -n "$2" route add 224.0.0.0/4 dev "$4" || fail "the link of $2"
 }
-link_up() { # NS END NET
-    ip -n "$1" addr add "$3.1/24" dev "$2" && ip -n "$1" link set "$2" up &&
-        ip -n "$1" route add 224.0.0.0/4 dev "$2" || fail "the link of $1"
+link_up() { # NS END NET: as a DHCP client does, the address last (the multicast route is there when it comes)
+    ip -n "$1" link set "$2" up && ip -n "$1" route add 224.0.0.0/4 dev "$2" &&
+        ip -n "$1" addr add "$3.1/24" dev "$2" || fail "the link of $1"
 }
 wait_for() { # PATTERN FILE...: up to 10 s
     for _ in $(seq 100); do

@@ -193,6 +193,7 @@ struct Endpoint {
     eprosima::fastdds::dds::DataReader* reader = nullptr; ///< a reader's entity, or null
     TopicId id = TopicId::Sectors;
     eprosima::fastdds::dds::TopicDataType* (*make)() = nullptr; ///< the topic's type, should the topic be made again
+    bool writes = false;                                        ///< a writer (else a reader)
 };
 } // namespace detail
 
@@ -207,7 +208,7 @@ public:
     bool write(const T& sample)
     {
         const auto lock = shared();
-        return e_ != nullptr && e_->writer->write(const_cast<T*>(&sample));
+        return entity() != nullptr && entity()->write(const_cast<T*>(&sample));
     }
     /// write() with the given source timestamp instead of this host's clock [ns since the epoch] (tests: a sender
     /// whose clock runs ahead).
@@ -216,8 +217,8 @@ public:
         const eprosima::fastrtps::Time_t stamp(static_cast<std::int32_t>(sourceNs / 1'000'000'000),
                                                static_cast<std::uint32_t>(sourceNs % 1'000'000'000));
         const auto lock = shared();
-        return e_ != nullptr &&
-               e_->writer->write_w_timestamp(const_cast<T*>(&sample), eprosima::fastdds::dds::HANDLE_NIL, stamp) ==
+        return entity() != nullptr &&
+               entity()->write_w_timestamp(const_cast<T*>(&sample), eprosima::fastdds::dds::HANDLE_NIL, stamp) ==
                    eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
     }
     // NOLINTEND(cppcoreguidelines-pro-type-const-cast)
@@ -228,7 +229,7 @@ public:
     [[nodiscard]] eprosima::fastrtps::rtps::GUID_t guid() const
     {
         const auto lock = shared();
-        return e_ != nullptr ? e_->writer->guid() : eprosima::fastrtps::rtps::GUID_t::unknown();
+        return entity() != nullptr ? entity()->guid() : eprosima::fastrtps::rtps::GUID_t::unknown();
     }
     /// Waits until every matched reliable reader acknowledged every sample written so far.
     bool waitForAcks(std::chrono::milliseconds timeout);
@@ -239,6 +240,8 @@ private:
     {
         return e_ != nullptr ? std::shared_lock<std::shared_mutex>{*e_->guard} : std::shared_lock<std::shared_mutex>{};
     }
+    /// The Fast DDS writer (use it under shared()); null without one, or after a renewal that failed to make it.
+    [[nodiscard]] eprosima::fastdds::dds::DataWriter* entity() const { return e_ != nullptr ? e_->writer : nullptr; }
     detail::Endpoint* e_ = nullptr;
 };
 
@@ -261,6 +264,8 @@ private:
     {
         return e_ != nullptr ? std::shared_lock<std::shared_mutex>{*e_->guard} : std::shared_lock<std::shared_mutex>{};
     }
+    /// The Fast DDS reader (use it under shared()); null without one, or after a renewal that failed to make it.
+    [[nodiscard]] eprosima::fastdds::dds::DataReader* entity() const { return e_ != nullptr ? e_->reader : nullptr; }
     detail::Endpoint* e_ = nullptr;
 };
 
@@ -273,15 +278,15 @@ class WriterIdentities;
 /// What Bus::followNetworkChanges() did.
 enum class NetworkChange : std::uint8_t {
     None,     ///< the interfaces' addresses are those the endpoints were made with
-    Followed, ///< they changed: the participant reads them anew and every writer and reader was made again
+    Followed, ///< they changed: the participant and every writer and reader were made again
     Failed,   ///< they changed, and making the endpoints again failed (Bus::lastNetworkError() says why)
 };
 
 /// What the service and the tools say on NetworkChange::Followed.
 constexpr const char* kNetworkFollowedNote =
-    "network interfaces changed (a link came up, went down or got a new address): the DDS bus made its readers and "
-    "writers again on the new addresses (Fast DDS 2.9 keeps an endpoint's addresses of its start); samples kept for "
-    "late joiners start again from now";
+    "network interfaces changed (a link came up, went down or got a new address): the DDS bus made its participant, "
+    "readers and writers again on the new addresses (Fast DDS 2.9 keeps an entity's addresses of its start); samples "
+    "kept for late joiners start again from now";
 
 class Bus {
 public:
@@ -334,12 +339,13 @@ public:
     [[nodiscard]] std::string writerIdentity(const eprosima::fastdds::dds::SampleInfo& info) const;
     /// Follows a change of the network interfaces' IPv4 addresses (a radio link that comes up after the start, a
     /// new DHCP address, a link that goes down). Fast DDS 2.9 keeps using the addresses an entity was made with:
-    /// measured, a reader made before its link came up stayed announced at 127.0.0.1 and received nothing; setting
-    /// the participant's QoS again makes the participant announce the new addresses, but not its endpoints. So when
-    /// the addresses differ from those the endpoints were made with, this sets the participant's QoS again, deletes
-    /// every writer and reader made so far and makes each again with its QoS behind the same handles (their
-    /// histories start again: a transient-local writer's late joiners get only what it writes from then on), and
-    /// announces the ROS 2 node again with the new GIDs (README "On the DDS bus"; test system.late-link). Call it on
+    /// measured, a reader made before its link came up stayed announced at 127.0.0.1 and received nothing. Setting
+    /// the participant's QoS again makes the participant announce the new addresses, but not its endpoints, and
+    /// gives a second participant of the host the first one's ports on them. So when the addresses differ from those
+    /// the endpoints were made with, this deletes the participant and makes it again with every writer and reader
+    /// made so far, each with its QoS, behind the same handles (a new GUID; histories start again: a
+    /// transient-local writer's late joiners get only what it writes from then on), and announces the ROS 2 node
+    /// again with the new GIDs (README "On the DDS bus"; test system.late-link). Call it on
     /// every turn of the owner thread's loop (not a real-time one): it looks at most once a second
     /// (kInterfaceCheckPeriod: one getifaddrs()).
     NetworkChange followNetworkChanges();
@@ -365,7 +371,11 @@ private:
     /// The same, kept as an endpoint that followNetworkChanges() renews.
     Result<detail::Endpoint*, Error> makeWriter(TopicId id, MakeType make);
     Result<detail::Endpoint*, Error> makeReader(TopicId id, MakeType make);
-    /// Deletes and makes again every endpoint (endpointGuard_ held exclusively).
+    /// The participant of config_ with its publishers and subscribers (its topics come with the first endpoints).
+    Result<void, Error> openParticipant(const eprosima::fastdds::dds::DomainParticipantQos& qos);
+    /// Deletes the participant and everything in it; the endpoints keep their slots, without entities.
+    void closeParticipant() noexcept;
+    /// Makes the participant and every endpoint again (endpointGuard_ held exclusively).
     Result<void, Error> renewEndpoints();
     /// Writes ros_discovery_info for rosNode_ (endpointGuard_ held by the caller).
     Result<void, Error> writeRosNode();
@@ -396,7 +406,7 @@ int Writer<T>::matched() const
 {
     eprosima::fastdds::dds::PublicationMatchedStatus status;
     const auto lock = shared();
-    if (e_ == nullptr || e_->writer->get_publication_matched_status(status) != ReturnCode_t::RETCODE_OK) {
+    if (entity() == nullptr || entity()->get_publication_matched_status(status) != ReturnCode_t::RETCODE_OK) {
         return 0;
     }
     return status.current_count;
@@ -408,19 +418,19 @@ bool Writer<T>::waitForAcks(std::chrono::milliseconds timeout)
     const eprosima::fastrtps::Duration_t d(static_cast<std::int32_t>(timeout.count() / 1000),
                                            static_cast<std::uint32_t>((timeout.count() % 1000) * 1'000'000));
     const auto lock = shared();
-    return e_ != nullptr && e_->writer->wait_for_acknowledgments(d) == ReturnCode_t::RETCODE_OK;
+    return entity() != nullptr && entity()->wait_for_acknowledgments(d) == ReturnCode_t::RETCODE_OK;
 }
 
 template <class T>
 bool Reader<T>::take(T& out, eprosima::fastdds::dds::SampleInfo* info)
 {
     const auto lock = shared();
-    if (e_ == nullptr) {
+    if (entity() == nullptr) {
         return false;
     }
     eprosima::fastdds::dds::SampleInfo local;
     eprosima::fastdds::dds::SampleInfo& i = info != nullptr ? *info : local;
-    while (e_->reader->take_next_sample(&out, &i) == ReturnCode_t::RETCODE_OK) {
+    while (entity()->take_next_sample(&out, &i) == ReturnCode_t::RETCODE_OK) {
         if (i.valid_data) {
             return true;
         }
@@ -434,7 +444,7 @@ bool Reader<T>::wait(std::chrono::milliseconds timeout)
     const eprosima::fastrtps::Duration_t d(static_cast<std::int32_t>(timeout.count() / 1000),
                                            static_cast<std::uint32_t>((timeout.count() % 1000) * 1'000'000));
     const auto lock = shared();
-    return e_ != nullptr && e_->reader->wait_for_unread_message(d);
+    return entity() != nullptr && entity()->wait_for_unread_message(d);
 }
 
 template <class T>
@@ -442,7 +452,7 @@ int Reader<T>::matched() const
 {
     eprosima::fastdds::dds::SubscriptionMatchedStatus status;
     const auto lock = shared();
-    if (e_ == nullptr || e_->reader->get_subscription_matched_status(status) != ReturnCode_t::RETCODE_OK) {
+    if (entity() == nullptr || entity()->get_subscription_matched_status(status) != ReturnCode_t::RETCODE_OK) {
         return 0;
     }
     return status.current_count;
