@@ -576,14 +576,25 @@ NetworkChange Bus::followNetworkChanges()
     if (lastAddresses_ == startAddresses_) {
         return NetworkChange::None;
     }
-    const std::unique_lock lock(endpointGuard_);
-    if (auto renewed = renewEndpoints(); !renewed) {
+    if (auto renewed = renew(); !renewed) {
         networkError_ = renewed.error();
         lastAddresses_.clear(); // the next check (a second later) tries again
         return NetworkChange::Failed;
     }
-    startAddresses_ = lastAddresses_;
     return NetworkChange::Followed;
+}
+
+Result<void, Error> Bus::renew()
+{
+    std::vector<std::uint32_t> now;
+    upIpv4Addresses(now);
+    const std::unique_lock lock(endpointGuard_);
+    if (auto renewed = renewEndpoints(); !renewed) {
+        return Unexpected(renewed.error());
+    }
+    startAddresses_ = now;
+    lastAddresses_ = std::move(now);
+    return {};
 }
 
 Result<void, Error> Bus::renewEndpoints()

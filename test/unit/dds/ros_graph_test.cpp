@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <string>
 #include <thread>
@@ -147,6 +148,71 @@ TEST(RosGraph, TheServiceIsANodeOfItsNamespaceWithItsRosWriters)
     EXPECT_TRUE(std::equal(writer.data().begin(), writer.data().begin() + 12, got.gid().data().begin()));
     EXPECT_EQ(got.gid().data()[15], 0xC1);
     EXPECT_EQ(check(got), nullptr);
+}
+
+/// Writes `sample` on `writer` until `reader` takes one (a discovery to wait out), at most 15 s.
+template <class T>
+bool arrives(Writer<T>& writer, Reader<T>& reader, const T& sample)
+{
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+    T got;
+    while (std::chrono::steady_clock::now() < deadline) {
+        writer.write(sample);
+        if (reader.wait(std::chrono::milliseconds(100)) && reader.take(got)) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// A link that comes up after the start (Bus::followNetworkChanges, system.late-link) makes the participant and its
+// endpoints anew. The handles taken before go on working, on the new entities; another thread using one meanwhile
+// waits for the renewal instead of touching a deleted entity; the ROS 2 node is announced again with the new GIDs.
+TEST(RosGraph, ARenewedBusKeepsItsHandlesWorkingAndAnnouncesItsNodeWithTheNewGids)
+{
+    const BusConfig c = graphConfig("r");
+    auto bus = Bus::create(c);
+    auto peer = Bus::create(c);
+    ASSERT_TRUE(bus && peer);
+    auto scan = (*bus)->writer<ros::LaserScan_>();
+    auto out = (*bus)->writer<msg::ObstacleSectors>();
+    auto in = (*bus)->reader<msg::VehiclePose>();
+    auto peerIn = (*peer)->reader<msg::ObstacleSectors>();
+    auto peerOut = (*peer)->writer<msg::VehiclePose>();
+    ASSERT_TRUE(scan && out && in && peerIn && peerOut);
+    ASSERT_TRUE((*bus)->announceRosNode("ugvsense"));
+    msg::ObstacleSectors sectors;
+    sectors.vehicle("ugv-renew");
+    msg::VehiclePose pose;
+    pose.vehicle("ugv-renew");
+    ASSERT_TRUE(arrives(*out, *peerIn, sectors));
+    const graph::Gid_ before = rosGid(scan->guid());
+
+    std::atomic<bool> stop{false};
+    std::atomic<int> writes{0};
+    std::thread user([&] { // the vehicle's correlator task, say, on its own thread
+        while (!stop.load()) {
+            (void)out->write(sectors);
+            writes.fetch_add(1);
+        }
+    });
+    while (writes.load() < 10) {
+        std::this_thread::yield();
+    }
+    auto renewed = (*bus)->renew();
+    stop.store(true);
+    user.join();
+    ASSERT_TRUE(renewed) << renewed.error().message();
+
+    EXPECT_FALSE(sameGid(rosGid(scan->guid()), before)) << "the writer was not made again";
+    EXPECT_TRUE(arrives(*out, *peerIn, sectors)) << "a writer taken before the renewal no longer reaches its reader";
+    EXPECT_TRUE(arrives(*peerOut, *in, pose)) << "a reader taken before the renewal no longer receives";
+    GraphReader tool(c.domainId);
+    graph::ParticipantEntitiesInfo_ got;
+    ASSERT_TRUE(tool.next("/" + c.rosNamespace, got)) << "no ros_discovery_info sample in 15 s";
+    ASSERT_EQ(got.node_entities_info_seq().size(), 1U);
+    EXPECT_TRUE(holds(got.node_entities_info_seq()[0].writer_gid_seq(), rosGid(scan->guid())));
+    EXPECT_FALSE(holds(got.node_entities_info_seq()[0].writer_gid_seq(), before));
 }
 
 TEST(RosGraph, AWriterOrReaderOfAnotherTypeOnATopicIsRefused)

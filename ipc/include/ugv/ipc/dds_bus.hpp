@@ -349,6 +349,9 @@ public:
     /// every turn of the owner thread's loop (not a real-time one): it looks at most once a second
     /// (kInterfaceCheckPeriod: one getifaddrs()).
     NetworkChange followNetworkChanges();
+    /// Makes the participant and every writer and reader again now, as followNetworkChanges() does on a change (an
+    /// operator's "use the network as it is now"; tests).
+    Result<void, Error> renew();
     /// Why the last NetworkChange::Failed.
     [[nodiscard]] const Error& lastNetworkError() const noexcept { return networkError_; }
 
