@@ -32,6 +32,17 @@ std::string rosNamespace(const adapters::ServiceConfig& config)
     return ns.empty() || std::isdigit(static_cast<unsigned char>(ns.front())) != 0 ? "ugv_" + ns : ns;
 }
 
+ipc::dds::NetworkChange followNetworkChanges(ipc::dds::Bus& bus)
+{
+    const ipc::dds::NetworkChange change = bus.followNetworkChanges();
+    if (change == ipc::dds::NetworkChange::Followed) {
+        UGV_LOG(Ipc, Info) << ipc::dds::kNetworkFollowedNote;
+    } else if (change == ipc::dds::NetworkChange::Failed) {
+        UGV_LOG(Ipc, Error) << ipc::dds::kNetworkFailedPrefix << bus.lastNetworkError().message();
+    }
+    return change;
+}
+
 ipc::dds::BusConfig busConfig(const adapters::ServiceConfig& config)
 {
     ipc::dds::BusConfig b;
@@ -142,15 +153,8 @@ void DdsBridge::idle() noexcept
             lastHealthNs_ = now;
             publishHealth(now);
         }
-        if (const ipc::dds::NetworkChange change = bus_->followNetworkChanges();
-            change != ipc::dds::NetworkChange::None) {
+        if (followNetworkChanges(*bus_) != ipc::dds::NetworkChange::None) {
             interfaceChanges_.fetch_add(1, std::memory_order_relaxed);
-            if (change == ipc::dds::NetworkChange::Followed) {
-                UGV_LOG(Ipc, Info) << ipc::dds::kNetworkFollowedNote;
-            } else {
-                UGV_LOG(Ipc, Error) << "network interfaces changed, and the DDS bus could not follow: "
-                                    << bus_->lastNetworkError().message();
-            }
         }
     } catch (...) {
         writeFailures_.fetch_add(1, std::memory_order_relaxed);

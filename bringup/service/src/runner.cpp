@@ -157,14 +157,7 @@ Result<RunResult, Error> runCorrelatorOnly(const adapters::ServiceConfig& config
             systemd.watchdog();
             lastPingNs = now;
         }
-        // A station's link that came up after the start (vehicles: DdsBridge).
-        if (const ipc::dds::NetworkChange change = bus.followNetworkChanges();
-            change == ipc::dds::NetworkChange::Followed) {
-            UGV_LOG(Ipc, Info) << ipc::dds::kNetworkFollowedNote;
-        } else if (change == ipc::dds::NetworkChange::Failed) {
-            UGV_LOG(Ipc, Error) << "network interfaces changed, and the DDS bus could not follow: "
-                                << bus.lastNetworkError().message();
-        }
+        (void)followNetworkChanges(bus); // a station's link that came up after the start (vehicles: DdsBridge)
         sleepMs(kMonitorPoll);
     }
     systemd.stopping();

@@ -287,6 +287,8 @@ constexpr const char* kNetworkFollowedNote =
     "network interfaces changed (a link came up, went down or got a new address): the DDS bus made its participant, "
     "readers and writers again on the new addresses (Fast DDS 2.9 keeps an entity's addresses of its start); samples "
     "kept for late joiners start again from now";
+/// What they say on NetworkChange::Failed, before Bus::lastNetworkError().
+constexpr const char* kNetworkFailedPrefix = "network interfaces changed, and the DDS bus could not follow: ";
 
 class Bus {
 public:

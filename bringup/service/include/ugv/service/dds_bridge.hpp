@@ -85,6 +85,8 @@ private:
 
 /// The ROS 2 namespace of the config: dds.ros_namespace, else vehicle_id's letters, digits and _ (ugv-1 -> ugv1).
 std::string rosNamespace(const adapters::ServiceConfig& config);
+/// Bus::followNetworkChanges() with its outcome logged (a vehicle's bus task, a ground station's main loop).
+ipc::dds::NetworkChange followNetworkChanges(ipc::dds::Bus& bus);
 /// The bus settings of the config (participant "ugvsense/<vehicle>").
 ipc::dds::BusConfig busConfig(const adapters::ServiceConfig& config);
 

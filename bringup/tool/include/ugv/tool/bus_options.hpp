@@ -45,8 +45,7 @@ inline void followNetworkChanges(ipc::dds::Bus& bus)
     if (change == ipc::dds::NetworkChange::Followed) {
         std::cerr << "note: " << ipc::dds::kNetworkFollowedNote << '\n';
     } else if (change == ipc::dds::NetworkChange::Failed) {
-        std::cerr << "error: network interfaces changed, and the DDS bus could not follow: "
-                  << bus.lastNetworkError().message() << '\n';
+        std::cerr << "error: " << ipc::dds::kNetworkFailedPrefix << bus.lastNetworkError().message() << '\n';
     }
 }
 
