@@ -14,6 +14,7 @@
 #include <iterator>
 #include <mutex>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -416,9 +417,9 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
 
 Result<void, Error> Bus::openParticipant(const fdds::DomainParticipantQos& qos)
 {
-    participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
+    dds_.participant = fdds::DomainParticipantFactory::get_instance()->create_participant(
         static_cast<fdds::DomainId_t>(config_.domainId), qos, identities_.get(), fdds::StatusMask::none());
-    if (participant_ == nullptr) {
+    if (dds_.participant == nullptr) {
         return Unexpected(Error{"dds domain " + std::to_string(config_.domainId), "cannot create the DDS participant",
                                 config_.security.enabled
                                     ? "check the dds.security files: the certificate signed by the identity CA, "
@@ -429,37 +430,29 @@ Result<void, Error> Bus::openParticipant(const fdds::DomainParticipantQos& qos)
     fdds::PublisherQos pubq = fdds::PUBLISHER_QOS_DEFAULT;
     fdds::SubscriberQos subq = fdds::SUBSCRIBER_QOS_DEFAULT;
     applyPartitions(config_, pubq, subq);
-    publisher_ = participant_->create_publisher(pubq);
-    subscriber_ = participant_->create_subscriber(subq);
-    rosPublisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-    rosSubscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-    if (publisher_ == nullptr || subscriber_ == nullptr || rosPublisher_ == nullptr || rosSubscriber_ == nullptr) {
+    dds_.publisher = dds_.participant->create_publisher(pubq);
+    dds_.subscriber = dds_.participant->create_subscriber(subq);
+    dds_.rosPublisher = dds_.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    dds_.rosSubscriber = dds_.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    if (dds_.publisher == nullptr || dds_.subscriber == nullptr || dds_.rosPublisher == nullptr ||
+        dds_.rosSubscriber == nullptr) {
         return Unexpected(Error{"dds", "cannot create the publishers and subscribers", "a bug or out of memory"});
     }
     return {};
 }
 
-void Bus::closeParticipant() noexcept
+void Bus::deleteEntities(Entities& entities) noexcept
 {
-    if (participant_ != nullptr) {
-        participant_->delete_contained_entities();
-        fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+    if (entities.participant != nullptr) {
+        entities.participant->delete_contained_entities();
+        fdds::DomainParticipantFactory::get_instance()->delete_participant(entities.participant);
     }
-    participant_ = nullptr;
-    publisher_ = nullptr;
-    subscriber_ = nullptr;
-    rosPublisher_ = nullptr;
-    rosSubscriber_ = nullptr;
-    topics_.fill(nullptr);
-    for (detail::Endpoint& e : endpoints_) {
-        e.writer = nullptr;
-        e.reader = nullptr;
-    }
+    entities = Entities{};
 }
 
 Bus::~Bus()
 {
-    closeParticipant();
+    deleteEntities(dds_);
 }
 
 std::string Bus::writerIdentity(const fdds::SampleInfo& info) const
@@ -480,14 +473,11 @@ Error Bus::wrongType(TopicId id) const
 
 Result<fdds::Topic*, Error> Bus::topic(TopicId id, MakeType make)
 {
-    if (participant_ == nullptr) { // a renewal failed to make it again (lastNetworkError)
-        return Unexpected(topicError(id, "the DDS participant is gone", "restart this process once the link is up"));
-    }
-    fdds::Topic*& t = topics_[static_cast<std::size_t>(id)];
+    fdds::Topic*& t = dds_.topics[static_cast<std::size_t>(id)];
     if (t == nullptr) {
         fdds::TypeSupport type(make());
-        if (type.register_type(participant_) == ReturnCode_t::RETCODE_OK) {
-            t = participant_->create_topic(topicName(id, config_), type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+        if (type.register_type(dds_.participant) == ReturnCode_t::RETCODE_OK) {
+            t = dds_.participant->create_topic(topicName(id, config_), type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
         }
     }
     if (t == nullptr) {
@@ -515,7 +505,7 @@ Result<fdds::DataWriter*, Error> Bus::createWriter(TopicId id, MakeType make)
         q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100'000'000);
         q.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0, 100'000'000);
     }
-    fdds::DataWriter* w = (s.ros ? rosPublisher_ : publisher_)->create_datawriter(*t, q);
+    fdds::DataWriter* w = (s.ros ? dds_.rosPublisher : dds_.publisher)->create_datawriter(*t, q);
     if (w == nullptr) {
         return Unexpected(topicError(id, "cannot create the writer",
                                      "does the signed permissions document allow this participant to write it in "
@@ -532,7 +522,7 @@ Result<fdds::DataReader*, Error> Bus::createReader(TopicId id, MakeType make)
     }
     fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
     applyCommon(q, spec(id));
-    fdds::DataReader* r = (spec(id).ros ? rosSubscriber_ : subscriber_)->create_datareader(*t, q);
+    fdds::DataReader* r = (spec(id).ros ? dds_.rosSubscriber : dds_.subscriber)->create_datareader(*t, q);
     if (r == nullptr) {
         return Unexpected(topicError(id, "cannot create the reader",
                                      "does the signed permissions document allow this participant "
@@ -602,30 +592,48 @@ Result<void, Error> Bus::renewEndpoints()
     // Made anew, the participant and its endpoints take the interfaces up now. Setting the participant's QoS again
     // is not enough (its endpoints keep their addresses), and Fast DDS 2.9 then gives a second participant of the
     // host the first one's ports on the new interfaces (measured: two processes announcing 10.80.0.1:55410).
+    if (auto ok = validate(config_, "dds"); !ok) { // the security files as at the start: a file gone is named
+        return Unexpected(ok.error());
+    }
     auto pq = participantQos(config_);
     if (!pq) {
         return Unexpected(pq.error());
     }
-    closeParticipant();
-    if (auto opened = openParticipant(*pq); !opened) {
+    Entities old = std::exchange(dds_, Entities{});
+    std::vector<detail::Endpoint> made(endpoints_.begin(), endpoints_.end());
+    auto opened = openParticipant(*pq);
+    for (std::size_t i = 0; opened && i < made.size(); ++i) {
+        opened = remake(made[i]);
+    }
+    if (!opened) {
+        deleteEntities(dds_);
+        dds_ = old;
         return Unexpected(opened.error());
     }
-    for (detail::Endpoint& e : endpoints_) {
-        if (e.writes) {
-            auto w = createWriter(e.id, e.make);
-            if (!w) {
-                return Unexpected(w.error());
-            }
-            e.writer = *w;
-        } else {
-            auto r = createReader(e.id, e.make);
-            if (!r) {
-                return Unexpected(r.error());
-            }
-            e.reader = *r;
-        }
+    for (std::size_t i = 0; i < made.size(); ++i) {
+        endpoints_[i].writer = made[i].writer;
+        endpoints_[i].reader = made[i].reader;
     }
+    deleteEntities(old);
     return rosNode_.empty() ? Result<void, Error>{} : writeRosNode();
+}
+
+Result<void, Error> Bus::remake(detail::Endpoint& endpoint)
+{
+    if (endpoint.writes) {
+        auto w = createWriter(endpoint.id, endpoint.make);
+        if (!w) {
+            return Unexpected(w.error());
+        }
+        endpoint.writer = *w;
+    } else {
+        auto r = createReader(endpoint.id, endpoint.make);
+        if (!r) {
+            return Unexpected(r.error());
+        }
+        endpoint.reader = *r;
+    }
+    return {};
 }
 
 graph::Gid_ rosGid(const rtps::GUID_t& guid)
@@ -676,7 +684,7 @@ Result<void, Error> Bus::writeRosNode()
         }
     }
     graph::ParticipantEntitiesInfo_ info;
-    info.gid(rosGid(participant_->guid()));
+    info.gid(rosGid(dds_.participant->guid()));
     info.node_entities_info_seq().push_back(std::move(node));
     if (graphOut_->writer == nullptr || !graphOut_->writer->write(&info)) {
         return Unexpected(Error{"dds topic ros_discovery_info", "the sample was refused",

@@ -1,7 +1,9 @@
 // service/dds_bridge on a secured bus (issue 22 item 4): the vehicle takes poses naming it only from its own
 // participants. A team member with a valid certificate of its own (ugv-2) that writes a pose naming ugv-1 is refused
 // and counted, while ugv-1's localisation (another participant with ugv-1's certificate) is used. The team's files
-// are made by bringup/deploy/security/make_security.sh (skipped with a message without openssl).
+// are made by bringup/deploy/security/make_security.sh (skipped with a message without openssl). And a renewal of a
+// secured bus (what it does when the network changes) makes new endpoints that pass the handshakes again, or, when it
+// cannot, leaves the bus working as it was.
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -77,6 +79,23 @@ dds::msg::VehiclePose poseNaming(const std::string& vehicle, double eastM)
     return p;
 }
 
+/// Writes `sample` every 50 ms until `in` takes one (true) or 30 s pass (false).
+template <class T>
+bool arrives(dds::Writer<T>& out, dds::Reader<T>& in, const T& sample)
+{
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    T got;
+    while (std::chrono::steady_clock::now() < deadline) {
+        (void)out.write(sample);
+        if (in.wait(std::chrono::milliseconds(50)) && in.take(got)) {
+            while (in.take(got)) { // what an older writer sent as well
+            }
+            return true;
+        }
+    }
+    return false;
+}
+
 TEST_F(SecuredTeam, APoseInThisVehiclesNameFromAnotherParticipantIsRefused)
 {
     // Arrange: ugv-1's service (the bridge), ugv-1's localisation, and team member ugv-2.
@@ -120,6 +139,59 @@ TEST_F(SecuredTeam, APoseInThisVehiclesNameFromAnotherParticipantIsRefused)
     EXPECT_EQ(stats.posesImpersonated, static_cast<std::uint64_t>(kEach));
     EXPECT_EQ(stats.posesRejected, 0U);
     EXPECT_EQ(stats.posesForeign, 0U);
+}
+
+// Make before break: a renewal that cannot make the new participant (a certificate replaced by another's, a file
+// gone) says why and leaves the old one working; once the file is back, the next renewal succeeds and its new
+// endpoints pass the secured handshakes in both directions.
+TEST_F(SecuredTeam, ARenewalThatCannotMakeTheParticipantLeavesTheBusWorkingAndTheNextOneSucceeds)
+{
+    // Arrange: the bus to renew (ugv-1's service) and a peer of ugv-1, with a topic each way between them.
+    const adapters::ServiceConfig config = vehicle("ugv-1");
+    auto bus = dds::Bus::create(busConfig(config));
+    auto peer = dds::Bus::create(busConfig(vehicle("ugv-1")));
+    ASSERT_TRUE(bus) << bus.error().message();
+    ASSERT_TRUE(peer) << peer.error().message();
+    auto poseOut = (*bus)->writer<dds::msg::VehiclePose>();
+    auto sectorsIn = (*bus)->reader<dds::msg::ObstacleSectors>();
+    auto poseIn = (*peer)->reader<dds::msg::VehiclePose>();
+    auto sectorsOut = (*peer)->writer<dds::msg::ObstacleSectors>();
+    ASSERT_TRUE(poseOut && sectorsIn && poseIn && sectorsOut);
+    const dds::msg::VehiclePose pose = poseNaming("ugv-1", 1.0);
+    dds::msg::ObstacleSectors sectors;
+    sectors.vehicle("ugv-1");
+    ASSERT_TRUE(arrives(*poseOut, *poseIn, pose)) << "the secured handshake never completed";
+    ASSERT_TRUE(arrives(*sectorsOut, *sectorsIn, sectors));
+    const auto before = poseOut->guid();
+    const std::filesystem::path certificate = config.dds.security.certificate;
+    const std::filesystem::path kept = folder_ / "ugv-1-certificate.kept";
+    std::filesystem::copy_file(certificate, kept);
+
+    // Act and assert 1: ugv-2's certificate (valid, but not for ugv-1's key and permissions) in its place.
+    std::filesystem::copy_file(dds::securityFromFolder((folder_ / "ugv-2").string(), "ugv-2").certificate, certificate,
+                               std::filesystem::copy_options::overwrite_existing);
+    const auto wrong = (*bus)->renew();
+    ASSERT_FALSE(wrong) << "a participant was made with another's certificate";
+    EXPECT_NE(wrong.error().message().find("cannot create the DDS participant"), std::string::npos)
+        << wrong.error().message();
+    EXPECT_EQ(poseOut->guid(), before) << "the old writer was not kept";
+    EXPECT_TRUE(arrives(*poseOut, *poseIn, pose)) << "the bus stopped writing after a failed renewal";
+    EXPECT_TRUE(arrives(*sectorsOut, *sectorsIn, sectors)) << "the bus stopped reading after a failed renewal";
+
+    // Act and assert 2: the file gone.
+    std::filesystem::remove(certificate);
+    const auto gone = (*bus)->renew();
+    ASSERT_FALSE(gone);
+    EXPECT_NE(gone.error().message().find("security.certificate"), std::string::npos) << gone.error().message();
+    EXPECT_TRUE(arrives(*poseOut, *poseIn, pose));
+
+    // Act and assert 3: the file back.
+    std::filesystem::copy_file(kept, certificate);
+    const auto renewed = (*bus)->renew();
+    ASSERT_TRUE(renewed) << renewed.error().message();
+    EXPECT_NE(poseOut->guid(), before) << "the writer was not made again";
+    EXPECT_TRUE(arrives(*poseOut, *poseIn, pose)) << "a renewed writer never passed the secured handshake";
+    EXPECT_TRUE(arrives(*sectorsOut, *sectorsIn, sectors)) << "a renewed reader never passed the secured handshake";
 }
 
 } // namespace

@@ -279,7 +279,8 @@ class WriterIdentities;
 enum class NetworkChange : std::uint8_t {
     None,     ///< the interfaces' addresses are those the endpoints were made with
     Followed, ///< they changed: the participant and every writer and reader were made again
-    Failed,   ///< they changed, and making the endpoints again failed (Bus::lastNetworkError() says why)
+    Failed,   ///< they changed, and making the endpoints again failed (Bus::lastNetworkError() says why): the old
+              ///< ones are kept, and the next check (a second later) tries again
 };
 
 /// What the service and the tools say on NetworkChange::Followed.
@@ -344,15 +345,17 @@ public:
     /// measured, a reader made before its link came up stayed announced at 127.0.0.1 and received nothing. Setting
     /// the participant's QoS again makes the participant announce the new addresses, but not its endpoints, and
     /// gives a second participant of the host the first one's ports on them. So when the addresses differ from those
-    /// the endpoints were made with, this deletes the participant and makes it again with every writer and reader
-    /// made so far, each with its QoS, behind the same handles (a new GUID; histories start again: a
-    /// transient-local writer's late joiners get only what it writes from then on), and announces the ROS 2 node
-    /// again with the new GIDs (README "On the DDS bus"; test system.late-link). Call it on
+    /// the endpoints were made with, this makes the participant again with every writer and reader made so far,
+    /// each with its QoS, puts them behind the same handles and deletes the old ones (a new GUID; histories start
+    /// again: a transient-local writer's late joiners get only what it writes from then on), and announces the ROS 2
+    /// node again with the new GIDs (README "On the DDS bus"; test system.late-link). Call it on
     /// every turn of the owner thread's loop (not a real-time one): it looks at most once a second
     /// (kInterfaceCheckPeriod: one getifaddrs()).
     NetworkChange followNetworkChanges();
     /// Makes the participant and every writer and reader again now, as followNetworkChanges() does on a change (an
-    /// operator's "use the network as it is now"; tests).
+    /// operator's "use the network as it is now"; tests). Make before break: the old participant and endpoints
+    /// work on until every new one is made, and stay when that fails (a certificate replaced by a wrong one, a file
+    /// gone: the error names it), so the bus is never left without them.
     Result<void, Error> renew();
     /// Why the last NetworkChange::Failed.
     [[nodiscard]] const Error& lastNetworkError() const noexcept { return networkError_; }
@@ -376,22 +379,30 @@ private:
     /// The same, kept as an endpoint that followNetworkChanges() renews.
     Result<detail::Endpoint*, Error> makeWriter(TopicId id, MakeType make);
     Result<detail::Endpoint*, Error> makeReader(TopicId id, MakeType make);
-    /// The participant of config_ with its publishers and subscribers (its topics come with the first endpoints).
+    /// A participant with its publishers, subscribers and topics.
+    struct Entities {
+        eprosima::fastdds::dds::DomainParticipant* participant = nullptr;
+        eprosima::fastdds::dds::Publisher* publisher = nullptr;      ///< our partitions
+        eprosima::fastdds::dds::Subscriber* subscriber = nullptr;    ///< our partitions
+        eprosima::fastdds::dds::Publisher* rosPublisher = nullptr;   ///< the default partition (ROS 2)
+        eprosima::fastdds::dds::Subscriber* rosSubscriber = nullptr; ///< the default partition (ROS 2)
+        std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics{};
+    };
+    /// The participant of config_ with its publishers and subscribers into dds_ (its topics come with the first
+    /// endpoints).
     Result<void, Error> openParticipant(const eprosima::fastdds::dds::DomainParticipantQos& qos);
-    /// Deletes the participant and everything in it; the endpoints keep their slots, without entities.
-    void closeParticipant() noexcept;
-    /// Makes the participant and every endpoint again (endpointGuard_ held exclusively).
+    /// Deletes the participant of `entities` and everything in it.
+    static void deleteEntities(Entities& entities) noexcept;
+    /// Makes the participant and every endpoint again, the old ones kept until all the new are made (a renewal that
+    /// fails leaves the bus as it was); endpointGuard_ held exclusively.
     Result<void, Error> renewEndpoints();
+    /// A new entity of `endpoint`'s topic and direction in dds_ (into the endpoint, a copy of a slot).
+    Result<void, Error> remake(detail::Endpoint& endpoint);
     /// Writes ros_discovery_info for rosNode_ (endpointGuard_ held by the caller).
     Result<void, Error> writeRosNode();
 
     BusConfig config_;
-    eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
-    eprosima::fastdds::dds::Publisher* publisher_ = nullptr;      ///< our partitions
-    eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;    ///< our partitions
-    eprosima::fastdds::dds::Publisher* rosPublisher_ = nullptr;   ///< the default partition (ROS 2)
-    eprosima::fastdds::dds::Subscriber* rosSubscriber_ = nullptr; ///< the default partition (ROS 2)
-    std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
+    Entities dds_;                                 ///< the participant the endpoints are made in
     std::unique_ptr<WriterIdentities> identities_; ///< writer GUID -> identity, from discovery
     mutable std::shared_mutex endpointGuard_;      ///< shared: an endpoint in use; exclusive: the endpoints renewed
     std::deque<detail::Endpoint> endpoints_;       ///< every writer and reader made (stable addresses: the handles')
