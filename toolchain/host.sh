@@ -66,7 +66,7 @@ run_main_job() {
     echo "== 3/5 RouDi (iceoryx): use a running one, else start iox-roudi with bringup/deploy/roudi.toml"
     roudi_pid=""
     if ! pgrep -x iox-roudi >/dev/null; then
-        iox-roudi -c bringup/deploy/roudi.toml -l warning >"$out/roudi.log" 2>&1 &
+        iox-roudi -c bringup/deploy/roudi.toml -m off -l warning >"$out/roudi.log" 2>&1 &
         roudi_pid=$!
         trap 'if [ -n "${roudi_pid:-}" ]; then kill "$roudi_pid" 2>/dev/null || true; fi' EXIT
         for _ in $(seq 50); do [ -S /tmp/roudi ] && break; sleep 0.1; done

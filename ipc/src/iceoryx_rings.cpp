@@ -186,7 +186,7 @@ Result<void, Error> startRuntime(const std::string& appName)
 {
     if (!roudiReachable()) {
         return Unexpected(Error{"iceoryx", "no RouDi is running on this machine (nothing answers on /tmp/roudi)",
-                                "start it first: `iox-roudi -c /etc/ugvsense/roudi.toml` (the ugvsense-roudi "
+                                "start it first: `iox-roudi -c /etc/ugvsense/roudi.toml -m off` (the ugvsense-roudi "
                                 "systemd unit), or run ugvsensed --embedded-roudi"});
     }
     quietIceoryxLog();

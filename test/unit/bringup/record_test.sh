@@ -8,7 +8,7 @@ tool=$1 service=$2 config=$3 work=$4 recording=$5
 rm -rf "$work" && mkdir -p "$work"
 command -v iox-roudi >/dev/null || { echo "iox-roudi not installed (package iceoryx)"; exit 1; }
 if pgrep -x iox-roudi >/dev/null; then echo "another iox-roudi runs: this test needs its own"; exit 1; fi
-iox-roudi -c "$config" -l warning >"$work/roudi.log" 2>&1 &
+iox-roudi -c "$config" -m off -l warning >"$work/roudi.log" 2>&1 &
 roudi=$!
 trap 'kill $roudi 2>/dev/null; wait $roudi 2>/dev/null' EXIT
 for _ in $(seq 50); do [ -S /tmp/roudi ] && break; sleep 0.1; done

@@ -23,7 +23,7 @@ echo "no RouDi: gave up after $waited_ms ms with the clear error"
 svc=$!
 sleep 2
 kill -0 $svc 2>/dev/null || { cat "$work/late.log"; echo "FAIL: the service did not wait for RouDi"; exit 1; }
-iox-roudi -c "$config" -l warning >"$work/roudi.log" 2>&1 &
+iox-roudi -c "$config" -m off -l warning >"$work/roudi.log" 2>&1 &
 roudi=$!
 wait $svc
 rc=$?
