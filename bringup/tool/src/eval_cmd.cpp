@@ -1066,7 +1066,8 @@ Args evalArgs()
 {
     return Args(
         "eval",
-        "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] "
+        "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] [--perturb "
+        "LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
         "MODE] "
         "[--ground-prior] [--ground-range on|off] [--half-res PX] [--detector stereo|colour] [--json OUT] [--data DIR] "
@@ -1092,6 +1093,12 @@ Args evalArgs()
          {"pairs", "LIST", "real: only these pairs, comma-separated (index.csv's pair column)", false},
          {"verbose", "", "real: a line per sector (truth, ours, outcome)", false},
          {"overlay-dir", "DIR", "real: write an overlay per pair (sector bar: ours; below it the truth)", false},
+         {"perturb", "LIST",
+          "real: run the pairs under these conditions, comma-separated, each scored in full beside the OpenCV "
+          "pipeline on the same changed images: none, or parts joined by '+': noise:S (grey levels), gain:G (right "
+          "camera), blur:S (px), exposure:F, jpeg:Q, half (another rig: half the resolution); sweep: a set of "
+          "each at two strengths",
+          false},
          {"quick", "",
           "simulator: a smoke version (1 texture, 1 range per band, bearing 0; new grounds: 2 seeds, obstacles at 4.5 "
           "m; "
@@ -1132,6 +1139,7 @@ struct EvalChoices {
     bool groundRange = vision::RoiMatcherConfig{}.groundRange;
     double halfResPx = vision::DetectorConfig{}.halfResolutionMinGroundPx;
     std::filesystem::path root = "../shared/data";
+    std::vector<Perturbation> perturbations; ///< --perturb (real)
 };
 
 /// An exit code when the Middlebury or real data the options name are missing (77 with --skip-missing).
@@ -1211,6 +1219,17 @@ std::optional<int> readChoices(const Args& args, EvalChoices& c)
         if (auto mount = parseMount(args.get("mount")); !mount) {
             return reportUsageError("eval", mount.error());
         }
+    }
+    if (args.has("perturb")) {
+        auto conditions = parsePerturbations(args.get("perturb"));
+        if (!conditions) {
+            return reportUsageError("eval", conditions.error());
+        }
+        if (c.colourDetector) {
+            return reportUsageError("eval", Error{"ugvsense eval --perturb", "changes the stereo pair only",
+                                                  "leave out --detector colour"});
+        }
+        c.perturbations = std::move(conditions).value();
     }
     return missingData(args, c.root);
 }
@@ -1339,6 +1358,7 @@ int runReal(const Args& args, const EvalChoices& choices, std::ostringstream& js
     for (std::string name; std::getline(list, name, ',');) {
         real.pairs.push_back(name);
     }
+    real.perturbations = choices.perturbations;
     return runRealEval(real, json);
 }
 

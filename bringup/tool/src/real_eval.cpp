@@ -15,6 +15,7 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "ugv/platform/angles.hpp"
 #include "ugv/tool/detection.hpp"
@@ -510,11 +511,16 @@ ObstacleSectors baselineSectors(const cv::Mat& disparity, int firstRow, const vi
 /// (grey: not scored). False when it could not be written.
 bool writeRealOverlay(const std::filesystem::path& out, const RealPair& pair, const RealImages& images,
                       const PairDetection& run, const vision::DetectorConfig& config,
-                      const std::vector<SectorTruth>& truth)
+                      const std::vector<SectorTruth>& truth, bool changed)
 {
     const ObstacleSectors& ours = run.detector->sectors();
     const vision::RectifiedProjection& projection = run.rectifier->projection();
-    cv::Mat colour = readImage(pair.left, cv::IMREAD_COLOR);
+    cv::Mat colour; // the left image in colour, or as matched when a condition changed it (eval --perturb)
+    if (changed) {
+        cv::cvtColor(images.left, colour, cv::COLOR_GRAY2BGR);
+    } else {
+        colour = readImage(pair.left, cv::IMREAD_COLOR);
+    }
     vision::RectifierConfig fullConfig;
     fullConfig.fullFrame = true;
     auto full = vision::Rectifier::create(images.calib, fullConfig);
@@ -531,7 +537,7 @@ bool writeRealOverlay(const std::filesystem::path& out, const RealPair& pair, co
         return false;
     }
     const cv::Mat image = makeOverlay(colour, *full, *run.detector, config, projection);
-    const cv::Mat plain = image(cv::Rect(0, 0, image.cols, pair.height)); // without the danger bar
+    const cv::Mat plain = image(cv::Rect(0, 0, image.cols, images.left.rows)); // without the danger bar
     return cv::imwrite(out.string(), appendSectorBar(appendSectorBar(plain, ours, oursColours, projection), ours,
                                                      truthColours, projection));
 }
@@ -551,12 +557,33 @@ void printSectorLines(const ObstacleSectors& ours, const std::vector<SectorTruth
     }
 }
 
+/// `p` applied to a pair as read (its images, and at half resolution its truth and calibration too).
+void applyCondition(const Perturbation& p, const RealPair& pair, RealImages& images)
+{
+    if (p.half) {
+        images.gt = halveDisparityTruth(images.gt);
+        const std::optional<vision::Mount> mount = images.calib.mount;
+        // Pixel centres: x_half = (x + 0.5) / 2 - 0.5.
+        images.calib =
+            vision::makeRectifiedCalibration(images.gt.size(), pair.fx / 2.0, pair.fx / 2.0,
+                                             (pair.cx + 0.5) / 2.0 - 0.5, (pair.cy + 0.5) / 2.0 - 0.5, pair.baselineM);
+        images.calib.mount = mount;
+    }
+    std::uint64_t seed = 1469598103934665603ULL; // FNV-1a of the pair's name: the same noise every run
+    for (const char c : pair.name) {
+        seed = (seed ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+    }
+    perturbImages(p, seed, images.left, images.right);
+}
+
 /// What the suite keeps across the pairs.
 struct RealRun {
     const RealEvalOptions& options;
     std::optional<vision::Mount> mount;
     vision::DetectorConfig config;
     RealScoringRules rules;
+    Perturbation condition; ///< applied to every pair
+    bool quiet = false;     ///< no line per pair (one of several conditions)
     RealTally ours;
     RealTally baseline;
     RealTally colour;         ///< the one-camera mode (options.colour)
@@ -627,6 +654,9 @@ RealTally scoreColour(const ColourRun& mono, const std::vector<SectorTruth>& tru
 int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
 {
     auto images = readRealPair(pair, r.mount);
+    if (images) {
+        applyCondition(r.condition, pair, *images);
+    }
     auto run = images ? detectPair(images->calib, images->left, images->right, r.config, pair.name)
                       : Result<PairDetection, Error>(Unexpected(images.error()));
     if (!run) {
@@ -667,10 +697,12 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
         }
     }
     const vision::GroundPlane& g = run->detector->ground();
-    std::printf("%-12s %5d | %4d %4d %4d %4d %4d  h %4.2f p %5.1f%s | %4d %4d %4d %4d  (GT road h %4.2f p %5.1f)\n",
-                pair.name.c_str(), o.gtObstacle, o.correct, o.missed, o.tooNear, o.falseSectors, o.negativeNoDrop,
-                g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct, b.missed,
-                b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
+    if (!r.quiet) {
+        std::printf("%-12s %5d | %4d %4d %4d %4d %4d  h %4.2f p %5.1f%s | %4d %4d %4d %4d  (GT road h %4.2f p %5.1f)\n",
+                    pair.name.c_str(), o.gtObstacle, o.correct, o.missed, o.tooNear, o.falseSectors, o.negativeNoDrop,
+                    g.heightM, g.pitchDeg(), run->detector->groundEstimate().reliable ? " " : "!", b.correct, b.missed,
+                    b.tooNear, b.falseSectors, road->heightM, road->pitchDeg());
+    }
     const RealTally c = mono ? scoreColour(*mono, truth, r) : RealTally{};
     if (r.options.verbose) {
         printSectorLines(ours, truth, r.rules);
@@ -694,7 +726,7 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
     ++r.searchedPairs;
     if (!r.options.overlayDir.empty()) {
         const std::filesystem::path out = r.options.overlayDir / (pair.name + ".png");
-        if (!writeRealOverlay(out, pair, *images, *run, r.config, truth)) {
+        if (!writeRealOverlay(out, pair, *images, *run, r.config, truth, r.condition.name != "none")) {
             std::cerr << "ugvsense eval: error: cannot write the overlay " << out.string() << '\n';
             return 1;
         }
@@ -730,6 +762,65 @@ void reportRealTotals(const RealRun& r, std::ostringstream& json)
          << (r.options.colour ? ", \"colour\": " + tallyJson(r.colour) : std::string()) << "}";
 }
 
+/// Every KITTI-style pair of `index` (each once, on its first GT row) into `r`.
+/// @return 0, or runRealPair's error code.
+int runRealPairs(const std::vector<RealPair>& index, RealRun& r, std::ostringstream& json)
+{
+    std::vector<std::string> done; // index.csv has a row per GT file: a pair is scored once, on its first (noc)
+    for (const RealPair& pair : index) {
+        if (std::find(done.begin(), done.end(), pair.name) != done.end()) {
+            continue;
+        }
+        done.push_back(pair.name);
+        if (!r.options.pairs.empty() &&
+            std::find(r.options.pairs.begin(), r.options.pairs.end(), pair.name) == r.options.pairs.end()) {
+            continue;
+        }
+        if (pair.format.rfind("uint16 PNG", 0) != 0 || pair.doffs != 0.0) {
+            if (!r.quiet) {
+                std::printf("%-12s skipped: only KITTI-style GT (16-bit PNG, no doffs) is scored\n", pair.name.c_str());
+            }
+            continue;
+        }
+        if (const int rc = runRealPair(pair, r, json); rc != 0) {
+            return rc;
+        }
+    }
+    return 0;
+}
+
+/// A condition's totals, for the table of several.
+struct ConditionTotals {
+    std::string name;
+    RealTally ours;
+    RealTally baseline;
+};
+
+/// The table of several conditions' totals; closes `json`'s "real" object with them.
+void reportConditions(const std::vector<ConditionTotals>& all, std::ostringstream& json)
+{
+    std::printf("\nUnder each condition (ours against OpenCV StereoSGBM + RANSAC ground + 0.25 m, the same changed "
+                "images, the same truth; drops: negative sectors on pairs without a drop):\n%-24s | %-31s | %-31s | "
+                "%s\n",
+                "condition", "ours: correct near+false drops", "opencv: correct near+false drops", "ours no worse");
+    json << "\n  ], \"conditions\": [";
+    bool first = true;
+    for (const ConditionTotals& c : all) {
+        const bool noWorse = c.ours.correctRate() >= c.baseline.correctRate() &&
+                             c.ours.tooNear + c.ours.falseSectors <= c.baseline.tooNear + c.baseline.falseSectors &&
+                             c.ours.negativeNoDrop <= c.baseline.negativeNoDrop;
+        std::printf("%-24s |    %5.1f %%   %5.1f %%  %5d |      %5.1f %%   %5.1f %%  %5d | %s\n", c.name.c_str(),
+                    100.0 * c.ours.correctRate(), 100.0 * c.ours.wrongRate(), c.ours.negativeNoDrop,
+                    100.0 * c.baseline.correctRate(), 100.0 * c.baseline.wrongRate(), c.baseline.negativeNoDrop,
+                    noWorse ? "yes" : "NO");
+        json << (first ? "\n" : ",\n") << "    {\"condition\": \"" << c.name << "\", \"ours\": " << tallyJson(c.ours)
+             << ", \"opencv\": " << tallyJson(c.baseline) << ", \"ours_no_worse\": " << (noWorse ? "true" : "false")
+             << "}";
+        first = false;
+    }
+    json << "\n  ]}";
+}
+
 } // namespace
 
 int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
@@ -739,43 +830,49 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         std::cerr << "ugvsense eval: error: " << index.error().message() << '\n';
         return 1;
     }
-    RealRun r{options, std::nullopt, detectorConfig(DetectionOptions{}), RealScoringRules{}, {}, {}, {}};
+    std::optional<vision::Mount> mount;
     if (!options.mount.empty()) {
         auto parsed = parseMount(options.mount);
         if (!parsed) {
             std::cerr << "ugvsense eval: error: " << parsed.error().message() << '\n';
             return 2;
         }
-        r.mount = *parsed;
+        mount = *parsed;
     }
-    r.config.matcher.groundRange = options.groundRange;
-    r.config.halfResolutionMinGroundPx = options.halfResPx;
+    const std::vector<Perturbation> conditions =
+        options.perturbations.empty() ? std::vector<Perturbation>{Perturbation{}} : options.perturbations;
+    const bool several = conditions.size() > 1;
     std::printf("\nReal pairs (%s), ground %s: obstacle sectors (GT 0.25-2.5 m above the GT road within 25 m) right "
                 "within max(1 m, 10 %%); ours against OpenCV StereoSGBM + RANSAC ground + 0.25 m threshold\n",
                 options.dir.string().c_str(),
-                r.mount ? ("of the mount " + options.mount).c_str() : "found (no mount given)");
-    std::printf("%-12s %5s | %-46s | %-19s\n", "pair", "gt", "ours: correct missed near false neg, ground",
-                "opencv: same");
-    json << "  \"real\": {\"mount\": \"" << (r.mount ? options.mount : "found") << "\", \"pairs\": [";
-    std::vector<std::string> done; // index.csv has a row per GT file: a pair is scored once, on its first (noc)
-    for (const RealPair& pair : *index) {
-        if (std::find(done.begin(), done.end(), pair.name) != done.end()) {
-            continue;
+                mount ? ("of the mount " + options.mount).c_str() : "found (no mount given)");
+    json << "  \"real\": {\"mount\": \"" << (mount ? options.mount : "found") << "\", \"pairs\": [";
+    std::vector<ConditionTotals> totals;
+    for (const Perturbation& condition : conditions) {
+        RealRun r{options, mount, detectorConfig(DetectionOptions{}), RealScoringRules{}, condition, several, {},
+                  {},      {}};
+        r.config.matcher.groundRange = options.groundRange;
+        r.config.halfResolutionMinGroundPx = options.halfResPx;
+        if (several || condition.name != "none") {
+            std::printf("condition %s\n", condition.name.c_str());
         }
-        done.push_back(pair.name);
-        if (!options.pairs.empty() &&
-            std::find(options.pairs.begin(), options.pairs.end(), pair.name) == options.pairs.end()) {
-            continue;
+        if (!several) {
+            std::printf("%-12s %5s | %-46s | %-19s\n", "pair", "gt", "ours: correct missed near false neg, ground",
+                        "opencv: same");
         }
-        if (pair.format.rfind("uint16 PNG", 0) != 0 || pair.doffs != 0.0) {
-            std::printf("%-12s skipped: only KITTI-style GT (16-bit PNG, no doffs) is scored\n", pair.name.c_str());
-            continue;
-        }
-        if (const int rc = runRealPair(pair, r, json); rc != 0) {
+        std::ostringstream pairs; // several: each condition's pairs are left out of the JSON (its totals go in)
+        if (const int rc = runRealPairs(*index, r, several ? pairs : json); rc != 0) {
             return rc;
         }
+        if (!several) {
+            reportRealTotals(r, json);
+            return 0;
+        }
+        printTally("  ours", r.ours);
+        printTally("  opencv", r.baseline);
+        totals.push_back({condition.name, r.ours, r.baseline});
     }
-    reportRealTotals(r, json);
+    reportConditions(totals, json);
     return 0;
 }
 

@@ -25,6 +25,7 @@
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/obstacle_sectors.hpp"
 #include "ugv/platform/result.hpp"
+#include "ugv/tool/real_conditions.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
@@ -115,6 +116,9 @@ struct RealEvalOptions {
     /// --detector colour: also the one-camera mode (vision::ColourFreeSpace on the left colour image, the ground of
     /// --mount, else of the stereo detector's estimate as a calibrated mount would give it), scored the same way
     bool colour = false;
+    /// --perturb: the conditions to run the pairs under, each scored in full (empty: the pairs as they are); with
+    /// more than one, only each condition's totals are printed, then a table of them
+    std::vector<Perturbation> perturbations;
 };
 
 /// "HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.
