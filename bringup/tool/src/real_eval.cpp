@@ -794,6 +794,7 @@ struct ConditionTotals {
     std::string name;
     RealTally ours;
     RealTally baseline;
+    bool failed = false; ///< a pair could not be run under it (its error printed above)
 };
 
 /// The table of several conditions' totals; closes `json`'s "real" object with them.
@@ -806,6 +807,12 @@ void reportConditions(const std::vector<ConditionTotals>& all, std::ostringstrea
     json << "\n  ], \"conditions\": [";
     bool first = true;
     for (const ConditionTotals& c : all) {
+        if (c.failed) {
+            std::printf("%-24s | %-31s | %-31s | NO\n", c.name.c_str(), "failed (the error above)", "");
+            json << (first ? "\n" : ",\n") << "    {\"condition\": \"" << c.name << "\", \"failed\": true}";
+            first = false;
+            continue;
+        }
         const bool noWorse = c.ours.correctRate() >= c.baseline.correctRate() &&
                              c.ours.tooNear + c.ours.falseSectors <= c.baseline.tooNear + c.baseline.falseSectors &&
                              c.ours.negativeNoDrop <= c.baseline.negativeNoDrop;
@@ -861,19 +868,24 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
                         "opencv: same");
         }
         std::ostringstream pairs; // several: each condition's pairs are left out of the JSON (its totals go in)
-        if (const int rc = runRealPairs(*index, r, several ? pairs : json); rc != 0) {
+        const int rc = runRealPairs(*index, r, several ? pairs : json);
+        if (!several) {
+            if (rc == 0) {
+                reportRealTotals(r, json);
+            }
             return rc;
         }
-        if (!several) {
-            reportRealTotals(r, json);
-            return 0;
+        if (rc != 0) { // the others still run: one condition that breaks a pair is a finding, not the end
+            totals.push_back({condition.name, {}, {}, true});
+            continue;
         }
         printTally("  ours", r.ours);
         printTally("  opencv", r.baseline);
-        totals.push_back({condition.name, r.ours, r.baseline});
+        totals.push_back({condition.name, r.ours, r.baseline, false});
     }
     reportConditions(totals, json);
-    return 0;
+    const bool anyFailed = std::any_of(totals.begin(), totals.end(), [](const ConditionTotals& c) { return c.failed; });
+    return anyFailed ? 1 : 0;
 }
 
 } // namespace ugv::tool
