@@ -22,7 +22,8 @@ constexpr int kFitStepPx = 4;        ///< [px] sample grid of the ground fit
 constexpr double kFitInlierPx = 1.0; ///< [px]
 constexpr int kFitIterations = 200;
 constexpr int kFitMinInliers = 300;
-constexpr double kFitMinInlierFraction = 0.15; ///< as vision::GroundEstimatorConfig (the candidates include obstacles)
+/// The share of the samples a plane must hold: vision::GroundEstimatorConfig's (the samples include obstacles).
+constexpr double kFitMinInlierFraction = 0.15;
 constexpr double kMinCameraHeightM = 0.05; ///< [m]
 constexpr double kMaxCameraHeightM = 10.0; ///< [m]
 constexpr double kMaxPitchDeg = 45.0;      ///< [deg]
