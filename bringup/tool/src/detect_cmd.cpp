@@ -227,6 +227,9 @@ std::optional<int> readDetectOptions(const Args& args, DetectionOptions& options
 /// The left and right images, grey, of one size and the calibration's; the error names the file and the fix.
 Result<std::pair<cv::Mat, cv::Mat>, Error> readStereoPair(const Args& args, const vision::StereoCalibration& calib)
 {
+    if (isJpeg(args.get("left")) || isJpeg(args.get("right"))) {
+        std::cerr << "ugvsense detect: warning: " << kJpegPairsWarning << '\n';
+    }
     std::string why;
     cv::Mat left = readImage(args.get("left"), cv::IMREAD_GRAYSCALE, &why);
     if (left.empty()) {

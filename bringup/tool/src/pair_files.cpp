@@ -196,6 +196,19 @@ cv::Mat readImage(const std::filesystem::path& path, int flags, std::string* why
     return image;
 }
 
+bool isJpeg(const std::filesystem::path& path)
+{
+    std::string extension = path.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return extension == ".jpg" || extension == ".jpeg";
+}
+
+const char* const kJpegPairsWarning =
+    "the pairs are JPEG: both images' 8x8 compression blocks sit at the same columns and match at disparities that "
+    "are multiples of 8, which made false drops on real streets at quality 50 and below (vision/README.md, "
+    "\"Under conditions the world can bring\"); use lossless images (PNG) where you have them";
+
 cv::Mat readGrey(const std::filesystem::path& path, std::string* why)
 {
     return readImage(path, cv::IMREAD_GRAYSCALE, why);

@@ -6,6 +6,7 @@
 // - export REC --out DIR: frame_NNNNNN_left.png / _right.png, frames.csv (frame, sequence, stamps) and
 //   calibration.yaml.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -181,6 +182,10 @@ int runImport(const Args& args)
     }
     for (const std::string& lonely : listing->unpaired) {
         std::cerr << "ugvsense recording: warning: skipped " << lonely << '\n';
+    }
+    if (std::any_of(listing->pairs.begin(), listing->pairs.end(),
+                    [](const PairFiles& p) { return isJpeg(p.left) || isJpeg(p.right); })) {
+        std::cerr << "ugvsense recording: warning: " << kJpegPairsWarning << '\n';
     }
     // Checked as the service will check it when it replays the recording (a deep or absurd file is refused here).
     const auto loaded = adapters::loadCalibrationWithText(args.get("calib"));

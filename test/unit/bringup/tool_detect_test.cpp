@@ -138,6 +138,34 @@ TEST_F(ToolDetect, GroundEstimateFailsCleanlyOnAFeaturelessPair)
     EXPECT_TRUE(contains(sut.output, "give the mount in the calibration file")) << sut.output;
 }
 
+// JPEG pairs: both images' 8x8 blocks sit at the same columns and match at multiples of 8 px (false drops on real
+// streets, vision/README.md): detect and recording import say so once, and go on.
+TEST_F(ToolDetect, JpegPairsAreWarnedAboutByDetectAndByRecordingImport)
+{
+    const auto jpegs = dir_ / "jpeg";
+    std::filesystem::create_directories(jpegs);
+    for (const char* side : {"left", "right"}) {
+        const cv::Mat image =
+            cv::imread((dir_ / (std::string("pole_") + side + ".png")).string(), cv::IMREAD_GRAYSCALE);
+        ASSERT_FALSE(image.empty());
+        ASSERT_TRUE(cv::imwrite((jpegs / (std::string(side) + "_0.JPG")).string(), image));
+    }
+    const std::string calib = (dir_ / "calibration.yaml").string();
+
+    const ToolRun detect = run("detect --calib " + calib + " --left " + (jpegs / "left_0.JPG").string() + " --right " +
+                               (jpegs / "right_0.JPG").string());
+    const ToolRun png = run(pairArgs("calibration.yaml"));
+    const ToolRun import = run("recording import --pairs " + jpegs.string() + " --calib " + calib + " --out " +
+                               (jpegs / "r.ugvrec").string());
+
+    EXPECT_EQ(detect.exitCode, 0) << detect.output;
+    EXPECT_TRUE(contains(detect.output, "warning: the pairs are JPEG")) << detect.output;
+    EXPECT_TRUE(contains(detect.output, "multiples of 8")) << detect.output;
+    EXPECT_FALSE(contains(png.output, "JPEG")) << png.output;
+    EXPECT_EQ(import.exitCode, 0) << import.output;
+    EXPECT_TRUE(contains(import.output, "ugvsense recording: warning: the pairs are JPEG")) << import.output;
+}
+
 TEST_F(ToolDetect, MonoFindsABoxOnTheGreenFloorAndWritesJson)
 {
     const auto floor = dir_ / "floor";

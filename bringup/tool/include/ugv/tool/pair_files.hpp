@@ -40,6 +40,14 @@ Result<void, Error> checkImageHeader(const std::filesystem::path& path);
 /// found", the header's refusal, "not a readable image") in `why` when given.
 cv::Mat readImage(const std::filesystem::path& path, int flags, std::string* why = nullptr);
 
+/// True for a JPEG file (by its extension: .jpg, .jpeg, any case).
+bool isJpeg(const std::filesystem::path& path);
+
+/// What `detect` and `recording import` say once when the pairs are JPEG: both images' 8 x 8 compression blocks sit at
+/// the same columns, a pattern that matches at disparities that are multiples of 8 and makes false drops on real
+/// streets (vision/README.md, "Under conditions the world can bring").
+extern const char* const kJpegPairsWarning;
+
 /// readImage() as 8-bit grey.
 cv::Mat readGrey(const std::filesystem::path& path, std::string* why = nullptr);
 
