@@ -240,7 +240,8 @@ private:
     {
         return e_ != nullptr ? std::shared_lock<std::shared_mutex>{*e_->guard} : std::shared_lock<std::shared_mutex>{};
     }
-    /// The Fast DDS writer (use it under shared()); null without one, or after a renewal that failed to make it.
+    /// The Fast DDS writer (use it under shared()); null for a default-made handle (a renewal that fails keeps the
+    /// old one).
     [[nodiscard]] eprosima::fastdds::dds::DataWriter* entity() const { return e_ != nullptr ? e_->writer : nullptr; }
     detail::Endpoint* e_ = nullptr;
 };
@@ -264,7 +265,8 @@ private:
     {
         return e_ != nullptr ? std::shared_lock<std::shared_mutex>{*e_->guard} : std::shared_lock<std::shared_mutex>{};
     }
-    /// The Fast DDS reader (use it under shared()); null without one, or after a renewal that failed to make it.
+    /// The Fast DDS reader (use it under shared()); null for a default-made handle (a renewal that fails keeps the
+    /// old one).
     [[nodiscard]] eprosima::fastdds::dds::DataReader* entity() const { return e_ != nullptr ? e_->reader : nullptr; }
     detail::Endpoint* e_ = nullptr;
 };
