@@ -7,19 +7,23 @@
 #include <limits>
 
 namespace ugv::vision {
-namespace {
-
-} // namespace
 
 void LocalGround::configure(const LocalGroundConfig& config, int sectors, float maxRangeM)
 {
     config_ = config;
     sectors_ = sectors;
     bins_ = std::max(1, static_cast<int>(std::ceil(maxRangeM / config.binM)));
-    heightBins_ = 2 * static_cast<int>(std::ceil(config.bandM / kHeightBinM)) + 1;
-    histogram_.assign(static_cast<std::size_t>(sectors_) * static_cast<std::size_t>(bins_) *
-                          static_cast<std::size_t>(heightBins_),
-                      0U);
+    bands_.assign(static_cast<std::size_t>(bins_), Band{});
+    perSector_ = 0;
+    for (int b = 0; b < bins_; ++b) {
+        // As wide as the profile's bound at the bin's far end, plus the band it looks within.
+        Band& band = bands_[static_cast<std::size_t>(b)];
+        band.halfM = config.bandM + config.maxOffsetM + config.maxSlope * static_cast<float>(b + 1) * config.binM;
+        band.centre = static_cast<int>(std::ceil(band.halfM / kHeightBinM));
+        band.first = perSector_;
+        perSector_ += 2 * band.centre + 1;
+    }
+    histogram_.assign(static_cast<std::size_t>(sectors_) * static_cast<std::size_t>(perSector_), 0U);
     profile_.assign(static_cast<std::size_t>(sectors_) * static_cast<std::size_t>(bins_), 0.0F);
 }
 
@@ -29,18 +33,23 @@ void LocalGround::clear() noexcept
     std::fill(profile_.begin(), profile_.end(), 0.0F);
 }
 
-bool LocalGround::mode(int s, int bin, float& z) const noexcept
+bool LocalGround::mode(int s, int bin, float centreM, float& z) const noexcept
 {
-    const std::uint16_t* h =
-        &histogram_[(static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_) + static_cast<std::size_t>(bin)) *
-                    static_cast<std::size_t>(heightBins_)];
+    // The heights within +-bandM of centreM that the bin's band holds.
+    const Band& band = bands_[static_cast<std::size_t>(bin)];
+    const std::uint16_t* h = &histogram_[static_cast<std::size_t>(s) * static_cast<std::size_t>(perSector_) +
+                                         static_cast<std::size_t>(band.first)];
+    const float centre = centreM / kHeightBinM + static_cast<float>(band.centre);
+    const float halfWidth = config_.bandM / kHeightBinM;
+    const int lo = std::max(0, static_cast<int>(std::ceil(centre - halfWidth)));
+    const int hi = std::min(2 * band.centre, static_cast<int>(std::floor(centre + halfWidth)));
     int total = 0;
     int best = -1;
     int bestSum = 0;
-    for (int i = 0; i < heightBins_; ++i) {
+    for (int i = lo; i <= hi; ++i) {
         total += h[i];
         // The peak of the histogram smoothed over three height bins (3 cm).
-        const int sum = h[i] + (i > 0 ? h[i - 1] : 0) + (i + 1 < heightBins_ ? h[i + 1] : 0);
+        const int sum = h[i] + (i > lo ? h[i - 1] : 0) + (i < hi ? h[i + 1] : 0);
         if (sum > bestSum) {
             bestSum = sum;
             best = i;
@@ -51,41 +60,61 @@ bool LocalGround::mode(int s, int bin, float& z) const noexcept
     }
     double sum = 0.0;
     double weighted = 0.0;
-    const int centre = heightBins_ / 2; // the bin of height 0
-    for (int i = std::max(0, best - 1); i <= std::min(heightBins_ - 1, best + 1); ++i) {
+    for (int i = std::max(lo, best - 1); i <= std::min(hi, best + 1); ++i) {
         sum += h[i];
-        weighted += static_cast<double>(h[i]) * (i - centre) * kHeightBinM;
+        weighted += static_cast<double>(h[i]) * (i - band.centre) * kHeightBinM;
     }
     z = static_cast<float>(weighted / sum);
     return true;
 }
 
+bool LocalGround::filteredMode(int s, int b, float centreM, float& z) const noexcept
+{
+    // A feature one bin deep (a trench's far wall, the foot of a face) is not the ground's course, a grade or a
+    // camber that goes on is: the median of this bin's mode and those of the nearest bins with one on each side
+    // (at most two bins away), all looked for near the same height.
+    if (!mode(s, b, centreM, z)) {
+        return false;
+    }
+    std::array<float, 3> v{z, z, z};
+    int count = 1;
+    for (int k = b - 1; k >= std::max(0, b - 2); --k) {
+        if (mode(s, k, centreM, v[static_cast<std::size_t>(count)])) {
+            ++count;
+            break;
+        }
+    }
+    for (int k = b + 1; k <= std::min(bins_ - 1, b + 2); ++k) {
+        if (mode(s, k, centreM, v[static_cast<std::size_t>(count)])) {
+            ++count;
+            break;
+        }
+    }
+    if (count == 3) { // else an end of the seen ground: nothing to filter against
+        z = std::max(std::min(v[0], v[1]), std::min(std::max(v[0], v[1]), v[2]));
+    }
+    return true;
+}
+
 void LocalGround::fitSector(int s) noexcept
 {
-    // The modes, median-filtered over three bins with a mode: a feature one bin deep (a trench's far wall, the foot
-    // of a face) is not the ground's course, a grade or a camber that goes on is.
-    constexpr int kMaxBins = 512;
-    std::array<float, kMaxBins> modes{};
-    std::array<bool, kMaxBins> have{};
-    const int n = std::min(bins_, kMaxBins);
-    for (int b = 0; b < n; ++b) {
-        have[static_cast<std::size_t>(b)] = mode(s, b, modes[static_cast<std::size_t>(b)]);
-    }
     // From the vehicle outwards: the ground is the surface connected to the nearest ground seen. A bin whose
-    // filtered mode follows the extrapolation (within stepM plus maxSlope over one bin) is ground and moves the
-    // estimate; one that jumps (a kerb, a pavement, a face, a drop) is not, and the last ground level holds (also
-    // over the bins after it: a pavement stays a step however long it runs).
+    // filtered mode, looked for within +-bandM of the extrapolation, follows it (within stepM plus maxSlope over one
+    // bin) is ground and moves the estimate; one that jumps (a kerb, a pavement, a face, a drop) is not, and the last
+    // ground level holds (also over the bins after it: a pavement stays a step however long it runs). Looking near
+    // the extrapolation, not over the whole band, keeps an obstacle's many pixels out of the ground's mode while a
+    // grade that goes on is followed.
     float* out = &profile_[static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_)];
     // The walk starts at the nearest bin whose level the next bin with a mode confirms (a near curb's top, one bin
-    // deep, is not the ground's level), within maxOffsetM of the plane; without one, on the plane.
+    // deep, is not the ground's level), within bandM of the plane; without one, on the plane.
     const float tolerance = config_.stepM + config_.maxSlope * config_.binM;
     float level = 0.0F; // [m] at lastR
     float slope = 0.0F; // [m/m]
     float lastR = 0.0F;
     bool confirmed = false;
-    for (int b = 0, previous = -1; b < n && !confirmed; ++b) {
+    for (int b = 0, previous = -1; b < bins_ && !confirmed; ++b) {
         float z = 0.0F;
-        if (!filteredMode(modes.data(), have.data(), n, b, z)) {
+        if (!filteredMode(s, b, 0.0F, z)) {
             continue;
         }
         confirmed = previous >= 0 && std::abs(z - level) <= tolerance; // bin `previous` starts the walk
@@ -99,48 +128,33 @@ void LocalGround::fitSector(int s) noexcept
         level = 0.0F;
         lastR = 0.0F;
     }
+    // A grade is the vehicle's own ground going on: the bound widens with the range (maxOffset(r)) only for a walk
+    // that starts on the plane; one that starts on a raised or sunken surface (a pavement, where the road is out of
+    // view) keeps +-maxOffsetM, so a pavement that rises away is not taken for the road.
+    const bool fromThePlane = std::abs(level) <= config_.stepM;
+    bool jumped = false; // a bin with a mode off the extrapolation since the last ground bin
     for (int b = 0; b < bins_; ++b) {
         const float r = (static_cast<float>(b) + 0.5F) * config_.binM;
-        float z = 0.0F;
-        const bool valid = b < n && filteredMode(modes.data(), have.data(), n, b, z);
         const float predicted = level + slope * (r - lastR);
-        if (valid && std::abs(z - predicted) <= tolerance) {
+        float z = 0.0F;
+        // A surface within maxSlope of the extrapolation drifts from it by up to maxSlope per metre since the last
+        // ground bin where only bins without a mode lie between (far ground is sparse), counted over two bins at
+        // most; after a bin that jumped (a step, a face), by one bin's worth.
+        const float gapTolerance =
+            config_.stepM + config_.maxSlope * (jumped ? config_.binM : std::min(r - lastR, 2.0F * config_.binM));
+        const bool seen = filteredMode(s, b, predicted, z);
+        const bool ground = seen && std::abs(z - predicted) <= gapTolerance;
+        if (ground) {
             const float newSlope =
                 r > lastR ? std::clamp((z - level) / (r - lastR), -config_.maxSlope, config_.maxSlope) : 0.0F;
             slope += 0.5F * (newSlope - slope);
             level = z;
             lastR = r;
         }
-        out[b] = std::clamp(level, -config_.maxOffsetM, config_.maxOffsetM); // held past the last ground bin
+        jumped = seen ? !ground : jumped;
+        const float bound = fromThePlane ? maxOffset(r) : config_.maxOffsetM;
+        out[b] = std::clamp(level, -bound, bound); // held past the last ground bin
     }
-}
-
-bool LocalGround::filteredMode(const float* modes, const bool* have, int n, int b, float& z) noexcept
-{
-    if (!have[b]) {
-        return false;
-    }
-    // The nearest bin with a mode on each side (at most two bins away), with this one: their median.
-    std::array<float, 3> v{modes[b], modes[b], modes[b]};
-    int count = 1;
-    for (int k = b - 1; k >= std::max(0, b - 2); --k) {
-        if (have[k]) {
-            v[static_cast<std::size_t>(count++)] = modes[k];
-            break;
-        }
-    }
-    for (int k = b + 1; k <= std::min(n - 1, b + 2); ++k) {
-        if (have[k]) {
-            v[static_cast<std::size_t>(count++)] = modes[k];
-            break;
-        }
-    }
-    if (count < 3) {
-        z = modes[b]; // an end of the seen ground: nothing to filter against
-        return true;
-    }
-    z = std::max(std::min(v[0], v[1]), std::min(std::max(v[0], v[1]), v[2]));
-    return true;
 }
 
 void LocalGround::fit() noexcept

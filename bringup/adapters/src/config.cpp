@@ -172,6 +172,9 @@ std::vector<KeySpec> visionKeys()
                   UGV_REF(obstacles.minHeightM)),
         numberKey("obstacles.min_depth_m", Kind::Double, 0.02, 2, "negative obstacles deeper than this count [m]",
                   UGV_REF(obstacles.minDepthM)),
+        numberKey("obstacles.max_range_disparity_px", Kind::Double, 2, 128,
+                  "the detector looks as far as the disparity stays at or above this [px]: to f B / this",
+                  UGV_REF(obstacles.maxRangeDisparityPx)),
         choiceKey<OverloadChoice>(
             "overload.policy",
             "when a frame would miss its deadline: degrade (ground-plane-only sectors, flagged) or drop (queue of one)",

@@ -28,6 +28,7 @@ vision::DetectorConfig detectorConfigFrom(const adapters::ServiceConfig& config)
     d.sectors.cautionDistanceM = static_cast<float>(config.obstacles.cautionDistanceM);
     d.sectors.minHeightM = static_cast<float>(config.obstacles.minHeightM);
     d.sectors.minDepthM = static_cast<float>(config.obstacles.minDepthM);
+    d.sectors.maxRangeDisparityPx = static_cast<float>(config.obstacles.maxRangeDisparityPx);
     d.marginRows = config.roi.matcherMarginRows;
     return d;
 }

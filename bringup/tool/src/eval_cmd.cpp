@@ -35,6 +35,7 @@
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
 #include "ugv/vision/roi_matcher.hpp"
+#include "ugv/vision/sector_builder.hpp"
 
 namespace ugv::tool {
 namespace {
@@ -89,6 +90,7 @@ struct SimOptions {
     bool groundRange = false; ///< RoiMatcherConfig::groundRange
     bool colour = false;      ///< --detector colour: ColourFreeSpace on the left colour image, not stereo
     double halfResPx = vision::DetectorConfig{}.halfResolutionMinGroundPx; ///< --half-res
+    double maxRangePx = vision::SectorBuilderConfig{}.maxRangeDisparityPx; ///< --max-range-px
 };
 
 const char* textureName(sim::GroundTexture t)
@@ -112,7 +114,7 @@ const char* textureName(sim::GroundTexture t)
 class SimDetector {
 public:
     static Result<SimDetector, Error> create(vision::MatcherMode matcher, bool groundPrior, bool groundRange,
-                                             bool colour, double halfResPx)
+                                             bool colour, double halfResPx, double maxRangePx)
     {
         const sim::Rig rig;
         vision::StereoCalibration calib = vision::makeRectifiedCalibration(
@@ -123,6 +125,7 @@ public:
         config.matcher.groundPrior = groundPrior;
         config.matcher.groundRange = groundRange;
         config.halfResolutionMinGroundPx = halfResPx;
+        config.sectors.maxRangeDisparityPx = static_cast<float>(maxRangePx);
         auto rectifier = vision::Rectifier::create(calib, vision::roiRectifierConfig(config));
         if (!rectifier) {
             return Unexpected(rectifier.error());
@@ -235,7 +238,7 @@ std::vector<std::string> obstacleTypes(const SimOptions& o)
 /// A fresh detector for a run (the ground estimate's smoothing starts anew); prints the error when it cannot be made.
 std::optional<SimDetector> makeSimDetector(const SimOptions& o)
 {
-    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.groundRange, o.colour, o.halfResPx);
+    auto detector = SimDetector::create(o.matcher, o.groundPrior, o.groundRange, o.colour, o.halfResPx, o.maxRangePx);
     if (!detector) {
         std::cerr << "ugvsense eval: error: " << detector.error().message() << '\n';
         return std::nullopt;
@@ -1070,7 +1073,8 @@ Args evalArgs()
         "LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
         "MODE] "
-        "[--ground-prior] [--ground-range on|off] [--half-res PX] [--detector stereo|colour] [--json OUT] [--data DIR] "
+        "[--ground-prior] [--ground-range on|off] [--half-res PX] [--max-range-px PX] [--detector stereo|colour] "
+        "[--json OUT] [--data DIR] "
         "[--skip-missing]",
         {{"sim", "",
           "run the simulator suite (obstacle types x ranges x textures, empty, overhang, doorway, and the new grounds: "
@@ -1121,6 +1125,10 @@ Args evalArgs()
           "simulator and real: match the near rows at half resolution, from the row where the configured ground's "
           "disparity reaches PX on (DetectorConfig::halfResolutionMinGroundPx; 0: off; default: its default)",
           false},
+         {"max-range-px", "PX",
+          "simulator and real: the detector looks as far as the disparity stays at or above PX "
+          "(obstacles.max_range_disparity_px, SectorBuilderConfig::maxRangeDisparityPx; default 13.65)",
+          false},
          {"detector", "NAME",
           "simulator suite: stereo (default) or colour: the one-camera mode (ColourFreeSpace on the left colour "
           "image) on asphalt, grass and floor at 1-6 m, scored by the same scorer, and its false sectors on empty "
@@ -1138,6 +1146,7 @@ struct EvalChoices {
     bool colourDetector = false;
     bool groundRange = vision::RoiMatcherConfig{}.groundRange;
     double halfResPx = vision::DetectorConfig{}.halfResolutionMinGroundPx;
+    double maxRangePx = vision::SectorBuilderConfig{}.maxRangeDisparityPx;
     std::filesystem::path root = "../shared/data";
     std::vector<Perturbation> perturbations; ///< --perturb (real)
 };
@@ -1210,6 +1219,11 @@ std::optional<int> readChoices(const Args& args, EvalChoices& c)
         return reportUsageError("eval", halfRes.error());
     }
     c.halfResPx = *halfRes;
+    const auto maxRange = args.number("max-range-px", c.maxRangePx, 2.0, 128.0);
+    if (!maxRange) {
+        return reportUsageError("eval", maxRange.error());
+    }
+    c.maxRangePx = *maxRange;
     if (args.has("data")) {
         c.root = args.get("data");
     } else if (const char* env = std::getenv("UGV_SHARED_DATA"); env != nullptr && *env != '\0') {
@@ -1303,6 +1317,7 @@ Result<SimOptions, Error> simOptions(const Args& args, const EvalChoices& c)
     o.groundPrior = args.has("ground-prior");
     o.groundRange = c.groundRange;
     o.halfResPx = c.halfResPx;
+    o.maxRangePx = c.maxRangePx;
     if (c.colourDetector) {
         // The grounds of issue 23's one-camera targets; the empty scenes on the same ones.
         o.colour = true;
@@ -1354,6 +1369,7 @@ int runReal(const Args& args, const EvalChoices& choices, std::ostringstream& js
     real.verbose = args.has("verbose");
     real.groundRange = choices.groundRange;
     real.halfResPx = choices.halfResPx;
+    real.maxRangePx = choices.maxRangePx;
     std::stringstream list(args.get("pairs"));
     for (std::string name; std::getline(list, name, ',');) {
         real.pairs.push_back(name);

@@ -860,6 +860,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
                   {},      {}};
         r.config.matcher.groundRange = options.groundRange;
         r.config.halfResolutionMinGroundPx = options.halfResPx;
+        r.config.sectors.maxRangeDisparityPx = static_cast<float>(options.maxRangePx);
         if (several || condition.name != "none") {
             std::printf("condition %s\n", condition.name.c_str());
         }

@@ -58,7 +58,7 @@ TEST(Config, EveryKeyIsParsed)
         "stereo:\n  mode: sgbm_3way\n  num_disparities: 64\n  block_size: 7\n  ground_range: false\n"
         "  ground_range_drop_m: 0.5\n  ground_range_margin_deg: 2.5\n  half_resolution_min_ground_px: 0\n"
         "obstacles:\n  detector: both\n  sector_count: 32\n  danger_distance_m: 1\n  caution_distance_m: 4\n"
-        "  min_height_m: 0.2\n  min_depth_m: 0.15\n"
+        "  min_height_m: 0.2\n  min_depth_m: 0.15\n  max_range_disparity_px: 8\n"
         "overload:\n  policy: drop\n  deadline_factor: 2\n"
         "handover:\n  spin_us: 0\n";
 
@@ -89,6 +89,7 @@ TEST(Config, EveryKeyIsParsed)
     EXPECT_DOUBLE_EQ(sut->obstacles.cautionDistanceM, 4.0);
     EXPECT_DOUBLE_EQ(sut->obstacles.minHeightM, 0.2);
     EXPECT_DOUBLE_EQ(sut->obstacles.minDepthM, 0.15);
+    EXPECT_DOUBLE_EQ(sut->obstacles.maxRangeDisparityPx, 8.0);
     EXPECT_EQ(sut->overload.policy, OverloadChoice::Drop);
     EXPECT_DOUBLE_EQ(sut->overload.deadlineFactor, 2.0);
     EXPECT_EQ(sut->handover.spinUs, 0);

@@ -3,6 +3,7 @@
 
 #include "ugv/vision/local_ground.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -98,17 +99,71 @@ TEST(LocalGround, StartsOnTheNearestConfirmedLevelNotOnANearCurbTop)
     EXPECT_NEAR(sut.at(1, 12.0F), -0.08F, kTolM);
 }
 
-TEST(LocalGround, StaysWithinItsOffsetBound)
+TEST(LocalGround, StaysWithinItsOffsetBoundWhichWidensWithTheRangeFromThePlane)
 {
     LocalGroundConfig config;
     config.maxOffsetM = 0.05F;
     auto sut = makeSut(config);
-    addGround(sut, 2, 2.0F, 16.0F, 60, [](float r) { return -0.02F * (r - 2.0F); }); // 2 % down to -0.28 m
+    // 6.5 % up from 4 m: each bin within the step tolerance of the extrapolation, so followed, but steeper than
+    // maxSlope (4 %): the bound maxOffsetM + maxSlope r holds it (0.68 m up at 14.5 m, the bound 0.63 m).
+    addGround(sut, 2, 2.0F, 16.0F, 60, [](float r) { return 0.065F * std::max(0.0F, r - 4.0F); });
 
     sut.fit();
 
-    EXPECT_NEAR(sut.at(2, 3.5F), -0.03F, kTolM);
-    EXPECT_FLOAT_EQ(sut.at(2, 15.0F), -0.05F);
+    EXPECT_NEAR(sut.at(2, 3.5F), 0.0F, kTolM);
+    EXPECT_NEAR(sut.at(2, 14.5F), config.maxOffsetM + config.maxSlope * 14.5F, kTolM);
+}
+
+TEST(LocalGround, FollowsAGradeBeyondTheNearBand)
+{
+    auto sut = makeSut();
+    const auto grade = [](float r) { return 0.04F * std::max(0.0F, r - 8.0F); }; // 0.46 m up at 19.5 m
+    addGround(sut, 1, 2.0F, 20.0F, 60, grade);
+
+    sut.fit();
+
+    for (const float r : {6.0F, 10.5F, 14.5F, 18.5F}) {
+        EXPECT_NEAR(sut.at(1, r), grade(r), 3.0F * kTolM) << r;
+    }
+}
+
+TEST(LocalGround, FollowsSparseFarGroundAcrossBinsWithoutAMode)
+{
+    auto sut = makeSut();
+    const auto grade = [](float r) { return 0.03F * std::max(0.0F, r - 6.0F); };
+    addGround(sut, 1, 2.0F, 10.0F, 60, grade);
+    for (float r0 = 10.0F; r0 < 20.0F; r0 += 2.0F) { // every other bin seen: the far ground's rows thin out
+        addGround(sut, 1, r0, r0 + 1.0F, 20, grade);
+    }
+
+    sut.fit();
+
+    EXPECT_NEAR(sut.at(1, 18.5F), grade(18.5F), 3.0F * kTolM);
+}
+
+TEST(LocalGround, DoesNotClimbAFaceAfterABinThatJumped)
+{
+    auto sut = makeSut();
+    addGround(sut, 1, 2.0F, 12.0F, 60, [](float) { return 0.0F; });
+    addGround(sut, 1, 12.0F, 13.0F, 60, [](float) { return 0.12F; }); // a face's foot: a jump
+    addGround(sut, 1, 13.0F, 17.0F, 60, [](float) { return 0.10F; }); // within two bins' drift, not one
+
+    sut.fit();
+
+    EXPECT_NEAR(sut.at(1, 15.5F), 0.0F, kTolM);
+}
+
+TEST(LocalGround, ABoundStartedOnAPavementDoesNotWidenWithTheRange)
+{
+    auto sut = makeSut();
+    // The road out of view in this sector: the first ground is a pavement 10 cm up, rising 2 % away.
+    const auto pavement = [](float r) { return 0.10F + 0.02F * (r - 5.0F); };
+    addGround(sut, 0, 5.0F, 18.0F, 60, pavement);
+
+    sut.fit();
+
+    EXPECT_NEAR(sut.at(0, 7.5F), pavement(7.5F), 2.0F * kTolM);
+    EXPECT_FLOAT_EQ(sut.at(0, 16.5F), LocalGroundConfig{}.maxOffsetM);
 }
 
 TEST(LocalGround, FitAllocatesNothing)

@@ -75,11 +75,12 @@ struct StereoConfig {
 
 struct ObstacleConfig {
     DetectorMode detector = DetectorMode::Stereo;
-    int sectorCount = 64;          ///< bearing bins across the horizontal field of view
-    double dangerDistanceM = 1.5;  ///< [m] closer than this: red
-    double cautionDistanceM = 5.0; ///< [m] closer than this: blue; beyond: green
-    double minHeightM = 0.10;      ///< [m] positive obstacles taller than this count
-    double minDepthM = 0.10;       ///< [m] negative obstacles deeper than this count
+    int sectorCount = 64;               ///< bearing bins across the horizontal field of view
+    double dangerDistanceM = 1.5;       ///< [m] closer than this: red
+    double cautionDistanceM = 5.0;      ///< [m] closer than this: blue; beyond: green
+    double minHeightM = 0.10;           ///< [m] positive obstacles taller than this count
+    double minDepthM = 0.10;            ///< [m] negative obstacles deeper than this count
+    double maxRangeDisparityPx = 13.65; ///< [px] the detector looks as far as the disparity stays at or above this
 };
 
 struct OverloadConfig {

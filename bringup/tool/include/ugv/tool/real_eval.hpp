@@ -28,6 +28,7 @@
 #include "ugv/tool/real_conditions.hpp"
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/sector_builder.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
 
 namespace ugv::tool {
@@ -113,6 +114,7 @@ struct RealEvalOptions {
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
     bool groundRange = false;         ///< RoiMatcherConfig::groundRange (detectPair then runs each pair twice)
     double halfResPx = 0.0;           ///< DetectorConfig::halfResolutionMinGroundPx (eval --half-res)
+    double maxRangePx = vision::SectorBuilderConfig{}.maxRangeDisparityPx; ///< eval --max-range-px
     /// --detector colour: also the one-camera mode (vision::ColourFreeSpace on the left colour image, the ground of
     /// --mount, else of the stereo detector's estimate as a calibrated mount would give it), scored the same way
     bool colour = false;
