@@ -201,7 +201,8 @@ std::optional<int> readDetectOptions(const Args& args, DetectionOptions& options
     const auto sectorCount = args.number("sectors", 64, 1, kMaxSectors);
     const auto danger = args.number("danger", 1.5, 0.01, kMaxDistanceM);
     const auto caution = args.number("caution", 5.0, 0.01, kMaxDistanceM);
-    for (const auto* value : {&sectorCount, &danger, &caution}) {
+    const auto maxRangePx = args.number("max-range-px", DetectionOptions{}.maxRangeDisparityPx, 2.0, 128.0);
+    for (const auto* value : {&sectorCount, &danger, &caution, &maxRangePx}) {
         if (!*value) {
             return reportUsageError("detect", value->error());
         }
@@ -219,8 +220,8 @@ std::optional<int> readDetectOptions(const Args& args, DetectionOptions& options
         return reportUsageError("detect", Error{"ugvsense detect", "--sectors must be whole and --caution >= --danger",
                                                 "see 'ugvsense detect --help'"});
     }
-    options =
-        DetectionOptions{static_cast<int>(*sectorCount), static_cast<float>(*danger), static_cast<float>(*caution)};
+    options = DetectionOptions{static_cast<int>(*sectorCount), static_cast<float>(*danger),
+                               static_cast<float>(*caution), static_cast<float>(*maxRangePx)};
     return std::nullopt;
 }
 
@@ -319,7 +320,11 @@ int runDetect(int argc, char** argv)
                {"overlay", "OUT.png", "write the rectified left image with obstacles and the sector bar", false},
                {"sectors", "N", "number of sectors, 1..180, default 64", false},
                {"danger", "M", "red below this range, default 1.5 m", false},
-               {"caution", "M", "blue below this range, default 5 m (>= --danger)", false}});
+               {"caution", "M", "blue below this range, default 5 m (>= --danger)", false},
+               {"max-range-px", "PX",
+                "look as far as the disparity stays at or above PX (obstacles.max_range_disparity_px), 2..128, "
+                "default 13.65",
+                false}});
     if (const auto exit = parseOrExit(args, argc, argv, "detect")) {
         return *exit;
     }

@@ -63,6 +63,7 @@ vision::DetectorConfig detectorConfig(const DetectionOptions& options)
     config.sectors.sectorCount = options.sectorCount;
     config.sectors.dangerDistanceM = options.dangerM;
     config.sectors.cautionDistanceM = options.cautionM;
+    config.sectors.maxRangeDisparityPx = options.maxRangeDisparityPx;
     return config;
 }
 

@@ -125,6 +125,25 @@ TEST_F(ToolDetect, WithoutMountTheGroundIsEstimatedNearTheTrueHeight)
     EXPECT_NEAR(height, 0.59, 0.03);
 }
 
+TEST_F(ToolDetect, MaxRangePxSetsHowFarTheDetectorLooks)
+{
+    // The default rig, 546 px x 0.30 m: f B / 13.65 px = 12 m by default, f B / 8 px = 20.5 m with --max-range-px 8.
+    const auto reach = [this](const std::string& extra) {
+        const auto json = dir_ / "reach.json";
+        const ToolRun sut = run(pairArgs("calibration.yaml") + " --json " + json.string() + extra);
+        EXPECT_EQ(sut.exitCode, 0) << sut.output;
+        const std::string text = readText(json);
+        double rangeM = 0.0;
+        const auto at = text.find("\"max_range_m\": ");
+        EXPECT_NE(at, std::string::npos) << text;
+        return at != std::string::npos && std::sscanf(text.c_str() + at, "\"max_range_m\": %lf", &rangeM) == 1 ? rangeM
+                                                                                                               : -1.0;
+    };
+
+    EXPECT_NEAR(reach(""), 546.0 * 0.30 / 13.65, 0.05);
+    EXPECT_NEAR(reach(" --max-range-px 8"), 546.0 * 0.30 / 8.0, 0.05);
+}
+
 TEST_F(ToolDetect, GroundEstimateFailsCleanlyOnAFeaturelessPair)
 {
     const cv::Mat flat(480, 640, CV_8UC1, cv::Scalar(128));

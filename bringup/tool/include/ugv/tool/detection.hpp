@@ -27,11 +27,12 @@ namespace ugv::tool {
 
 struct DetectionOptions {
     int sectorCount = 64;
-    float dangerM = 1.5F;  ///< [m]
-    float cautionM = 5.0F; ///< [m]
+    float dangerM = 1.5F;               ///< [m]
+    float cautionM = 5.0F;              ///< [m]
+    float maxRangeDisparityPx = 13.65F; ///< [px] SectorBuilderConfig::maxRangeDisparityPx (the reach, f B / this)
 };
 
-/// The vision library's detector defaults with the sector count and danger distances of `options`.
+/// The vision library's detector defaults with the sector count, danger distances and reach of `options`.
 vision::DetectorConfig detectorConfig(const DetectionOptions& options);
 
 /// Read-only view of a continuous or strided CV_8UC1 matrix (the matrix must outlive the view).
