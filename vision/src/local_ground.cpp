@@ -132,26 +132,17 @@ void LocalGround::fitSector(int s) noexcept
     // that starts on the plane; one that starts on a raised or sunken surface (a pavement, where the road is out of
     // view) keeps +-maxOffsetM, so a pavement that rises away is not taken for the road.
     const bool fromThePlane = std::abs(level) <= config_.stepM;
-    bool jumped = false; // a bin with a mode off the extrapolation since the last ground bin
     for (int b = 0; b < bins_; ++b) {
         const float r = (static_cast<float>(b) + 0.5F) * config_.binM;
         const float predicted = level + slope * (r - lastR);
         float z = 0.0F;
-        // A surface within maxSlope of the extrapolation drifts from it by up to maxSlope per metre since the last
-        // ground bin where only bins without a mode lie between (far ground is sparse), counted over two bins at
-        // most; after a bin that jumped (a step, a face), by one bin's worth.
-        const float gapTolerance =
-            config_.stepM + config_.maxSlope * (jumped ? config_.binM : std::min(r - lastR, 2.0F * config_.binM));
-        const bool seen = filteredMode(s, b, predicted, z);
-        const bool ground = seen && std::abs(z - predicted) <= gapTolerance;
-        if (ground) {
+        if (filteredMode(s, b, predicted, z) && std::abs(z - predicted) <= tolerance) {
             const float newSlope =
                 r > lastR ? std::clamp((z - level) / (r - lastR), -config_.maxSlope, config_.maxSlope) : 0.0F;
             slope += 0.5F * (newSlope - slope);
             level = z;
             lastR = r;
         }
-        jumped = seen ? !ground : jumped;
         const float bound = fromThePlane ? maxOffset(r) : config_.maxOffsetM;
         out[b] = std::clamp(level, -bound, bound); // held past the last ground bin
     }

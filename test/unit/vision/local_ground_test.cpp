@@ -141,18 +141,6 @@ TEST(LocalGround, FollowsSparseFarGroundAcrossBinsWithoutAMode)
     EXPECT_NEAR(sut.at(1, 18.5F), grade(18.5F), 3.0F * kTolM);
 }
 
-TEST(LocalGround, DoesNotClimbAFaceAfterABinThatJumped)
-{
-    auto sut = makeSut();
-    addGround(sut, 1, 2.0F, 12.0F, 60, [](float) { return 0.0F; });
-    addGround(sut, 1, 12.0F, 13.0F, 60, [](float) { return 0.12F; }); // a face's foot: a jump
-    addGround(sut, 1, 13.0F, 17.0F, 60, [](float) { return 0.10F; }); // within two bins' drift, not one
-
-    sut.fit();
-
-    EXPECT_NEAR(sut.at(1, 15.5F), 0.0F, kTolM);
-}
-
 TEST(LocalGround, ABoundStartedOnAPavementDoesNotWidenWithTheRange)
 {
     auto sut = makeSut();

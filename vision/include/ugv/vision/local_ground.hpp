@@ -14,9 +14,9 @@
 ///  - per sector, from the vehicle outwards, the surface connected to the nearest ground seen: a bin whose mode near
 ///    the extrapolation (from at least minPoints pixels, median-filtered over three bins so that a feature one bin
 ///    deep, like a trench's far wall, is not taken for the ground's course) follows it within stepM plus maxSlope
-///    over one bin (over up to two when the bins between have no mode: far ground is sparse) moves the profile
-///    (level and a slope, at most maxSlope); a bin that jumps is not ground (a kerb, a pavement, a face, a drop) and
-///    the last ground level holds. So a smooth surface (camber, grade) is followed and a step is not.
+///    over one bin moves the profile (level and a slope, at most maxSlope); a bin that jumps is not ground (a kerb,
+///    a pavement, a face, a drop) and the last ground level holds. So a smooth surface (camber, grade) is followed
+///    and a step is not.
 ///  - the profile stays within +-(maxOffsetM + maxSlope r) of the plane when the walk starts on it (a grade that
 ///    goes on is followed as far as the detector looks: 4 % from 8 m is 0.48 m up at 20 m), within +-maxOffsetM
 ///    when it starts on a raised or sunken surface (a pavement where the road is out of view).
