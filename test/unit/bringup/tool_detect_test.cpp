@@ -128,7 +128,7 @@ TEST_F(ToolDetect, WithoutMountTheGroundIsEstimatedNearTheTrueHeight)
 TEST_F(ToolDetect, MaxRangePxSetsHowFarTheDetectorLooks)
 {
     // The default rig, 546 px x 0.30 m: f B / 13.65 px = 12 m by default, f B / 8 px = 20.5 m with --max-range-px 8.
-    const auto reach = [this](const std::string& extra) {
+    const auto reach = [](const std::string& extra) {
         const auto json = dir_ / "reach.json";
         const ToolRun sut = run(pairArgs("calibration.yaml") + " --json " + json.string() + extra);
         EXPECT_EQ(sut.exitCode, 0) << sut.output;
