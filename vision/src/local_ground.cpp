@@ -106,7 +106,8 @@ void LocalGround::fitSector(int s) noexcept
     // grade that goes on is followed.
     float* out = &profile_[static_cast<std::size_t>(s) * static_cast<std::size_t>(bins_)];
     // The walk starts at the nearest bin whose level the next bin with a mode confirms (a near curb's top, one bin
-    // deep, is not the ground's level), within bandM of the plane; without one, on the plane.
+    // deep, is not the ground's level; modes looked for within bandM of the plane), within maxOffsetM of the plane;
+    // without one, on the plane.
     const float tolerance = config_.stepM + config_.maxSlope * config_.binM;
     float level = 0.0F; // [m] at lastR
     float slope = 0.0F; // [m/m]

@@ -32,7 +32,7 @@
 namespace ugv::vision {
 
 struct LocalGroundConfig {
-    float bandM = 0.25F;      ///< [m] heights counted, +- from the plane at the vehicle (plus maxSlope r)
+    float bandM = 0.25F;      ///< [m] a bin's mode is looked for within +- this of the profile's extrapolation
     float binM = 1.0F;        ///< [m] range bins
     int minPoints = 10;       ///< pixels a bin needs to give a mode
     float stepM = 0.03F;      ///< [m] a bin within this of the extrapolation (plus maxSlope over a bin) follows it
