@@ -459,6 +459,13 @@ public:
                   "value " + std::to_string(config_.stereo.numDisparities) + " is not a multiple of 16",
                   "use 16, 32, 64, 128 or 256");
         }
+        if (config_.obstacles.maxRangeDisparityPx >= config_.stereo.numDisparities) {
+            error(at("obstacles"), "obstacles.max_range_disparity_px",
+                  "value " + formatNumber(config_.obstacles.maxRangeDisparityPx) +
+                      " is not below stereo.num_disparities (" + std::to_string(config_.stereo.numDisparities) +
+                      "): the detector would look nowhere the matcher searches",
+                  "lower max_range_disparity_px (default 13.65) or raise num_disparities");
+        }
         if (config_.stereo.numDisparities >= config_.camera.width) {
             error(at("stereo"), "stereo.num_disparities",
                   "value " + std::to_string(config_.stereo.numDisparities) + " is not below the image width " +

@@ -256,6 +256,17 @@ TEST(Config, DisparityRangeMustFitTheImage)
     EXPECT_NE(errors[0].what.find("not below the image width"), std::string::npos);
 }
 
+TEST(Config, TheReachMustBeInsideTheDisparitySearch)
+{
+    const auto errors = parseErrors(std::string(kValidMinimal) +
+                                    "stereo:\n  num_disparities: 32\nobstacles:\n  max_range_disparity_px: 40\n");
+
+    ASSERT_EQ(errors.size(), 1u) << joined(errors);
+    EXPECT_NE(errors[0].where.find("obstacles.max_range_disparity_px"), std::string::npos) << errors[0].where;
+    EXPECT_NE(errors[0].what.find("not below stereo.num_disparities (32)"), std::string::npos) << errors[0].what;
+    EXPECT_NE(errors[0].fix.find("lower max_range_disparity_px"), std::string::npos) << errors[0].fix;
+}
+
 TEST(Config, SectionGivenAsScalarIsAnError)
 {
     const auto errors = parseErrors(std::string(kValidMinimal) + "stereo: 5\n");

@@ -21,15 +21,16 @@
 #include "ugv/vision/ground_plane.hpp"
 #include "ugv/vision/obstacle_detector.hpp"
 #include "ugv/vision/rectifier.hpp"
+#include "ugv/vision/sector_builder.hpp"
 #include "ugv/vision/stereo_calibration.hpp"
 
 namespace ugv::tool {
 
 struct DetectionOptions {
     int sectorCount = 64;
-    float dangerM = 1.5F;               ///< [m]
-    float cautionM = 5.0F;              ///< [m]
-    float maxRangeDisparityPx = 13.65F; ///< [px] SectorBuilderConfig::maxRangeDisparityPx (the reach, f B / this)
+    float dangerM = 1.5F;                                                          ///< [m]
+    float cautionM = 5.0F;                                                         ///< [m]
+    float maxRangeDisparityPx = vision::SectorBuilderConfig{}.maxRangeDisparityPx; ///< [px] the reach: f B / this
 };
 
 /// The vision library's detector defaults with the sector count, danger distances and reach of `options`.
