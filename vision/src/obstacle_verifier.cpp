@@ -61,6 +61,29 @@ public:
     }
     /// Sum of |L - mean L| over the window [1/16 grey].
     [[nodiscard]] int contrast() const noexcept { return contrast_; }
+    /// True when the window's match slides along x by more than `perRow` columns per row its contour moves,
+    /// |sum Ix Iy| > perRow sum Ix^2 over the window of `left` (forward differences; the neighbour right of or below
+    /// the window is read from the image, and at its last column or row the difference is 0).
+    /// ObstacleVerifierConfig::maxSlidePerRow; 0: never.
+    [[nodiscard]] bool slides(ConstImageViewU8 left, float perRow) const noexcept
+    {
+        if (!(perRow > 0.0F)) {
+            return false;
+        }
+        const int lastColumn = left.width() - 1;
+        int xx = 0; // at most 135 x 255^2
+        int xy = 0;
+        for (int y = v_ - hh_; y <= v_ + hh_; ++y) {
+            const std::uint8_t* row = left.row(y);
+            const std::uint8_t* below = left.row(std::min(y + 1, left.height() - 1));
+            for (int c = x_ - hw_; c <= x_ + hw_; ++c) {
+                const int ix = row[std::min(c + 1, lastColumn)] - row[c];
+                xx += ix * ix;
+                xy += ix * (below[c] - row[c]);
+            }
+        }
+        return static_cast<double>(std::abs(xy)) > static_cast<double>(perRow) * static_cast<double>(xx);
+    }
 
     /// The window's zero-mean SAD against the right image at disparity d16; `simd` false: the scalar reference.
     [[nodiscard]] int costAt(ConstImageViewU8 right, int d16, bool simd) const noexcept
@@ -141,10 +164,9 @@ Result<ObstacleVerifier, Error> ObstacleVerifier::create(const ObstacleVerifierC
     }
     if (!(config.minResidualPx >= 0.0F) || !(config.acceptRatio > 0.0F && config.acceptRatio <= 1.0F) ||
         !(config.minContrast >= 0.0F) || !(config.minContrastBelow >= 0.0F) || !(config.refineMaxGroundPx >= 0.0F) ||
-        !(config.contrastNoiseFactor >= 0.0F)) {
-        return Unexpected(
-            verifierConfigError("minResidualPx, contrastNoiseFactor, minContrast and minContrastBelow must be "
-                                ">= 0 and acceptRatio in (0, 1]"));
+        !(config.contrastNoiseFactor >= 0.0F) || !(config.maxSlidePerRow >= 0.0F)) {
+        return Unexpected(verifierConfigError("minResidualPx, contrastNoiseFactor, minContrast, minContrastBelow and "
+                                              "maxSlidePerRow must be >= 0 and acceptRatio in (0, 1]"));
     }
     auto noise = ImageNoise::create(config.width, config.height);
     if (!noise) {
@@ -224,9 +246,10 @@ VerifyStatus ObstacleVerifier::run(ConstImageViewU8 left, ConstImageViewU8 right
             }
             const int atD = window.costAt(right, d16, config_.simd);
             const int atGround = window.costAt(right, dg16, config_.simd);
-            if (static_cast<std::int64_t>(atD) * 1024 >= ratio1024 * atGround) {
+            const bool groundExplains = static_cast<std::int64_t>(atD) * 1024 >= ratio1024 * atGround;
+            if (groundExplains || window.slides(left, config_.maxSlidePerRow)) {
                 dst[x] = kInvalid;
-                ++counts_.rejected;
+                ++(groundExplains ? counts_.rejected : counts_.undecided);
             }
         }
     }

@@ -101,6 +101,9 @@ TEST(ObstacleVerifier, CreateRejectsInvalidConfig)
     window.windowHalfWidth = 8;
     ObstacleVerifierConfig ratio = config();
     ratio.acceptRatio = 1.5F;
+    ObstacleVerifierConfig slide = config();
+    slide.maxSlidePerRow = -1.0F;
+    EXPECT_FALSE(ObstacleVerifier::create(slide).has_value());
 
     EXPECT_FALSE(ObstacleVerifier::create(empty).has_value());
     EXPECT_FALSE(ObstacleVerifier::create(window).has_value());
@@ -266,6 +269,97 @@ TEST(ObstacleVerifier, TheContrastAWindowNeedsFollowsTheCamerasNoise)
         for (int x = kBoxX0 + 3; x < kBoxX1 - 3; ++x) {
             ASSERT_EQ(sut.disparity().row(y)[x], kInvalid) << x << "," << y;
         }
+    }
+}
+
+/// Left image `grey(x, y)`; the right image shows it shifted by `shift` px (right x = left x - shift); the disparity
+/// claims `shift` everywhere.
+template <class Grey>
+Pair makeShifted(Grey grey, int shift)
+{
+    Pair p;
+    for (int y = 0; y < kVerifierHeight; ++y) {
+        for (int x = 0; x < kVerifierWidth; ++x) {
+            p.left.view().row(y)[x] = static_cast<std::uint8_t>(grey(x, y));
+            p.right.view().row(y)[x] = static_cast<std::uint8_t>(grey(x + shift, y));
+            p.disparity.view().row(y)[x] = static_cast<std::int16_t>(16 * shift);
+        }
+    }
+    return p;
+}
+
+/// Pixels whose disparity the verifier kept (not invalidated) among those `counted(x, y)`, where its windows fit in
+/// the images at the ground's and a 14 px disparity (elsewhere it keeps the matcher's disparity untested).
+template <class Counted>
+int countKept(ImageView<const std::int16_t> d, Counted counted)
+{
+    int n = 0;
+    for (int y = 3; y < kVerifierHeight - 3; ++y) {
+        for (int x = 24; x < kVerifierWidth - 8; ++x) {
+            n += d.row(y)[x] >= 0 && counted(x, y) ? 1 : 0;
+        }
+    }
+    return n;
+}
+
+int countKept(ImageView<const std::int16_t> d)
+{
+    return countKept(d, [](int, int) { return true; });
+}
+
+/// A blurred step from 60 to 200 grey over about three rows (or columns), centred where `at` is 0.
+int step(double at)
+{
+    return static_cast<int>(std::lround(130.0 + 70.0 * std::tanh(at / 1.5)));
+}
+
+TEST(ObstacleVerifier, AnEdgeNearlyAlongTheRowsCannotPlaceAMatchAlongX)
+{
+    // A road marking's edge of slope 1/8 (rows per column). The right image shows it 4 px further than the ground's
+    // 10 px: what half a row of contour shift between the cameras (their different gain on a blurred or clipped
+    // edge) does to such an edge. The window at 14 px matches exactly, but an edge this flat cannot tell 14 px from
+    // 10 px plus half a row, so the verifier must not keep an obstacle there (KITTI 000013_10 at half resolution).
+    const auto edgeAt = [](double x) { return 12.0 + x / 8.0; };
+    const Pair marking = makeShifted([&](int x, int y) { return step(y - edgeAt(x)); }, kGroundD + 4);
+    const auto onTheEdge = [&](int x, int y) { return std::abs(y - edgeAt(x)) <= 2.0; }; // windows the edge fills
+    ObstacleVerifierConfig without = config();
+    without.maxSlidePerRow = 0.0F;
+    auto blind = ObstacleVerifier::create(without).value();
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    ASSERT_EQ(blind.run(marking.left.view(), marking.right.view(), marking.disparity.view(), kGroundDisparity, kY0),
+              VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(marking.left.view(), marking.right.view(), marking.disparity.view(), kGroundDisparity, kY0),
+              VerifyStatus::Ok);
+
+    EXPECT_GT(countKept(blind.disparity(), onTheEdge), 300); // what the ratio test alone keeps
+    EXPECT_EQ(countKept(sut.disparity(), onTheEdge), 0);
+}
+
+TEST(ObstacleVerifier, AnEdgeAcrossTheRowsOrExactlyAlongThemWithTextureAcrossKeepsItsMatch)
+{
+    // A post's edge (across the rows) and a kerb's top seen square on (exactly along the rows, with the face's own
+    // texture across them) at 14 px over a 10 px ground: both place the match along x, and the aperture leaves them
+    // to the ratio test, which keeps them.
+    const Pair post = makeShifted([](int x, int) { return step(x - 80.0); }, kGroundD + 4);
+    const Pair kerb = makeShifted(
+        [](int x, int y) {
+            const int texture = ((x * 37) % 11) * 6 - 30; // a fixed pattern across the columns, +-30 grey
+            return std::clamp(step(20.0 - y) + texture, 0, 255);
+        },
+        kGroundD + 4);
+    ObstacleVerifierConfig without = config();
+    without.maxSlidePerRow = 0.0F;
+    auto blind = ObstacleVerifier::create(without).value();
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    for (const Pair* p : {&post, &kerb}) {
+        ASSERT_EQ(blind.run(p->left.view(), p->right.view(), p->disparity.view(), kGroundDisparity, kY0),
+                  VerifyStatus::Ok);
+        ASSERT_EQ(sut.run(p->left.view(), p->right.view(), p->disparity.view(), kGroundDisparity, kY0),
+                  VerifyStatus::Ok);
+        EXPECT_GT(countKept(sut.disparity()), 100);
+        EXPECT_EQ(countKept(sut.disparity()), countKept(blind.disparity()));
     }
 }
 

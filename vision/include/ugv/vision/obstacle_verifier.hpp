@@ -15,8 +15,9 @@
 /// left image's noise (ImageNoise, learnt per frame), between minContrastBelow and minContrast (minContrastBelow
 /// where the disparity is below the ground's); its disparity is the
 /// matcher's guess (a textureless obstacle is then seen through its textured edges, and its sectors cannot turn
-/// Clear because the ground behind it is not seen; see SectorBuilderConfig::clearRangeM). Windows that leave the
-/// image keep the matcher's disparity.
+/// Clear because the ground behind it is not seen; see SectorBuilderConfig::clearRangeM). So is a window the obstacle
+/// wins whose texture runs nearly along the rows (maxSlidePerRow: such a texture cannot place a match along x).
+/// Windows that leave the image keep the matcher's disparity.
 ///
 /// Input and output disparity: CV_16S fixed point as cv::StereoSGBM (value / 16 = disparity [px]), invalid < 0.
 /// ROI convention: the images hold full-frame rows [y0, y0 + height) and the ground plane is in full-frame
@@ -51,6 +52,16 @@ struct ObstacleVerifierConfig {
     /// textured, but the ratio test still decides there (the fill-in this guards against is a strong
     /// surface's larger disparity spreading over the ground: above it) [grey]
     float minContrastBelow = 1.0F; ///< ... and at least this, above the ground too
+    /// The aperture: a window whose match moves along x by more than this many columns per row that its texture's
+    /// contour moves between the two images is invalidated off the ground (undecided, like one without contrast).
+    /// That slide is |sum Ix Iy| / sum Ix^2 over the window (Ix, Iy: the left image's differences along x and y):
+    /// an edge of slope s (rows per column) slides 1 / s columns per row; texture that runs across the rows (a
+    /// post's edges, a face's own texture) and an edge exactly along the rows (a kerb's top seen square on) slide
+    /// none. Contours do move between the images, by a fraction of a row: the cameras' different gain on a blurred or
+    /// clipped edge, a rectification off by a fraction of a row. With 1/4 row and the 1 px residual tested
+    /// (minResidualPx), edges flatter than slope 1/4 can fake an obstacle: on KITTI 000013_10 at half resolution a
+    /// clipped stop line of slope about 1/8 matched 3-6 px above the road across 27 sectors. 0 disables.
+    float maxSlidePerRow = 4.0F;
     /// Below the ground the matcher's disparity is re-estimated, not only tested. The visible part of a drop at
     /// range is a strip a few rows high (a 1 m trench at 9 m: 4 rows, 0.2..1.3 px below d_g), which a 5-row
     /// window straddles: the matcher returns no or a wrong disparity there (2 px low), and the ground wins the
@@ -83,7 +94,8 @@ struct VerifyCounts {
     int tested = 0;    ///< off-ground pixels re-matched
     int rejected = 0;  ///< the ground explained them at least as well: invalidated
     int refined = 0;   ///< below the ground, re-estimated and kept
-    int undecided = 0; ///< too little contrast (invalidated) or the window leaves the image (kept)
+    int undecided = 0; ///< too little contrast or a texture along the rows (invalidated), or the window leaves the
+                       ///< image (kept)
 };
 
 /// Thread-safety: thread-bound (run() writes the internal buffer). RT-safe: run() yes (no allocation, no
