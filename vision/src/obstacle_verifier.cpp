@@ -315,6 +315,10 @@ std::int16_t ObstacleVerifier::refineBelow(ConstImageViewU8 left, ConstImageView
         ++counts_.rejected;
         return kInvalid;
     }
+    if (window.slides(left, config_.maxSlidePerRow)) {
+        ++counts_.undecided;
+        return kInvalid;
+    }
     ++counts_.refined;
     return static_cast<std::int16_t>(best);
 }

@@ -336,6 +336,32 @@ TEST(ObstacleVerifier, AnEdgeNearlyAlongTheRowsCannotPlaceAMatchAlongX)
     EXPECT_EQ(countKept(sut.disparity(), onTheEdge), 0);
 }
 
+TEST(ObstacleVerifier, BelowTheGroundAnEdgeNearlyAlongTheRowsIsNotReestimatedIntoADrop)
+{
+    // The same marking's edge over a far ground (30 px: re-matched below it), shown 4 px nearer the horizon's side
+    // of the ground's disparity: the re-match finds 26 px exactly, but the edge cannot tell 26 px from 30 px plus
+    // a fraction of a row, so no drop is kept on it (KITTI at JPEG quality 50: 2 false drop sectors -> 0).
+    constexpr DisparityPlane farGround{0.0, 0.0, 30.0};
+    const auto edgeAt = [](double x) { return 12.0 + x / 8.0; };
+    const Pair marking = makeShifted([&](int x, int y) { return step(y - edgeAt(x)); }, 26);
+    // The 15 x 3 re-match window fits in the right image at the ground's 30.5 px from column 38 on (nearer the
+    // border it keeps the matcher's disparity untested); its 3 rows are filled by the edge within a row of it.
+    const auto onTheEdge = [&](int x, int y) { return x >= 38 && std::abs(y - edgeAt(x)) <= 1.0; };
+    ObstacleVerifierConfig without = config();
+    without.maxSlidePerRow = 0.0F;
+    auto blind = ObstacleVerifier::create(without).value();
+    auto sut = ObstacleVerifier::create(config()).value();
+
+    ASSERT_EQ(blind.run(marking.left.view(), marking.right.view(), marking.disparity.view(), farGround, kY0),
+              VerifyStatus::Ok);
+    ASSERT_EQ(sut.run(marking.left.view(), marking.right.view(), marking.disparity.view(), farGround, kY0),
+              VerifyStatus::Ok);
+
+    EXPECT_GT(blind.counts().refined, 100);
+    EXPECT_GT(countKept(blind.disparity(), onTheEdge), 150);
+    EXPECT_EQ(countKept(sut.disparity(), onTheEdge), 0);
+}
+
 TEST(ObstacleVerifier, AnEdgeAcrossTheRowsOrExactlyAlongThemWithTextureAcrossKeepsItsMatch)
 {
     // A post's edge (across the rows) and a kerb's top seen square on (exactly along the rows, with the face's own

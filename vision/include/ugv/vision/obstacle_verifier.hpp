@@ -16,7 +16,8 @@
 /// where the disparity is below the ground's); its disparity is the
 /// matcher's guess (a textureless obstacle is then seen through its textured edges, and its sectors cannot turn
 /// Clear because the ground behind it is not seen; see SectorBuilderConfig::clearRangeM). So is a window the obstacle
-/// wins whose texture runs nearly along the rows (maxSlidePerRow: such a texture cannot place a match along x).
+/// wins, or a drop the re-match below finds, whose texture runs nearly along the rows (maxSlidePerRow: such a texture
+/// cannot place a match along x).
 /// Windows that leave the image keep the matcher's disparity.
 ///
 /// Input and output disparity: CV_16S fixed point as cv::StereoSGBM (value / 16 = disparity [px]), invalid < 0.
@@ -60,7 +61,9 @@ struct ObstacleVerifierConfig {
     /// none. Contours do move between the images, by a fraction of a row: the cameras' different gain on a blurred or
     /// clipped edge, a rectification off by a fraction of a row. With 1/4 row and the 1 px residual tested
     /// (minResidualPx), edges flatter than slope 1/4 can fake an obstacle: on KITTI 000013_10 at half resolution a
-    /// clipped stop line of slope about 1/8 matched 3-6 px above the road across 27 sectors. 0 disables.
+    /// clipped stop line of slope about 1/8 matched 3-6 px above the road across 27 sectors. The below-ground
+    /// re-match (belowHalfWidth) applies it too: a drop it finds on such a texture is invalid (KITTI at JPEG quality
+    /// 50: 2 false drop sectors). 0 disables.
     float maxSlidePerRow = 4.0F;
     /// Below the ground the matcher's disparity is re-estimated, not only tested. The visible part of a drop at
     /// range is a strip a few rows high (a 1 m trench at 9 m: 4 rows, 0.2..1.3 px below d_g), which a 5-row
