@@ -313,6 +313,22 @@ int step(double at)
     return static_cast<int>(std::lround(130.0 + 70.0 * std::tanh(at / 1.5)));
 }
 
+/// The verifier without its aperture test (maxSlidePerRow 0) and with it (the default), each run once on one pair.
+struct ApertureRuns {
+    ObstacleVerifier without;
+    ObstacleVerifier with;
+};
+
+ApertureRuns runWithAndWithoutAperture(const Pair& p, const DisparityPlane& ground)
+{
+    ObstacleVerifierConfig off = config();
+    off.maxSlidePerRow = 0.0F;
+    ApertureRuns runs{ObstacleVerifier::create(off).value(), ObstacleVerifier::create(config()).value()};
+    EXPECT_EQ(runs.without.run(p.left.view(), p.right.view(), p.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    EXPECT_EQ(runs.with.run(p.left.view(), p.right.view(), p.disparity.view(), ground, kY0), VerifyStatus::Ok);
+    return runs;
+}
+
 TEST(ObstacleVerifier, AnEdgeNearlyAlongTheRowsCannotPlaceAMatchAlongX)
 {
     // A road marking's edge of slope 1/8 (rows per column). The right image shows it 4 px further than the ground's
@@ -322,18 +338,10 @@ TEST(ObstacleVerifier, AnEdgeNearlyAlongTheRowsCannotPlaceAMatchAlongX)
     const auto edgeAt = [](double x) { return 12.0 + x / 8.0; };
     const Pair marking = makeShifted([&](int x, int y) { return step(y - edgeAt(x)); }, kGroundD + 4);
     const auto onTheEdge = [&](int x, int y) { return std::abs(y - edgeAt(x)) <= 2.0; }; // windows the edge fills
-    ObstacleVerifierConfig without = config();
-    without.maxSlidePerRow = 0.0F;
-    auto blind = ObstacleVerifier::create(without).value();
-    auto sut = ObstacleVerifier::create(config()).value();
+    const ApertureRuns runs = runWithAndWithoutAperture(marking, kGroundDisparity);
 
-    ASSERT_EQ(blind.run(marking.left.view(), marking.right.view(), marking.disparity.view(), kGroundDisparity, kY0),
-              VerifyStatus::Ok);
-    ASSERT_EQ(sut.run(marking.left.view(), marking.right.view(), marking.disparity.view(), kGroundDisparity, kY0),
-              VerifyStatus::Ok);
-
-    EXPECT_GT(countKept(blind.disparity(), onTheEdge), 300); // what the ratio test alone keeps
-    EXPECT_EQ(countKept(sut.disparity(), onTheEdge), 0);
+    EXPECT_GT(countKept(runs.without.disparity(), onTheEdge), 300); // what the ratio test alone keeps
+    EXPECT_EQ(countKept(runs.with.disparity(), onTheEdge), 0);
 }
 
 TEST(ObstacleVerifier, BelowTheGroundAnEdgeNearlyAlongTheRowsIsNotReestimatedIntoADrop)
@@ -347,19 +355,11 @@ TEST(ObstacleVerifier, BelowTheGroundAnEdgeNearlyAlongTheRowsIsNotReestimatedInt
     // The 15 x 3 re-match window fits in the right image at the ground's 30.5 px from column 38 on (nearer the
     // border it keeps the matcher's disparity untested); its 3 rows are filled by the edge within a row of it.
     const auto onTheEdge = [&](int x, int y) { return x >= 38 && std::abs(y - edgeAt(x)) <= 1.0; };
-    ObstacleVerifierConfig without = config();
-    without.maxSlidePerRow = 0.0F;
-    auto blind = ObstacleVerifier::create(without).value();
-    auto sut = ObstacleVerifier::create(config()).value();
+    const ApertureRuns runs = runWithAndWithoutAperture(marking, farGround);
 
-    ASSERT_EQ(blind.run(marking.left.view(), marking.right.view(), marking.disparity.view(), farGround, kY0),
-              VerifyStatus::Ok);
-    ASSERT_EQ(sut.run(marking.left.view(), marking.right.view(), marking.disparity.view(), farGround, kY0),
-              VerifyStatus::Ok);
-
-    EXPECT_GT(blind.counts().refined, 100);
-    EXPECT_GT(countKept(blind.disparity(), onTheEdge), 150);
-    EXPECT_EQ(countKept(sut.disparity(), onTheEdge), 0);
+    EXPECT_GT(runs.without.counts().refined, 100);
+    EXPECT_GT(countKept(runs.without.disparity(), onTheEdge), 150);
+    EXPECT_EQ(countKept(runs.with.disparity(), onTheEdge), 0);
 }
 
 TEST(ObstacleVerifier, AnEdgeAcrossTheRowsOrExactlyAlongThemWithTextureAcrossKeepsItsMatch)
@@ -374,18 +374,10 @@ TEST(ObstacleVerifier, AnEdgeAcrossTheRowsOrExactlyAlongThemWithTextureAcrossKee
             return std::clamp(step(20.0 - y) + texture, 0, 255);
         },
         kGroundD + 4);
-    ObstacleVerifierConfig without = config();
-    without.maxSlidePerRow = 0.0F;
-    auto blind = ObstacleVerifier::create(without).value();
-    auto sut = ObstacleVerifier::create(config()).value();
-
     for (const Pair* p : {&post, &kerb}) {
-        ASSERT_EQ(blind.run(p->left.view(), p->right.view(), p->disparity.view(), kGroundDisparity, kY0),
-                  VerifyStatus::Ok);
-        ASSERT_EQ(sut.run(p->left.view(), p->right.view(), p->disparity.view(), kGroundDisparity, kY0),
-                  VerifyStatus::Ok);
-        EXPECT_GT(countKept(sut.disparity()), 100);
-        EXPECT_EQ(countKept(sut.disparity()), countKept(blind.disparity()));
+        const ApertureRuns runs = runWithAndWithoutAperture(*p, kGroundDisparity);
+        EXPECT_GT(countKept(runs.with.disparity()), 100);
+        EXPECT_EQ(countKept(runs.with.disparity()), countKept(runs.without.disparity()));
     }
 }
 
