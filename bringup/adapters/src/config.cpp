@@ -464,7 +464,8 @@ public:
                   "value " + formatNumber(config_.obstacles.maxRangeDisparityPx) +
                       " is not below stereo.num_disparities (" + std::to_string(config_.stereo.numDisparities) +
                       "): the detector would look nowhere the matcher searches",
-                  "lower max_range_disparity_px (default 13.65) or raise num_disparities");
+                  "lower max_range_disparity_px (default " + formatNumber(ObstacleConfig{}.maxRangeDisparityPx) +
+                      ") or raise num_disparities");
         }
         if (config_.stereo.numDisparities >= config_.camera.width) {
             error(at("stereo"), "stereo.num_disparities",
