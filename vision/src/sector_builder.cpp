@@ -232,10 +232,15 @@ bool SectorBuilder::wallLike(int s, int firstBin, int endBin) const noexcept
     const double margin = config_.wallSlopeSigmas * std::sqrt(std::max(0.0, varO - slope * cov) / (w.n * varG));
     // A wall: o stays put while g changes.
     const bool wall = std::abs(slope) + margin < config_.maxWallSlope;
-    // A floor: o = g h / (h + D), a line through the origin whose slope gives a depth D of at least minDepthM.
+    // A floor: o = g h / (h + D), a line through the origin whose slope gives a depth D of at least minDepthM. The
+    // line's own ratio, mean o / mean g, must give that depth too: it is the floor's depth measured over every vote,
+    // while the free slope is uncertain by its margin (a patch whose line through the origin is 7 cm deep must not
+    // pass as deeper on the slope's uncertainty).
     const double h = groundHeight_;
-    const bool floor = std::abs(slope - w.o / w.g) <= margin + config_.floorLineTolerance &&
-                       slope + margin <= h / (h + static_cast<double>(config_.minDepthM));
+    const double shallowestRatio = h / (h + static_cast<double>(config_.minDepthM));
+    const double ratio = w.o / w.g;
+    const bool floor = std::abs(slope - ratio) <= margin + config_.floorLineTolerance &&
+                       slope + margin <= shallowestRatio && ratio <= shallowestRatio;
     return wall || floor;
 }
 
