@@ -172,15 +172,12 @@ bool GroundEstimator::refine(int count, DisparityPlane& plane, int& inliers) con
     double sx = 0.0;
     double sy = 0.0;
     double sd = 0.0;
-    for (int i = 0; i < count; ++i) {
-        const Candidate& c = candidates_[static_cast<std::size_t>(i)];
-        if (std::abs(plane.at(c.x, c.y) - c.d) < config_.inlierTolerancePx) {
-            n += 1.0;
-            sx += c.x;
-            sy += c.y;
-            sd += c.d;
-        }
-    }
+    forEachInlier(count, plane, [&](const Candidate& c) {
+        n += 1.0;
+        sx += c.x;
+        sy += c.y;
+        sd += c.d;
+    });
     if (n < 3.0) {
         return false;
     }
@@ -192,19 +189,16 @@ bool GroundEstimator::refine(int count, DisparityPlane& plane, int& inliers) con
     double syy = 0.0;
     double sxd = 0.0;
     double syd = 0.0;
-    for (int i = 0; i < count; ++i) {
-        const Candidate& c = candidates_[static_cast<std::size_t>(i)];
-        if (std::abs(plane.at(c.x, c.y) - c.d) < config_.inlierTolerancePx) {
-            const double x = c.x - mx;
-            const double y = c.y - my;
-            const double d = c.d - md;
-            sxx += x * x;
-            sxy += x * y;
-            syy += y * y;
-            sxd += x * d;
-            syd += y * d;
-        }
-    }
+    forEachInlier(count, plane, [&](const Candidate& c) {
+        const double x = c.x - mx;
+        const double y = c.y - my;
+        const double d = c.d - md;
+        sxx += x * x;
+        sxy += x * y;
+        syy += y * y;
+        sxd += x * d;
+        syd += y * d;
+    });
     const double det = sxx * syy - sxy * sxy;
     if (!(det > kMinDeterminant * sxx * syy) || !(sxx > 0.0)) {
         return false;

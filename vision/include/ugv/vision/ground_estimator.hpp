@@ -21,6 +21,8 @@
 ///
 /// Disparity input: CV_16S fixed point as cv::StereoSGBM outputs (value / 16 = disparity [px]), invalid < 0.
 
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -102,6 +104,17 @@ private:
     [[nodiscard]] bool inBand(const DisparityPlane& plane) const noexcept;
     [[nodiscard]] int countInliers(int count, const DisparityPlane& plane) const noexcept;
     bool refine(int count, DisparityPlane& plane, int& inliers) const noexcept;
+    /// Calls f(candidate) for each of the first `count` candidates within inlierTolerancePx of `plane`, in order.
+    template <typename F>
+    void forEachInlier(int count, const DisparityPlane& plane, F&& f) const noexcept
+    {
+        for (int i = 0; i < count; ++i) {
+            const Candidate& c = candidates_[static_cast<std::size_t>(i)];
+            if (std::abs(plane.at(c.x, c.y) - c.d) < config_.inlierTolerancePx) {
+                f(c);
+            }
+        }
+    }
 
     GroundEstimatorConfig config_;
     GroundPlane configured_;
