@@ -97,17 +97,25 @@ ReadStatus ReplayCamera::peekNext() noexcept
     return ReadStatus::End;
 }
 
+std::optional<GrabStatus> ReplayCamera::failedRead(ReadStatus read) noexcept
+{
+    if (read == ReadStatus::IoError) {
+        ++stats_.disconnects;
+        return GrabStatus::Disconnected;
+    }
+    if (read != ReadStatus::Frame) {
+        return GrabStatus::End;
+    }
+    return std::nullopt;
+}
+
 GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout) noexcept
 {
     std::int64_t now = clock_.now(clock_.context);
     if (!pending_) {
-        const ReadStatus read = peekNext(); // the header only: the payload is read once the frame is due
-        if (read == ReadStatus::IoError) {
-            ++stats_.disconnects;
-            return GrabStatus::Disconnected;
-        }
-        if (read != ReadStatus::Frame) {
-            return GrabStatus::End;
+        // The header only: the payload is read once the frame is due.
+        if (const auto failed = failedRead(peekNext())) {
+            return *failed;
         }
         const FrameHeader& h = reader_.peekedHeader();
         if (loopStarted_) {
@@ -143,13 +151,8 @@ GrabStatus ReplayCamera::grab(CameraFrame& out, std::chrono::nanoseconds timeout
     // The frame is due: read it (as a camera's readout follows its exposure). A corrupt record is skipped by the
     // reader, which then returns the next complete one.
     pending_ = false;
-    const ReadStatus read = reader_.next();
-    if (read == ReadStatus::IoError) {
-        ++stats_.disconnects;
-        return GrabStatus::Disconnected;
-    }
-    if (read != ReadStatus::Frame) {
-        return GrabStatus::End;
+    if (const auto failed = failedRead(reader_.next())) {
+        return *failed;
     }
     const FrameHeader& h = reader_.header();
     out.sequence = h.sequence + sequenceOffset_;

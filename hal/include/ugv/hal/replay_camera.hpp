@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ugv/hal/recording.hpp"
@@ -80,6 +81,9 @@ private:
                  std::chrono::nanoseconds period, std::uint64_t frames, bool truncated, std::string description);
     /// Peeks at the next frame's header (rewinding when looping): Frame, End (or Truncated) or IoError.
     ReadStatus peekNext() noexcept;
+    /// What grab() returns when a read gave no frame: Disconnected on an I/O error (counted), End otherwise; nothing
+    /// for a frame.
+    std::optional<GrabStatus> failedRead(ReadStatus read) noexcept;
 
     RecordingReader reader_;
     ReplayOptions options_;
