@@ -189,6 +189,7 @@ const ObstacleSectors& ObstacleDetector::process(ConstImageViewU8 rectLeftRoi, C
         disparity = verifier_.disparity();
     }
     lap.to(VisionStage::Verify);
+    builder_.setBlockGrid(measureBlockGrid(rectLeftRoi), measureBlockGrid(rectRightRoi));
     const BuildStatus built = builder_.build(disparity, labels, ground_, sequence, stampNs);
     lap.to(VisionStage::Sectors);
     status_ = built == BuildStatus::Ok ? DetectorStatus::Ok : DetectorStatus::BuildFailed;

@@ -16,6 +16,15 @@ constexpr int kKinds = 2; // 0 positive, 1 negative
 constexpr float kDisparityScale = 16.0F;
 constexpr int kMaxProfileRows = 2048; ///< analysed rows the row profile's noise estimate looks at
 constexpr float kWallBinM = 0.10F;    ///< [m] range resolution of the wall test's sums
+constexpr int kSubpixels = 16;        ///< disparity units per pixel (kDisparityScale)
+
+/// d16 (> 0) within half a pixel of offsetPx plus a multiple of the block size.
+bool onBlockGrid(int d16, int offsetPx) noexcept
+{
+    constexpr int kPeriod = BlockGrid::kBlockPx * kSubpixels;
+    const int phase = ((d16 - offsetPx * kSubpixels) % kPeriod + kPeriod) % kPeriod;
+    return phase < kSubpixels / 2 || phase >= kPeriod - kSubpixels / 2;
+}
 
 /// Vehicle axes in camera coordinates, exactly as GroundPlane::toVehicle builds them: forward f and left l
 /// (both of norm 1 / invNorm) and up u (unit).
@@ -76,7 +85,8 @@ Result<void, Error> checkConfig(const SectorBuilderConfig& config)
         config.minRimVotes < 0 || !(config.rimWindowFraction >= 0.0F) || !(config.explainWindowM >= 0.0F) ||
         !(config.heightNoiseFactor >= 0.0F) || !(config.dropNoiseFactor >= 0.0F) ||
         !(config.dropProfileNoiseFactor >= 0.0F) || config.dropProfileMinLabels < 0 || !(config.maxWallSlope > 0.0F) ||
-        !(config.wallSlopeSigmas >= 0.0F) || !(config.floorLineTolerance >= 0.0F)) {
+        !(config.wallSlopeSigmas >= 0.0F) || !(config.floorLineTolerance >= 0.0F) ||
+        !(config.blockGridContrast >= 0.0F)) {
         return Unexpected(sectorConfigError("a local-ground or drop-evidence setting is out of range (band, bin > 0, "
                                             "minPoints >= 1, share in [0, 1], maxWallSlope > 0, the others >= 0)"));
     }
@@ -202,6 +212,16 @@ void SectorBuilder::setAllUnknown(std::uint64_t sequence, std::int64_t stampNs) 
     sectors_.sequence = sequence;
     sectors_.captureStampNs = stampNs;
     sectors_.degraded = true;
+}
+
+void SectorBuilder::setBlockGrid(const BlockGrid& left, const BlockGrid& right) noexcept
+{
+    const float threshold = config_.blockGridContrast;
+    const bool coded = threshold > 0.0F && left.contrast >= threshold && right.contrast >= threshold;
+    // A left column x on its grid's edge (x % 8 == left.offset) matches the right column x - d on the right grid's
+    // edge: d % 8 == left.offset - right.offset.
+    constexpr int kBlock = BlockGrid::kBlockPx;
+    gridOffsetPx_ = coded ? ((left.offset - right.offset) % kBlock + kBlock) % kBlock : -1;
 }
 
 bool SectorBuilder::wallLike(int s, int firstBin, int endBin) const noexcept
@@ -681,7 +701,9 @@ void SectorBuilder::vote(const PixelPoint& p, const VoteLimits& limits) noexcept
     const std::size_t slot = static_cast<std::size_t>(s) * kKinds + static_cast<std::size_t>(kind);
     // Face votes (below minHeightM) support a cluster but do not forbid Clear by themselves.
     const bool tall = kind == 1 || z > std::max(config_.minHeightM, noiseHeight);
-    if (!labelled && !config_.useDenseCue) {
+    // A drop vote where the two images' block grids meet: the matcher's lock onto the blocks' edges, no evidence.
+    const bool gridLock = kind == 1 && gridOffsetPx_ >= 0 && onBlockGrid(d16, gridOffsetPx_);
+    if ((!labelled && !config_.useDenseCue) || gridLock) {
         kindVotes_[slot] += tall ? 1U : 0U; // unconfirmed: not an obstacle, but it forbids Clear
         return;
     }

@@ -462,6 +462,35 @@ TEST(SectorBuilder, FarWallOfADropSeenOverAGapIsNegativeAtTheRim)
     EXPECT_NEAR(ahead.rangeM, 7.0, 0.03 * 7.0);
 }
 
+TEST(SectorBuilder, DropVotesWhereTheTwoImagesBlockGridsMeetAreNoEvidence)
+{
+    // A far wall at a disparity of 24 px behind a rim 1 m before it: a trench as the matcher shows it, and as it
+    // shows the edges of JPEG blocks matched to each other (at multiples of 8 px when the two images' grids line up:
+    // KITTI at JPEG quality 20 and 70). With both images showing the grid, at offsets that meet at 0 px, its votes
+    // are no evidence: no drop, never Clear. Grids that meet at 4 px, a grid in one image only, or none: a drop.
+    constexpr double kWallPx = 24.0;
+    cv::Mat d16 = groundDisparity();
+    paintFarWall(d16, kFb / kWallPx - 1.0, kFb / kWallPx);
+    const auto ahead = [&d16](BlockGrid left, BlockGrid right) {
+        auto sut = makeBuilder();
+        sut.setBlockGrid(left, right);
+        EXPECT_EQ(sut.build(view16(d16), {}, kGround, 1U, 0), BuildStatus::Ok);
+        return sut.sectors().sectors[static_cast<std::size_t>(sectorOf(sut.sectors(), 0.0))];
+    };
+    const BlockGrid coded{1.6F, 7};
+
+    const Sector locked = ahead(coded, coded);
+    EXPECT_NE(locked.state, SectorState::Obstacle);
+    EXPECT_NE(locked.state, SectorState::Clear);
+
+    for (const auto& [left, right] : {std::pair{coded, BlockGrid{1.6F, 3}}, std::pair{coded, BlockGrid{1.05F, 7}},
+                                      std::pair{BlockGrid{}, BlockGrid{}}}) {
+        const Sector drop = ahead(left, right);
+        EXPECT_EQ(drop.state, SectorState::Obstacle) << right.contrast << " " << right.offset;
+        EXPECT_EQ(drop.kind, ObstacleKind::Negative) << right.contrast << " " << right.offset;
+    }
+}
+
 /// The default config with the per-pixel drop votes switched off (depth thresholds of 1 m): only the row profile
 /// can report a drop.
 SectorBuilderConfig profileOnly()
