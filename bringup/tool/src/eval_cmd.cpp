@@ -1101,7 +1101,7 @@ Args evalArgs()
           "real: run the pairs under these conditions, comma-separated, each scored in full beside the OpenCV "
           "pipeline on the same changed images: none, or parts joined by '+': noise:S (grey levels), gain:G (right "
           "camera), blur:S (px), exposure:F, jpeg:Q, half (another rig: half the resolution); sweep: a set of "
-          "each at two strengths",
+          "each at two strengths (JPEG at three)",
           false},
          {"quick", "",
           "simulator: a smoke version (1 texture, 1 range per band, bearing 0; new grounds: 2 seeds, obstacles at 4.5 "

@@ -206,8 +206,9 @@ bool isJpeg(const std::filesystem::path& path)
 
 const char* const kJpegPairsWarning =
     "the pairs are JPEG: both images' 8x8 compression blocks sit at the same columns and match at disparities that "
-    "are multiples of 8, which made false drops on real streets at quality 50 and below (vision/README.md, "
-    "\"Under conditions the world can bring\"); use lossless images (PNG) where you have them";
+    "are multiples of 8; where both images show the blocks such a match is no evidence of a drop, so a real drop "
+    "seen at such a disparity is Unknown (vision/README.md, \"A drop is not the blocks' edges\"); use lossless "
+    "images (PNG) where you have them";
 
 cv::Mat readGrey(const std::filesystem::path& path, std::string* why)
 {

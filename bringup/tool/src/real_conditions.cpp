@@ -118,8 +118,8 @@ const std::vector<std::string>& sweepConditions()
     static const std::vector<std::string> kSweep = {"none",         "noise:3",      "noise:6",
                                                     "gain:0.8",     "gain:1.25",    "blur:1",
                                                     "blur:2",       "exposure:0.5", "exposure:0.25+noise:2",
-                                                    "exposure:1.6", "jpeg:50",      "jpeg:20",
-                                                    "half"};
+                                                    "exposure:1.6", "jpeg:70",      "jpeg:50",
+                                                    "jpeg:20",      "half"};
     return kSweep;
 }
 

@@ -157,8 +157,8 @@ TEST_F(ToolDetect, GroundEstimateFailsCleanlyOnAFeaturelessPair)
     EXPECT_TRUE(contains(sut.output, "give the mount in the calibration file")) << sut.output;
 }
 
-// JPEG pairs: both images' 8x8 blocks sit at the same columns and match at multiples of 8 px (false drops on real
-// streets, vision/README.md): detect and recording import say so once, and go on.
+// JPEG pairs: both images' 8x8 blocks sit at the same columns and match at multiples of 8 px (no evidence of a drop,
+// so a real drop there is Unknown: vision/README.md): detect and recording import say so once, and go on.
 TEST_F(ToolDetect, JpegPairsAreWarnedAboutByDetectAndByRecordingImport)
 {
     const auto jpegs = dir_ / "jpeg";

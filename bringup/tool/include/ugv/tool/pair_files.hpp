@@ -44,8 +44,9 @@ cv::Mat readImage(const std::filesystem::path& path, int flags, std::string* why
 bool isJpeg(const std::filesystem::path& path);
 
 /// What `detect` and `recording import` say once when the pairs are JPEG: both images' 8 x 8 compression blocks sit at
-/// the same columns, a pattern that matches at disparities that are multiples of 8 and makes false drops on real
-/// streets (vision/README.md, "Under conditions the world can bring").
+/// the same columns, a pattern that matches at disparities that are multiples of 8; the detector takes no drop from
+/// such matches where both images show the blocks, so a real drop at such a disparity is Unknown (vision/README.md,
+/// "A drop is not the blocks' edges").
 extern const char* const kJpegPairsWarning;
 
 /// readImage() as 8-bit grey.

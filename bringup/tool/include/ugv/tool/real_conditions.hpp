@@ -34,8 +34,8 @@ Result<Perturbation, Error> parsePerturbation(const std::string& text);
 /// A comma-separated list of conditions; "sweep" stands for sweepConditions().
 Result<std::vector<Perturbation>, Error> parsePerturbations(const std::string& list);
 
-/// The conditions `--perturb sweep` runs: none, each kind alone at a moderate and a strong setting, and
-/// underexposure with the noise that comes with it.
+/// The conditions `--perturb sweep` runs: none, each kind alone at a moderate and a strong setting (JPEG at three:
+/// 70, a common MJPEG setting, 50 and 20), and underexposure with the noise that comes with it.
 const std::vector<std::string>& sweepConditions();
 
 /// Applies `p` to a pair's grey images (8-bit), in the order a camera would: resolution, exposure and gain, blur,
