@@ -7,8 +7,8 @@
 /// at one offset within 8 carry more horizontal gradient than the seven others. On a camera's raw frame no offset
 /// stands out. `contrast` is the mean |I(x + 1) - I(x)| at the strongest offset over the median of the other seven:
 /// KITTI's 17 left images 1.02-1.07 as they are and 1.08 at half resolution, the simulator's 1.00-1.02; 1.09-1.27
-/// at JPEG quality 90, 1.29-1.64 at 70, 1.44-1.93 at 50, 1.85-2.85 at 20 (`ugvsense eval --real`'s `jpeg:Q`
-/// on the bottom halves).
+/// at JPEG quality 90, 1.29-1.64 at 70, 1.44-1.93 at 50, 1.85-2.85 at 20 (the images' bottom halves, coded by
+/// OpenCV's JPEG at quality Q as `ugvsense eval --perturb jpeg:Q` codes them).
 ///
 /// Why it matters: the two images of a pair are coded on their own grids, and their blocks' edges match each other
 /// at the disparities that bring the grids together (multiples of 8 px plus the grids' offset), constant down the
