@@ -16,7 +16,7 @@ constexpr int kKinds = 2; // 0 positive, 1 negative
 constexpr float kDisparityScale = 16.0F;
 constexpr int kMaxProfileRows = 2048; ///< analysed rows the row profile's noise estimate looks at
 constexpr float kWallBinM = 0.10F;    ///< [m] range resolution of the wall test's sums
-constexpr int kSubpixels = 16;        ///< disparity units per pixel (kDisparityScale)
+constexpr auto kSubpixels = static_cast<int>(kDisparityScale); ///< disparity units per pixel
 
 /// d16 (> 0) within half a pixel of offsetPx plus a multiple of the block size.
 bool onBlockGrid(int d16, int offsetPx) noexcept

@@ -217,8 +217,6 @@ public:
     /// frame): when both reach blockGridContrast, negative votes at the disparities that match the grids to each
     /// other are left out (SectorBuilderConfig::blockGridContrast). Default: no grid.
     void setBlockGrid(const BlockGrid& left, const BlockGrid& right) noexcept;
-    /// The disparity offset [px, 0..7] at which the grids meet, or -1 when the last setBlockGrid() saw no grid.
-    [[nodiscard]] int blockGridOffsetPx() const noexcept { return gridOffsetPx_; }
     /// Flags the last build's sectors as produced by a fallback path (ObstacleDetector::processGroundOnly).
     void markDegraded() noexcept { sectors_.degraded = true; }
 
