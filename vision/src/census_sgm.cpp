@@ -1,6 +1,7 @@
 #include "ugv/vision/census_sgm.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdlib>
@@ -91,11 +92,15 @@ std::uint8_t pathStepScalar(const std::uint8_t* prev, int minPrev, const std::ui
     return static_cast<std::uint8_t>(acc);
 }
 
-void sumFourScalar(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c, const std::uint8_t* e,
-                   std::uint16_t* sum, int d) noexcept
+template <std::size_t N>
+void sumRowsScalar(const std::array<const std::uint8_t*, N>& rows, std::uint16_t* sum, int d) noexcept
 {
     for (int k = 0; k < d; ++k) {
-        sum[k] = static_cast<std::uint16_t>(a[k] + b[k] + c[k] + e[k]);
+        int total = 0;
+        for (const std::uint8_t* row : rows) {
+            total += row[k];
+        }
+        sum[k] = static_cast<std::uint16_t>(total);
     }
 }
 
@@ -447,13 +452,20 @@ void CensusSgm::forwardPaths(RowRange range, const std::int16_t* above, int y) n
             topRight = tr;
         }
         std::uint16_t* sum = sum_.data() + static_cast<std::ptrdiff_t>(i) * n;
+        const auto sumRows = [&](const auto& rows) {
 #if (CV_SIMD || CV_SIMD_SCALABLE)
-        if (range.simd) {
-            simd::sumFourSimd(h + lo, top + lo, topLeft + lo, topRight + lo, sum, n);
-            continue;
-        }
+            if (range.simd) {
+                simd::sumRowsSimd(rows, sum, n);
+                return;
+            }
 #endif
-        sumFourScalar(h + lo, top + lo, topLeft + lo, topRight + lo, sum, n);
+            sumRowsScalar(rows, sum, n);
+        };
+        if (diagonals) {
+            sumRows(std::array<const std::uint8_t*, 4>{h + lo, top + lo, topLeft + lo, topRight + lo});
+        } else { // the horizontal path and the top one (zeros with two paths): no rows of zeros for the diagonals
+            sumRows(std::array<const std::uint8_t*, 2>{h + lo, top + lo});
+        }
     }
 }
 

@@ -4,6 +4,7 @@
 // census_sgm.cpp with the same saturating 8-bit arithmetic, so both give identical results.
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <type_traits>
@@ -157,27 +158,26 @@ inline std::uint8_t pathStepSimd(const std::uint8_t* prev, int minPrev, const st
     return result.value();
 }
 
-/// sum[k] = a[k] + b[k] + c[k] + e[k] (16-bit) for k in [0, d).
-inline void sumFourSimd(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c, const std::uint8_t* e,
-                        std::uint16_t* sum, int d) noexcept
+/// sum[k] = the sum over `rows` of rows[r][k] (u8 -> u16) for k in [0, d): the row's paths (two for three paths,
+/// four for five: summing only those there are, not rows of zeros).
+template <std::size_t N>
+inline void sumRowsSimd(const std::array<const std::uint8_t*, N>& rows, std::uint16_t* sum, int d) noexcept
 {
     using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
     forDisparityBlocks(d, [&](auto w, int k) {
         using V = decltype(w);
-        typename V::U16 aLo;
-        typename V::U16 aHi;
-        typename V::U16 bLo;
-        typename V::U16 bHi;
-        typename V::U16 cLo;
-        typename V::U16 cHi;
-        typename V::U16 eLo;
-        typename V::U16 eHi;
-        v_expand(V::load(a + k), aLo, aHi);
-        v_expand(V::load(b + k), bLo, bHi);
-        v_expand(V::load(c + k), cLo, cHi);
-        v_expand(V::load(e + k), eLo, eHi);
-        v_store(sum + k, v_add(v_add(aLo, bLo), v_add(cLo, eLo)));
-        v_store(sum + k + V::kLanes8 / 2, v_add(v_add(aHi, bHi), v_add(cHi, eHi)));
+        typename V::U16 lo;
+        typename V::U16 hi;
+        v_expand(V::load(rows[0] + k), lo, hi);
+        for (std::size_t r = 1; r < N; ++r) {
+            typename V::U16 rowLo;
+            typename V::U16 rowHi;
+            v_expand(V::load(rows[r] + k), rowLo, rowHi);
+            lo = v_add(lo, rowLo);
+            hi = v_add(hi, rowHi);
+        }
+        v_store(sum + k, lo);
+        v_store(sum + k + V::kLanes8 / 2, hi);
     });
 }
 
