@@ -272,7 +272,14 @@ void CensusSgm::census(ConstImageViewU8 image, std::uint8_t* planes, bool revers
         }
         for (int p = 0; p < kRowPlanes; ++p) {
             const std::uint8_t* in = censusRow_.data() + static_cast<std::ptrdiff_t>(p) * width_;
-            std::reverse_copy(in, in + width_, out + static_cast<std::ptrdiff_t>(p) * width_);
+            std::uint8_t* plane = out + static_cast<std::ptrdiff_t>(p) * width_;
+            int done = 0;
+#if (CV_SIMD || CV_SIMD_SCALABLE)
+            if (config_.simd) {
+                done = simd::reverseRowSimd(in, width_, plane);
+            }
+#endif
+            std::reverse_copy(in + done, in + width_, plane);
         }
     }
 }

@@ -47,6 +47,19 @@ inline int censusRowSimd(const std::uint8_t* centre, std::ptrdiff_t step, int wi
     return x;
 }
 
+/// out[width - 1 - i] = in[i] for the leading whole vectors of [0, width); @return how many (the rest is the caller's).
+inline int reverseRowSimd(const std::uint8_t* in, int width, std::uint8_t* out) noexcept
+{
+    using namespace cv; // NOLINT(google-build-using-namespace): universal intrinsics are free functions in cv
+    const int lanes = VTraits<v_uint8>::vlanes();
+    int x = 0;
+    for (; x <= width - lanes; x += lanes) {
+        v_store(out + width - x - lanes, v_reverse(vx_load(in + x)));
+    }
+    vx_cleanup();
+    return x;
+}
+
 /// The two vector widths of the kernels over disparities: 256-bit blocks while they fit, 128-bit for the rest.
 /// The disparity count is a multiple of 16, not of 32, so the native width alone would run past the end.
 struct W128 {
