@@ -1115,7 +1115,9 @@ Args evalArgs()
           false},
          {"frames-per-case", "N", "simulator: noise seeds per case, 1..20, default 1", false},
          {"matcher", "MODE", "our matcher: census_sgm (default) or an OpenCV mode: sgbm_3way, sgbm, hh4", false},
-         {"ground-prior", "", "simulator: census SGM's top path follows the ground (RoiMatcherConfig::groundPrior)",
+         {"ground-prior", "",
+          "simulator and real: census SGM's top path follows the ground (RoiMatcherConfig::groundPrior; on real pairs "
+          "the configured ground: --mount's, else the plane found, or with --ground-range on the first run's estimate)",
           false},
          {"ground-range", "on|off",
           "simulator and real: census SGM's ground-guided disparity ranges (RoiMatcherConfig::groundRange; default: "
@@ -1368,6 +1370,7 @@ int runReal(const Args& args, const EvalChoices& choices, std::ostringstream& js
     real.mount = args.get("mount");
     real.verbose = args.has("verbose");
     real.groundRange = choices.groundRange;
+    real.groundPrior = args.has("ground-prior");
     real.halfResPx = choices.halfResPx;
     real.maxRangePx = choices.maxRangePx;
     std::stringstream list(args.get("pairs"));

@@ -859,6 +859,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         RealRun r{options, mount, detectorConfig(DetectionOptions{}), RealScoringRules{}, condition, several, {},
                   {},      {}};
         r.config.matcher.groundRange = options.groundRange;
+        r.config.matcher.groundPrior = options.groundPrior;
         r.config.halfResolutionMinGroundPx = options.halfResPx;
         r.config.sectors.maxRangeDisparityPx = static_cast<float>(options.maxRangePx);
         if (several || condition.name != "none") {

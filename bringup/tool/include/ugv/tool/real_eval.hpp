@@ -113,6 +113,8 @@ struct RealEvalOptions {
     std::vector<std::string> pairs;   ///< only these pairs (empty: all)
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
     bool groundRange = false;         ///< RoiMatcherConfig::groundRange (detectPair then runs each pair twice)
+    bool groundPrior = false;         ///< RoiMatcherConfig::groundPrior (the configured ground; with groundRange
+                                      ///< the second run's prior is the first run's estimate)
     double halfResPx = 0.0;           ///< DetectorConfig::halfResolutionMinGroundPx (eval --half-res)
     double maxRangePx = vision::SectorBuilderConfig{}.maxRangeDisparityPx; ///< eval --max-range-px
     /// --detector colour: also the one-camera mode (vision::ColourFreeSpace on the left colour image, the ground of
