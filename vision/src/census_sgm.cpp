@@ -444,8 +444,8 @@ void CensusSgm::forwardPaths(RowRange range, const std::int16_t* above, int y) n
             range.guard(t);
             top = t;
         }
-        const std::uint8_t* topLeft = zeros_.data();
-        const std::uint8_t* topRight = zeros_.data();
+        const std::uint8_t* topLeft = nullptr; // the diagonals' rows: set and summed with five paths only
+        const std::uint8_t* topRight = nullptr;
         if (diagonals) {
             std::uint8_t* tl = pathEntry(cur, 1, e);
             std::uint8_t* tr = pathEntry(cur, 2, e);

@@ -136,7 +136,7 @@ private:
     std::vector<std::uint8_t> paths_;       ///< prev/cur rows of the top, top-left, top-right paths
     std::vector<std::uint8_t> pathMin_;     ///< min over d of each entry in paths_
     std::vector<std::uint8_t> horizontal_;  ///< border + two entries: left-to-right and right-to-left path
-    std::vector<std::uint8_t> zeros_;       ///< d zeros: the diagonals' term of the sum with 3 paths
+    std::vector<std::uint8_t> zeros_;       ///< d zeros: the top path's term of the sum with 2 paths
     std::vector<std::uint16_t> sum_;        ///< cols x d: sum of the five paths (cols x n when ranged)
     std::vector<std::uint16_t> disp2Cost_;  ///< width: best cost seen for each right-image column
     std::vector<std::int16_t> disp2_;       ///< width: its disparity (left-right check)
