@@ -1069,7 +1069,8 @@ Args evalArgs()
 {
     return Args(
         "eval",
-        "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount H,P,R] [--pairs LIST] [--perturb "
+        "[--sim] [--approach] [--hole-signal] [--middlebury] [--real DIR [--mount [SET=]H,P,R] [--pairs LIST] "
+        "[--perturb "
         "LIST] "
         "[--overlay-dir DIR] [--verbose]] [--quick] [--types LIST] [--grounds LIST] [--frames-per-case N] [--matcher "
         "MODE] "
@@ -1092,7 +1093,9 @@ Args evalArgs()
           "score the obstacle sectors on real pairs with LiDAR ground truth (DIR: ../shared/data/real-stereo, its "
           "index.csv), beside OpenCV StereoSGBM + RANSAC ground + a 0.25 m threshold",
           false},
-         {"mount", "H,P,R", "real: give every pair this mount (height m, pitch deg, roll deg); default: none, found",
+         {"mount", "[SET=]H,P,R",
+          "real: give every pair, or those of data set SET (index.csv's dataset starts with it), this mount (height "
+          "m, pitch deg, roll deg); the others' ground is found",
           false},
          {"pairs", "LIST", "real: only these pairs, comma-separated (index.csv's pair column)", false},
          {"verbose", "", "real: a line per sector (truth, ours, outcome)", false},

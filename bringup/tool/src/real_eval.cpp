@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -86,6 +88,7 @@ std::vector<std::string> splitCsv(const std::string& line)
 }
 
 struct RealPair {
+    std::string dataset; ///< index.csv's, up to its first " (": "KITTI 2015", "Middlebury 2014"
     std::string name;
     std::filesystem::path left, right, gt;
     std::string format;
@@ -107,7 +110,7 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         column[header[i]] = i;
     }
     for (const char* need : {"pair", "left", "right", "gt", "gt_format", "width", "height", "fx_px", "cx_px", "cy_px",
-                             "baseline_m", "doffs_px"}) {
+                             "baseline_m", "doffs_px", "dataset"}) {
         if (column.count(need) == 0) {
             return Unexpected(Error{path.string(), std::string("no column '") + need + "'",
                                     "use the index.csv of ../shared/data/real-stereo"});
@@ -127,6 +130,7 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         }
         RealPair p;
         const auto at = [&](const char* key) -> const std::string& { return f[column[key]]; };
+        p.dataset = at("dataset").substr(0, at("dataset").find(" ("));
         p.name = at("pair");
         p.left = dir / at("left");
         p.right = dir / at("right");
@@ -147,6 +151,12 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         pairs.push_back(p);
     }
     return pairs;
+}
+
+/// Whether the pair's GT is a Middlebury float PFM (index.csv's gt_format).
+bool isPfmPair(const RealPair& pair)
+{
+    return pair.format.rfind("float32 PFM", 0) == 0;
 }
 
 /// Sectors of a point set as a detector would report them: Obstacle at the robust nearest range, else Clear.
@@ -313,15 +323,21 @@ bool parseThreeNumbers(const std::string& text, double& a, double& b, double& c)
 
 } // namespace
 
-Result<vision::Mount, Error> parseMount(const std::string& text)
+Result<RealMount, Error> parseMount(const std::string& text)
 {
-    vision::Mount m;
-    if (!parseThreeNumbers(text, m.heightM, m.pitchDeg, m.rollDeg) || !(m.heightM > 0.0 && m.heightM < 10.0) ||
+    RealMount out;
+    const std::size_t equals = text.find('=');
+    const std::string numbers = equals == std::string::npos ? text : text.substr(equals + 1);
+    out.dataset = equals == std::string::npos ? std::string() : text.substr(0, equals);
+    vision::Mount& m = out.mount;
+    if ((equals != std::string::npos && out.dataset.empty()) ||
+        !parseThreeNumbers(numbers, m.heightM, m.pitchDeg, m.rollDeg) || !(m.heightM > 0.0 && m.heightM < 10.0) ||
         !(std::abs(m.pitchDeg) < 45.0) || !(std::abs(m.rollDeg) < 45.0)) {
-        return Unexpected(Error{"ugvsense eval --mount", "'" + text + "' is not HEIGHT_M,PITCH_DEG,ROLL_DEG",
-                                "for example --mount 1.65,0,0 (height 0-10 m, pitch and roll within 45 deg)"});
+        return Unexpected(Error{"ugvsense eval --mount", "'" + text + "' is not [DATASET=]HEIGHT_M,PITCH_DEG,ROLL_DEG",
+                                "for example --mount 1.65,0,0 or --mount KITTI=1.65,0,0 (height 0-10 m, pitch and "
+                                "roll within 45 deg)"});
     }
-    return m;
+    return out;
 }
 
 std::vector<SectorTruth> sectorTruth(const cv::Mat& disparity, int firstRow, const vision::GroundPlane& road,
@@ -469,18 +485,43 @@ Result<RealImages, Error> readRealPair(const RealPair& pair, const std::optional
     RealImages images;
     images.left = read(pair.left, cv::IMREAD_GRAYSCALE);
     images.right = read(pair.right, cv::IMREAD_GRAYSCALE);
-    const cv::Mat gtRaw = read(pair.gt, cv::IMREAD_UNCHANGED);
     const cv::Size size(pair.width, pair.height);
-    if (images.left.empty() || images.right.empty() || gtRaw.type() != CV_16UC1 || images.left.size() != size ||
-        images.right.size() != size || gtRaw.size() != size) {
-        return Unexpected(Error{"",
-                                "cannot read " + pair.left.string() + ", " + pair.right.string() +
-                                    " and the 16-bit GT " + pair.gt.string() + " of size " +
-                                    std::to_string(pair.width) + "x" + std::to_string(pair.height) +
-                                    (why.empty() ? "" : ": " + why),
-                                "give index.csv's images and 16-bit disparity ground truth of the size it names"});
+    const bool pfm = isPfmPair(pair);
+    cv::Mat gtRaw;
+    if (pfm && why.empty()) {
+        std::string reason;
+        gtRaw = readPfmDisparity(pair.gt, size, reason);
+        why = gtRaw.empty() ? pair.gt.filename().string() + ": " + reason : why;
+    } else if (!pfm) {
+        gtRaw = read(pair.gt, cv::IMREAD_UNCHANGED);
     }
-    gtRaw.convertTo(images.gt, CV_32F, 1.0 / kKittiScale);
+    if (images.left.empty() || images.right.empty() || gtRaw.type() != (pfm ? CV_32FC1 : CV_16UC1) ||
+        images.left.size() != size || images.right.size() != size || gtRaw.size() != size) {
+        return Unexpected(Error{"",
+                                "cannot read " + pair.left.string() + ", " + pair.right.string() + " and the GT " +
+                                    pair.gt.string() + " of size " + std::to_string(pair.width) + "x" +
+                                    std::to_string(pair.height) + (why.empty() ? "" : ": " + why),
+                                "give index.csv's images and disparity ground truth (KITTI's 16-bit PNG or "
+                                "Middlebury's PFM) of the size it names"});
+    }
+    if (pfm) {
+        // No GT (inf) is 0 as in KITTI's files; a measured disparity is the pixels' offset plus doffs, the right
+        // camera's principal point right of the left's (Z = f B / (d + doffs)).
+        images.gt = cv::Mat(size, CV_32F, cv::Scalar(0.0));
+        const cv::Mat valid = (gtRaw > 0.0F) & (gtRaw < std::numeric_limits<float>::max());
+        cv::Mat shifted = gtRaw + pair.doffs;
+        shifted.copyTo(images.gt, valid);
+    } else {
+        gtRaw.convertTo(images.gt, CV_32F, 1.0 / kKittiScale);
+    }
+    if (pair.doffs != 0.0) {
+        // One principal point for both images, as every matcher here assumes: the right image moved left by doffs
+        // (bilinear), so that its disparities are f B / Z.
+        const cv::Matx23d shift(1.0, 0.0, -pair.doffs, 0.0, 1.0, 0.0);
+        cv::Mat moved;
+        cv::warpAffine(images.right, moved, shift, size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+        images.right = moved;
+    }
     images.calib = vision::makeRectifiedCalibration(size, pair.fx, pair.fx, pair.cx, pair.cy, pair.baselineM);
     images.calib.mount = mount;
     return images;
@@ -579,14 +620,16 @@ void applyCondition(const Perturbation& p, const RealPair& pair, RealImages& ima
 /// What the suite keeps across the pairs.
 struct RealRun {
     const RealEvalOptions& options;
-    std::optional<vision::Mount> mount;
+    std::optional<RealMount> mount;
     vision::DetectorConfig config;
     RealScoringRules rules;
     Perturbation condition; ///< applied to every pair
     bool quiet = false;     ///< no line per pair (one of several conditions)
     RealTally ours;
     RealTally baseline;
-    RealTally colour;         ///< the one-camera mode (options.colour)
+    RealTally colour; ///< the one-camera mode (options.colour)
+    /// ours and the baseline per data set (each its own rig and scenes), in the order first seen
+    std::vector<std::pair<std::string, std::array<RealTally, 2>>> byDataset;
     double searchedSum = 0.0; ///< CensusSgm::searchedFraction over the pairs
     int searchedPairs = 0;
     bool firstJson = true;
@@ -653,7 +696,9 @@ RealTally scoreColour(const ColourRun& mono, const std::vector<SectorTruth>& tru
 /// @return 0, or 1 on a pair that cannot be read or run, or an overlay that cannot be written.
 int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
 {
-    auto images = readRealPair(pair, r.mount);
+    // A mount belongs to one rig: given for a data set, the other data sets' pairs have their ground found.
+    const bool mounted = r.mount && pair.dataset.rfind(r.mount->dataset, 0) == 0;
+    auto images = readRealPair(pair, mounted ? std::optional<vision::Mount>(r.mount->mount) : std::nullopt);
     if (images) {
         applyCondition(r.condition, pair, *images);
     }
@@ -733,6 +778,13 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
     }
     r.ours.merge(o);
     r.baseline.merge(b);
+    auto set =
+        std::find_if(r.byDataset.begin(), r.byDataset.end(), [&](const auto& d) { return d.first == pair.dataset; });
+    if (set == r.byDataset.end()) {
+        set = r.byDataset.insert(r.byDataset.end(), {pair.dataset, {}});
+    }
+    set->second[0].merge(o);
+    set->second[1].merge(b);
     r.colour.merge(c);
     return 0;
 }
@@ -748,6 +800,13 @@ void reportRealTotals(const RealRun& r, std::ostringstream& json)
     printTally("opencv", r.baseline);
     if (r.options.colour) {
         printTally("colour", r.colour);
+    }
+    if (r.byDataset.size() > 1) {
+        for (const auto& [name, tallies] : r.byDataset) {
+            std::printf("  %s:\n", name.c_str());
+            printTally("  ours", tallies[0]);
+            printTally("  opencv", tallies[1]);
+        }
     }
     const auto verdict = [](bool ok) { return ok ? "PASS" : "FAIL"; };
     const bool noWorse = r.ours.correctRate() >= r.baseline.correctRate() &&
@@ -776,9 +835,10 @@ int runRealPairs(const std::vector<RealPair>& index, RealRun& r, std::ostringstr
             std::find(r.options.pairs.begin(), r.options.pairs.end(), pair.name) == r.options.pairs.end()) {
             continue;
         }
-        if (pair.format.rfind("uint16 PNG", 0) != 0 || pair.doffs != 0.0) {
+        if (pair.format.rfind("uint16 PNG", 0) != 0 && !isPfmPair(pair)) {
             if (!r.quiet) {
-                std::printf("%-12s skipped: only KITTI-style GT (16-bit PNG, no doffs) is scored\n", pair.name.c_str());
+                std::printf("%-12s skipped: its GT is neither KITTI's 16-bit PNG nor Middlebury's PFM\n",
+                            pair.name.c_str());
             }
             continue;
         }
@@ -830,6 +890,38 @@ void reportConditions(const std::vector<ConditionTotals>& all, std::ostringstrea
 
 } // namespace
 
+cv::Mat readPfmDisparity(const std::filesystem::path& path, cv::Size size, std::string& why)
+{
+    std::ifstream in(path, std::ios::binary);
+    std::string magic;
+    int width = 0;
+    int height = 0;
+    double scale = 0.0;
+    if (!(in >> magic >> width >> height >> scale) || magic != "Pf" || in.get() != '\n') {
+        why = "not a one-channel PFM (\"Pf\", width, height, scale, then the data)";
+        return {};
+    }
+    if (width != size.width || height != size.height) {
+        why = "a PFM of " + std::to_string(width) + "x" + std::to_string(height) + ", the index says " +
+              std::to_string(size.width) + "x" + std::to_string(size.height);
+        return {};
+    }
+    if (!(scale < 0.0)) {
+        why = "a big-endian PFM (positive scale): only little-endian ones are read";
+        return {};
+    }
+    cv::Mat raw(height, width, CV_32F);
+    const auto bytes = static_cast<std::streamsize>(raw.total() * raw.elemSize());
+    if (!in.read(reinterpret_cast<char*>(raw.data), bytes)) {
+        why = "the PFM is truncated: " + std::to_string(in.gcount()) + " of " + std::to_string(bytes) + " data bytes";
+        return {};
+    }
+    static_assert(std::endian::native == std::endian::little, "the PFM reader assumes a little-endian host");
+    cv::Mat out;
+    cv::flip(raw, out, 0); // bottom-up rows
+    return out;
+}
+
 int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
 {
     auto index = readIndex(options.dir);
@@ -837,7 +929,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
         std::cerr << "ugvsense eval: error: " << index.error().message() << '\n';
         return 1;
     }
-    std::optional<vision::Mount> mount;
+    std::optional<RealMount> mount;
     if (!options.mount.empty()) {
         auto parsed = parseMount(options.mount);
         if (!parsed) {
@@ -856,7 +948,7 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
     json << "  \"real\": {\"mount\": \"" << (mount ? options.mount : "found") << "\", \"pairs\": [";
     std::vector<ConditionTotals> totals;
     for (const Perturbation& condition : conditions) {
-        RealRun r{options, mount, detectorConfig(DetectionOptions{}), RealScoringRules{}, condition, several, {},
+        RealRun r{options, mount, detectorConfig(DetectionOptions{}), RealScoringRules{}, condition, several, {}, {},
                   {},      {}};
         r.config.matcher.groundRange = options.groundRange;
         r.config.matcher.groundPrior = options.groundPrior;

@@ -4,7 +4,12 @@
 #include "ugv/tool/real_eval.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
+#include <string>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -170,3 +175,75 @@ TEST(RealEval, TallyCountsAndRates)
 }
 
 } // namespace
+
+namespace {
+
+/// A PFM file as Middlebury writes it: header, then the rows bottom-up as little-endian float32.
+std::filesystem::path writePfm(const std::string& name, const std::string& header, const cv::Mat& topDown,
+                               std::size_t dropBytes = 0)
+{
+    const auto path = std::filesystem::temp_directory_path() / ("ugv-pfm-test-" + std::to_string(::getpid()) + name);
+    std::string bytes = header;
+    for (int v = topDown.rows - 1; v >= 0; --v) {
+        bytes.append(reinterpret_cast<const char*>(topDown.ptr<float>(v)),
+                     static_cast<std::size_t>(topDown.cols) * sizeof(float));
+    }
+    bytes.resize(bytes.size() - dropBytes);
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path;
+}
+
+cv::Mat pfmPattern()
+{
+    cv::Mat m(3, 4, CV_32F);
+    for (int v = 0; v < m.rows; ++v) {
+        for (int u = 0; u < m.cols; ++u) {
+            m.at<float>(v, u) = static_cast<float>(10 * v + u) + 0.25F;
+        }
+    }
+    m.at<float>(1, 2) = std::numeric_limits<float>::infinity(); // no GT there
+    return m;
+}
+
+} // namespace
+
+TEST(RealEval, APfmIsReadTopRowFirstWithItsValuesAsStoredWhateverItsScale)
+{
+    const cv::Mat expected = pfmPattern();
+    const auto path = writePfm("ok.pfm", "Pf\n4 3\n-0.003922\n", expected);
+    std::string why;
+    const cv::Mat read = ugv::tool::readPfmDisparity(path, cv::Size(4, 3), why);
+    std::filesystem::remove(path);
+    ASSERT_EQ(read.type(), CV_32FC1) << why;
+    for (int v = 0; v < 3; ++v) {
+        for (int u = 0; u < 4; ++u) {
+            EXPECT_EQ(read.at<float>(v, u), expected.at<float>(v, u)) << v << "," << u;
+        }
+    }
+}
+
+TEST(RealEval, AMalformedPfmIsRefusedWithWhatIsWrong)
+{
+    const cv::Mat m = pfmPattern();
+    const struct {
+        const char* name;
+        std::string header;
+        std::size_t dropBytes;
+        cv::Size size;
+        const char* why;
+    } cases[] = {
+        {"colour.pfm", "PF\n4 3\n-1\n", 0, {4, 3}, "not a one-channel PFM"},
+        {"size.pfm", "Pf\n4 3\n-1\n", 0, {5, 3}, "a PFM of 4x3, the index says 5x3"},
+        {"big.pfm", "Pf\n4 3\n1\n", 0, {4, 3}, "big-endian"},
+        {"short.pfm", "Pf\n4 3\n-1\n", 5, {4, 3}, "truncated: 43 of 48 data bytes"},
+        {"empty.pfm", "", 48, {4, 3}, "not a one-channel PFM"},
+    };
+    for (const auto& c : cases) {
+        const auto path = writePfm(c.name, c.header, m, c.dropBytes);
+        std::string why;
+        const cv::Mat read = ugv::tool::readPfmDisparity(path, c.size, why);
+        std::filesystem::remove(path);
+        EXPECT_TRUE(read.empty()) << c.name;
+        EXPECT_NE(why.find(c.why), std::string::npos) << c.name << ": " << why;
+    }
+}

@@ -109,7 +109,7 @@ struct RealTally {
 struct RealEvalOptions {
     std::filesystem::path dir;        ///< the real-stereo folder (index.csv)
     std::filesystem::path overlayDir; ///< per-pair overlays when not empty
-    std::string mount;                ///< "" (found), or "H,PITCH,ROLL" given to every pair
+    std::string mount;                ///< "" (found), "H,PITCH,ROLL" for every pair, or "SET=H,PITCH,ROLL"
     std::vector<std::string> pairs;   ///< only these pairs (empty: all)
     bool verbose = false;             ///< a line per sector: truth, ours, outcome
     bool groundRange = false;         ///< RoiMatcherConfig::groundRange (detectPair then runs each pair twice)
@@ -125,8 +125,21 @@ struct RealEvalOptions {
     std::vector<Perturbation> perturbations;
 };
 
-/// "HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.
-Result<vision::Mount, Error> parseMount(const std::string& text);
+/// eval --real --mount: a rig's mount, for every pair or for one data set's.
+struct RealMount {
+    std::string dataset; ///< "" for every pair, else the pairs whose index.csv dataset starts with it
+    vision::Mount mount;
+};
+
+/// "[DATASET=]HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.
+Result<RealMount, Error> parseMount(const std::string& text);
+
+/// A Middlebury PFM disparity map ("Pf": one float32 channel, rows stored bottom-up, a negative scale for little
+/// endian) as CV_32F, top row first, the values as stored (inf where there is no GT). OpenCV 4.6's reader is not
+/// used: it multiplies the values by 1 / |scale|, and Middlebury writes the scale -1/255 while its disparities are in
+/// pixels as stored. Empty, with `why` set, when the file is not such a PFM of `size` (a different size, another
+/// header, big endian, truncated data).
+cv::Mat readPfmDisparity(const std::filesystem::path& path, cv::Size size, std::string& why);
 
 /// Runs the evaluation; prints a table per pair and the totals, appends `"real": {...}` to `json`.
 /// @return 0, 1 on unreadable data.
