@@ -88,7 +88,7 @@ std::vector<std::string> splitCsv(const std::string& line)
 }
 
 struct RealPair {
-    std::string dataset; ///< index.csv's, up to its first " (": "KITTI 2015", "Middlebury 2014"
+    std::string dataset; ///< index.csv's, up to its first " (" ("KITTI 2015", "Middlebury 2014"); "" without the column
     std::string name;
     std::filesystem::path left, right, gt;
     std::string format;
@@ -110,7 +110,7 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         column[header[i]] = i;
     }
     for (const char* need : {"pair", "left", "right", "gt", "gt_format", "width", "height", "fx_px", "cx_px", "cy_px",
-                             "baseline_m", "doffs_px", "dataset"}) {
+                             "baseline_m", "doffs_px"}) {
         if (column.count(need) == 0) {
             return Unexpected(Error{path.string(), std::string("no column '") + need + "'",
                                     "use the index.csv of ../shared/data/real-stereo"});
@@ -130,7 +130,9 @@ Result<std::vector<RealPair>, Error> readIndex(const std::filesystem::path& dir)
         }
         RealPair p;
         const auto at = [&](const char* key) -> const std::string& { return f[column[key]]; };
-        p.dataset = at("dataset").substr(0, at("dataset").find(" ("));
+        if (column.count("dataset") != 0) { // optional: without it, one data set
+            p.dataset = at("dataset").substr(0, at("dataset").find(" ("));
+        }
         p.name = at("pair");
         p.left = dir / at("left");
         p.right = dir / at("right");
@@ -937,6 +939,14 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             return 2;
         }
         mount = *parsed;
+        const bool anyMounted = std::any_of(index->begin(), index->end(), [&](const RealPair& pair) {
+            return pair.dataset.rfind(mount->dataset, 0) == 0;
+        });
+        if (!anyMounted) {
+            std::cerr << "ugvsense eval: warning: --mount " << options.mount << ": no pair of " << options.dir.string()
+                      << "/index.csv is of a data set named '" << mount->dataset
+                      << "...' (its dataset column), so every ground is found\n";
+        }
     }
     const std::vector<Perturbation> conditions =
         options.perturbations.empty() ? std::vector<Perturbation>{Perturbation{}} : options.perturbations;
