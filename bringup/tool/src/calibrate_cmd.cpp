@@ -19,7 +19,7 @@
 #include "ugv/adapters/calibration_file.hpp"
 #include "ugv/adapters/camera_factory.hpp"
 #include "ugv/adapters/config.hpp"
-#include "ugv/platform/sectors_json.hpp" // jsonNumber
+#include "ugv/platform/sectors_json.hpp" // jsonNumber, jsonString
 #include "ugv/tool/args.hpp"
 #include "ugv/tool/commands.hpp"
 #include "ugv/tool/detection.hpp"
@@ -31,39 +31,6 @@ namespace {
 
 constexpr double kMinSquareM = 1e-4; // [m]
 constexpr double kMaxSquareM = 10.0; // [m]
-
-std::string jsonString(const std::string& text)
-{
-    std::string out = "\"";
-    for (const char c : text) {
-        switch (c) {
-        case '"':
-            out += "\\\"";
-            break;
-        case '\\':
-            out += "\\\\";
-            break;
-        case '\n':
-            out += "\\n";
-            break;
-        case '\r':
-            out += "\\r";
-            break;
-        case '\t':
-            out += "\\t";
-            break;
-        default:
-            if (static_cast<unsigned char>(c) < 0x20) {
-                char escaped[8];
-                (void)std::snprintf(escaped, sizeof(escaped), "\\u%04x", static_cast<unsigned>(c));
-                out += escaped;
-            } else {
-                out += c;
-            }
-        }
-    }
-    return out + "\"";
-}
 
 bool writeJson(const std::string& path, const vision::CalibrationReport& report)
 {

@@ -758,8 +758,9 @@ int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
             printSectorLines(mono->sectors, truth, r.rules);
         }
     }
-    json << (r.firstJson ? "\n" : ",\n") << "    {\"pair\": \"" << pair.name
-         << "\", \"truth_has_drop\": " << (truthHasDrop ? "true" : "false")
+    json << (r.firstJson ? "\n" : ",\n") << "    {\"pair\": " << jsonString(pair.name)
+         << ", \"dataset\": " << jsonString(pair.dataset)
+         << ", \"truth_has_drop\": " << (truthHasDrop ? "true" : "false")
          << ", \"ground\": {\"height_m\": " << jsonNumber(g.heightM) << ", \"pitch_deg\": " << jsonNumber(g.pitchDeg())
          << ", \"roll_deg\": " << jsonNumber(g.rollDeg()) << ", \"gt_height_m\": " << jsonNumber(road->heightM)
          << ", \"gt_pitch_deg\": " << jsonNumber(road->pitchDeg())
@@ -820,7 +821,13 @@ void reportRealTotals(const RealRun& r, std::ostringstream& json)
     std::printf("against the plain OpenCV pipeline: correct no lower and too near + false no more: %s\n",
                 verdict(noWorse));
     json << "\n  ], \"ours\": " << tallyJson(r.ours) << ", \"opencv\": " << tallyJson(r.baseline)
-         << (r.options.colour ? ", \"colour\": " + tallyJson(r.colour) : std::string()) << "}";
+         << (r.options.colour ? ", \"colour\": " + tallyJson(r.colour) : std::string()) << ", \"by_dataset\": [";
+    for (std::size_t i = 0; i < r.byDataset.size(); ++i) {
+        const auto& [name, tallies] = r.byDataset[i];
+        json << (i == 0 ? "" : ", ") << "{\"dataset\": " << jsonString(name) << ", \"ours\": " << tallyJson(tallies[0])
+             << ", \"opencv\": " << tallyJson(tallies[1]) << "}";
+    }
+    json << "]}";
 }
 
 /// Every KITTI-style pair of `index` (each once, on its first GT row) into `r`.

@@ -4,7 +4,7 @@
 /// The sectors as JSON text, written once for every file and report that holds them (`ugvsense detect --json`, the
 /// simulator's `<stem>_sectors.json`): per sector `bearing_min_deg`, `bearing_max_deg`, `range_m`, `kind`, `state`,
 /// `class`, `height_m`, `confidence`; a number that is not finite (an infinite range: nothing measured there) is
-/// `null`. Not for the frame path (it allocates).
+/// `null`; and the number and string helpers of the tools' JSON reports. Not for the frame path (it allocates).
 
 #include <string>
 
@@ -21,6 +21,9 @@ const char* className(DangerClass danger) noexcept;
 
 /// `value` with 6 significant digits (printf's %.6g), or null when it is not finite.
 std::string jsonNumber(double value);
+
+/// `text` as a JSON string: quoted, with quotes, backslashes and control characters escaped.
+std::string jsonString(const std::string& text);
 
 /// The sectors as a JSON array, one sector per line indented by `indent` spaces, the closing bracket by `indent - 2`.
 std::string sectorsJsonArray(const ObstacleSectors& sectors, int indent);
