@@ -507,18 +507,16 @@ Result<RealImages, Error> readRealPair(const RealPair& pair, const std::optional
                                 "Middlebury's PFM) of the size it names"});
     }
     if (pfm) {
-        // No GT (inf) is 0 as in KITTI's files; a measured disparity is the pixels' offset plus doffs, the right
-        // camera's principal point right of the left's (Z = f B / (d + doffs)).
-        images.gt = cv::Mat(size, CV_32F, cv::Scalar(0.0));
-        const cv::Mat valid = (gtRaw > 0.0F) & (gtRaw < std::numeric_limits<float>::max());
-        cv::Mat shifted = gtRaw + pair.doffs;
-        shifted.copyTo(images.gt, valid);
+        images.gt = cv::Mat(size, CV_32F, cv::Scalar(0.0)); // no GT (inf in a PFM) is 0, as in KITTI's files
+        gtRaw.copyTo(images.gt, (gtRaw > 0.0F) & (gtRaw < std::numeric_limits<float>::max()));
     } else {
         gtRaw.convertTo(images.gt, CV_32F, 1.0 / kKittiScale);
     }
     if (pair.doffs != 0.0) {
-        // One principal point for both images, as every matcher here assumes: the right image moved left by doffs
-        // (bilinear), so that its disparities are f B / Z.
+        // One principal point for both images, as every matcher here assumes (the right camera's is doffs right of
+        // the left's, Z = f B / (d + doffs)): the right image moved left by doffs (bilinear) and doffs added to the
+        // truth, so that every disparity is f B / Z.
+        cv::add(images.gt, cv::Scalar(pair.doffs), images.gt, images.gt > 0.0F);
         const cv::Matx23d shift(1.0, 0.0, -pair.doffs, 0.0, 1.0, 0.0);
         cv::Mat moved;
         cv::warpAffine(images.right, moved, shift, size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
@@ -830,7 +828,7 @@ void reportRealTotals(const RealRun& r, std::ostringstream& json)
     json << "]}";
 }
 
-/// Every KITTI-style pair of `index` (each once, on its first GT row) into `r`.
+/// Every pair of `index` whose truth can be read (each once, on its first GT row) into `r`.
 /// @return 0, or runRealPair's error code.
 int runRealPairs(const std::vector<RealPair>& index, RealRun& r, std::ostringstream& json)
 {

@@ -1,8 +1,9 @@
 #pragma once
 
 /// @file
-/// `ugvsense eval --real DIR`: obstacle sectors scored against real stereo pairs with LiDAR ground truth
-/// (../shared/data/real-stereo: KITTI, its README and index.csv). The truth of a pair: its GT disparity in the rows
+/// `ugvsense eval --real DIR`: obstacle sectors scored against real stereo pairs with ground truth
+/// (../shared/data/real-stereo, its README and index.csv: KITTI's LiDAR truth as 16-bit PNG, Middlebury's structured
+/// light as PFM with the pair's doffs; totals per data set too). The truth of a pair: its GT disparity in the rows
 /// the detector analyses becomes 3-D points, a RANSAC road plane is fitted to the GT of the bottom third
 /// (fitGround), and per sector the nearest range of the points 0.25-2.5 m above that plane within 25 m is the
 /// obstacle (the 5th nearest point: robust to a few stray ones), the nearest of those 0.10 m or more above it the
