@@ -697,7 +697,7 @@ RealTally scoreColour(const ColourRun& mono, const std::vector<SectorTruth>& tru
 int runRealPair(const RealPair& pair, RealRun& r, std::ostringstream& json)
 {
     // A mount belongs to one rig: given for a data set, the other data sets' pairs have their ground found.
-    const bool mounted = r.mount && pair.dataset.rfind(r.mount->dataset, 0) == 0;
+    const bool mounted = r.mount && r.mount->appliesTo(pair.dataset);
     auto images = readRealPair(pair, mounted ? std::optional<vision::Mount>(r.mount->mount) : std::nullopt);
     if (images) {
         applyCondition(r.condition, pair, *images);
@@ -945,9 +945,8 @@ int runRealEval(const RealEvalOptions& options, std::ostringstream& json)
             return 2;
         }
         mount = *parsed;
-        const bool anyMounted = std::any_of(index->begin(), index->end(), [&](const RealPair& pair) {
-            return pair.dataset.rfind(mount->dataset, 0) == 0;
-        });
+        const bool anyMounted = std::any_of(index->begin(), index->end(),
+                                            [&](const RealPair& pair) { return mount->appliesTo(pair.dataset); });
         if (!anyMounted) {
             std::cerr << "ugvsense eval: warning: --mount " << options.mount << ": no pair of " << options.dir.string()
                       << "/index.csv is of a data set named '" << mount->dataset

@@ -247,3 +247,26 @@ TEST(RealEval, AMalformedPfmIsRefusedWithWhatIsWrong)
         EXPECT_NE(why.find(c.why), std::string::npos) << c.name << ": " << why;
     }
 }
+
+TEST(RealEval, AMountForOneDataSetAppliesToItsPairsOnly)
+{
+    const auto kitti = ugv::tool::parseMount("KITTI=1.65,0.5,-1");
+    ASSERT_TRUE(kitti.has_value()) << kitti.error().message();
+    EXPECT_EQ(kitti->dataset, "KITTI");
+    EXPECT_DOUBLE_EQ(kitti->mount.heightM, 1.65);
+    EXPECT_DOUBLE_EQ(kitti->mount.pitchDeg, 0.5);
+    EXPECT_DOUBLE_EQ(kitti->mount.rollDeg, -1.0);
+    EXPECT_TRUE(kitti->appliesTo("KITTI 2015"));
+    EXPECT_TRUE(kitti->appliesTo("KITTI 2012"));
+    EXPECT_FALSE(kitti->appliesTo("Middlebury 2014"));
+    EXPECT_FALSE(kitti->appliesTo("")); // an index without the dataset column
+
+    const auto every = ugv::tool::parseMount("1.65,0,0");
+    ASSERT_TRUE(every.has_value()) << every.error().message();
+    EXPECT_TRUE(every->appliesTo("Middlebury 2014"));
+    EXPECT_TRUE(every->appliesTo(""));
+
+    EXPECT_FALSE(ugv::tool::parseMount("=1.65,0,0").has_value());
+    EXPECT_FALSE(ugv::tool::parseMount("KITTI=").has_value());
+    EXPECT_FALSE(ugv::tool::parseMount("KITTI=1.65,0").has_value());
+}

@@ -130,6 +130,12 @@ struct RealEvalOptions {
 struct RealMount {
     std::string dataset; ///< "" for every pair, else the pairs whose index.csv dataset starts with it
     vision::Mount mount;
+
+    /// Whether a pair of `pairDataset` (index.csv's, "" without the column) is of this mount's rig.
+    [[nodiscard]] bool appliesTo(const std::string& pairDataset) const noexcept
+    {
+        return pairDataset.rfind(dataset, 0) == 0;
+    }
 };
 
 /// "[DATASET=]HEIGHT_M,PITCH_DEG,ROLL_DEG" (eval --real --mount), or a usage error naming the option.
