@@ -15,11 +15,17 @@ double StereoCalibration::rectifiedFocalPx() const
 StereoCalibration makeRectifiedCalibration(cv::Size imageSize, double fx, double fy, double cx, double cy,
                                            double baselineM)
 {
+    return makeRectifiedCalibration(imageSize, fx, fy, cx, cy, baselineM, cx);
+}
+
+StereoCalibration makeRectifiedCalibration(cv::Size imageSize, double fx, double fy, double cx, double cy,
+                                           double baselineM, double cxRight)
+{
     StereoCalibration calib;
     calib.imageSize = imageSize;
     calib.rectified = true;
     calib.K1 = (cv::Mat_<double>(3, 3) << fx, 0, cx, 0, fy, cy, 0, 0, 1);
-    calib.K2 = calib.K1.clone();
+    calib.K2 = (cv::Mat_<double>(3, 3) << fx, 0, cxRight, 0, fy, cy, 0, 0, 1);
     calib.D1 = cv::Mat::zeros(1, 5, CV_64F);
     calib.D2 = cv::Mat::zeros(1, 5, CV_64F);
     calib.R = cv::Mat::eye(3, 3, CV_64F);
@@ -30,9 +36,10 @@ StereoCalibration makeRectifiedCalibration(cv::Size imageSize, double fx, double
     calib.R1 = cv::Mat::eye(3, 3, CV_64F);
     calib.R2 = cv::Mat::eye(3, 3, CV_64F);
     calib.P1 = (cv::Mat_<double>(3, 4) << fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0);
-    calib.P2 = (cv::Mat_<double>(3, 4) << fx, 0, cx, -fx * baselineM, 0, fy, cy, 0, 0, 0, 1, 0);
-    // As cv::stereoRectify with CALIB_ZERO_DISPARITY: Q(3,2) = -1/Tx with Tx = -baseline.
-    calib.Q = (cv::Mat_<double>(4, 4) << 1, 0, 0, -cx, 0, 1, 0, -cy, 0, 0, 0, fx, 0, 0, 1.0 / baselineM, 0);
+    calib.P2 = (cv::Mat_<double>(3, 4) << fx, 0, cxRight, -fx * baselineM, 0, fy, cy, 0, 0, 0, 1, 0);
+    // As cv::stereoRectify: Q(3,2) = -1/Tx and Q(3,3) = (cx - cxRight)/Tx with Tx = -baseline.
+    calib.Q = (cv::Mat_<double>(4, 4) << 1, 0, 0, -cx, 0, 1, 0, -cy, 0, 0, 0, fx, 0, 0, 1.0 / baselineM,
+               (cxRight - cx) / baselineM);
     return calib;
 }
 

@@ -189,7 +189,14 @@ Result<StereoCalibration, Error> readRectified(const Reader& in, cv::Size size)
     UGV_TRY_ASSIGN(cx, in.numberIn("cx", 0.0, size.width, false, in.root(), "cx must lie inside the image width"));
     UGV_TRY_ASSIGN(cy, in.numberIn("cy", 0.0, size.height, false, in.root(), "cy must lie inside the image height"));
     UGV_TRY_ASSIGN(baseline, in.numberIn("baseline_m", kMinBaselineM, kMaxBaselineM, false, in.root(), baselineFix()));
-    return vision::makeRectifiedCalibration(size, fx, fy, cx, cy, baseline);
+    double cxRight = cx;
+    if (!in.root()["cx_right"].empty()) { // the right camera's, when the pair was rectified without zero disparity
+        UGV_TRY_ASSIGN(right, in.numberIn("cx_right", 0.0, size.width, false, in.root(),
+                                          "cx_right (the right camera's cx, e.g. cx + Middlebury's doffs) must lie "
+                                          "inside the image width; leave it out when it equals cx"));
+        cxRight = right;
+    }
+    return vision::makeRectifiedCalibration(size, fx, fy, cx, cy, baseline, cxRight);
 }
 
 Result<StereoCalibration, Error> readFull(const Reader& in, cv::Size size)
@@ -332,6 +339,9 @@ Result<void, Error> saveCalibration(const std::string& path, const vision::Stere
             fs << "rectified" << 1;
             fs << "fx" << p1.at<double>(0, 0) << "fy" << p1.at<double>(1, 1) << "cx" << p1.at<double>(0, 2) << "cy"
                << p1.at<double>(1, 2) << "baseline_m" << calib.baselineM();
+            if (const double cxRight = calib.P2.at<double>(0, 2); cxRight != p1.at<double>(0, 2)) {
+                fs << "cx_right" << cxRight;
+            }
         } else {
             fs << "K1" << calib.K1 << "D1" << calib.D1 << "K2" << calib.K2 << "D2" << calib.D2;
             fs << "R" << calib.R << "T" << calib.T << "E" << calib.E << "F" << calib.F;

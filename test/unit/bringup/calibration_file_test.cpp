@@ -122,6 +122,35 @@ TEST(CalibrationFile, RectifiedFormRoundTrips)
     EXPECT_FALSE(loaded->mount.has_value());
 }
 
+TEST(CalibrationFile, TheRightCamerasPrincipalPointRoundTripsWhenItIsElsewhere)
+{
+    const auto path = tempPath("rectified-doffs.yaml");
+    const StereoCalibration original =
+        ugv::vision::makeRectifiedCalibration(cv::Size(741, 497), 999.421, 999.421, 294.182, 252.932, 0.193001, 326.96);
+
+    ASSERT_TRUE(saveCalibration(path.string(), original).has_value());
+    EXPECT_NE(readText(path).find("cx_right: 3.269"), std::string::npos) << readText(path);
+    const auto loaded = loadCalibration(path.string());
+
+    ASSERT_TRUE(loaded.has_value()) << loaded.error().message();
+    EXPECT_DOUBLE_EQ(loaded->P1.at<double>(0, 2), 294.182);
+    EXPECT_DOUBLE_EQ(loaded->P2.at<double>(0, 2), 326.96);
+    EXPECT_DOUBLE_EQ(loaded->K2.at<double>(0, 2), 326.96);
+    // Without it the right camera's is the left's, and the file does not name it.
+    ASSERT_TRUE(saveCalibration(path.string(), ugv::vision::makeRectifiedCalibration(cv::Size(640, 480), 500.0, 501.0,
+                                                                                     320.0, 240.0, 0.12))
+                    .has_value());
+    EXPECT_EQ(readText(path).find("cx_right"), std::string::npos) << readText(path);
+}
+
+TEST(CalibrationFile, ARightPrincipalPointOutsideTheImageIsNamed)
+{
+    const std::string message =
+        loadRectifiedText("cx-right.yaml", replaced(kRectified, "baseline_m: 0.12", "baseline_m: 0.12\ncx_right: 900"));
+    EXPECT_NE(message.find("cx-right.yaml: cx_right"), std::string::npos) << message;
+    EXPECT_NE(message.find("leave it out when it equals cx"), std::string::npos) << message;
+}
+
 TEST(CalibrationFile, HandWrittenRectifiedFormNeedsOnlyItsKeys)
 {
     const auto path = tempPath("hand.yaml");

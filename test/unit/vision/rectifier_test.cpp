@@ -1,6 +1,7 @@
 #include "ugv/vision/rectifier.hpp"
 
 #include <cstdint>
+#include <cstring>
 
 #include <cmath>
 
@@ -196,6 +197,45 @@ TEST(Rectifier, IdentityPathCopiesRoiRowsBitExact)
     EXPECT_EQ(cv::norm(outRight, right.rowRange(roi.y, roi.y + roi.height), cv::NORM_INF), 0.0);
     EXPECT_DOUBLE_EQ(sut->projection().baselineM, 0.12);
     EXPECT_DOUBLE_EQ(sut->projection().fx, 500.0);
+}
+
+TEST(Rectifier, ARightPrincipalPointElsewhereIsMovedIntoTheLeftsSoDisparitiesCarryNoOffset)
+{
+    // The already-rectified form with Middlebury-style doffs of 12 px: the right image moves 12 px left.
+    constexpr int kDoffs = 12;
+    const StereoCalibration calib = ugv::vision::makeRectifiedCalibration(cv::Size(kWidth, kHeight), 500.0, 500.0,
+                                                                          320.0, 240.0, 0.12, 320.0 + kDoffs);
+    auto sut = Rectifier::create(calib, RectifierConfig{});
+    ASSERT_TRUE(sut.has_value()) << sut.error().message();
+    EXPECT_FALSE(sut->identity());
+    const cv::Mat left = makeTexture(6);
+    const cv::Mat right = makeTexture(7);
+    ASSERT_EQ(sut->rectify(view(left), view(right)), RectifyStatus::Ok);
+    const ugv::Rect roi = sut->roi();
+    const ConstImageViewU8 outL = sut->rectifiedLeft();
+    const ConstImageViewU8 outR = sut->rectifiedRight();
+    for (int r = 0; r < roi.height; r += 37) {
+        for (int x = 0; x + kDoffs < kWidth - 1; ++x) {
+            ASSERT_EQ(outL.row(r)[x], left.at<std::uint8_t>(roi.y + r, x)) << r << "," << x;
+            ASSERT_EQ(outR.row(r)[x], right.at<std::uint8_t>(roi.y + r, x + kDoffs)) << r << "," << x;
+        }
+    }
+    EXPECT_DOUBLE_EQ(sut->projection().cx, 320.0);
+    EXPECT_DOUBLE_EQ(sut->projection().baselineM, 0.12);
+
+    // The full form rectified without zero disparity (P2's cx elsewhere) gives the images of the one with it.
+    const StereoCalibration zero = distortedCalibration();
+    StereoCalibration apart = zero;
+    apart.P2 = zero.P2.clone();
+    apart.P2.at<double>(0, 2) += 7.25;
+    auto a = Rectifier::create(zero, RectifierConfig{});
+    auto b = Rectifier::create(apart, RectifierConfig{});
+    ASSERT_TRUE(a.has_value() && b.has_value());
+    ASSERT_EQ(a->rectify(view(left), view(right)), RectifyStatus::Ok);
+    ASSERT_EQ(b->rectify(view(left), view(right)), RectifyStatus::Ok);
+    for (int r = 0; r < a->roi().height; ++r) {
+        ASSERT_EQ(std::memcmp(a->rectifiedRight().row(r), b->rectifiedRight().row(r), a->roi().width), 0) << r;
+    }
 }
 
 TEST(Rectifier, ProjectionComesFromP1P2)

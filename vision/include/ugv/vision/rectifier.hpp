@@ -42,7 +42,10 @@ struct RectifiedProjection {
 };
 
 /// Rectifies the ROI rows of a stereo pair with fixed-point remap tables (CV_16SC2 + CV_16UC1, bilinear)
-/// built once in create(); for an already-rectified calibration it copies the ROI rows (identity path).
+/// built once in create(); for an already-rectified calibration it copies the ROI rows (identity path). The right
+/// image is always rectified into the left's principal point (P2 with P1's cx and cy), so that a disparity is
+/// fx B / Z with no offset even for a rectification that keeps them apart (cv::stereoRectify without
+/// CALIB_ZERO_DISPARITY; an already-rectified pair with the right camera's cx elsewhere: no identity path then).
 /// Thread-safety: thread-bound (rectify() writes the internal buffers). RT-safe: rectify() yes (no allocation,
 /// no exception for valid views: sizes are checked before OpenCV runs); create() no.
 class Rectifier {

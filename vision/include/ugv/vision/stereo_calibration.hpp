@@ -20,8 +20,9 @@ struct Mount {
 
 /// Intrinsics, extrinsics and rectification of a stereo pair, all matrices CV_64F in OpenCV's conventions
 /// (X_right = R * X_left + T; P1/P2/Q as from cv::stereoRectify).
-/// `rectified == true` is the already-rectified form: the images need no remapping; K1 = K2 = the rectified
-/// intrinsics, D1 = D2 = 0, R = R1 = R2 = I, and P1/P2/Q are derived from fx, fy, cx, cy and the baseline.
+/// `rectified == true` is the already-rectified form: the images need no remapping but, when the right camera's
+/// principal point lies elsewhere (cxRight), a shift; K1, K2 = the rectified intrinsics (K2 with cxRight), D1 = D2 =
+/// 0, R = R1 = R2 = I, and P1/P2/Q are derived from fx, fy, cx, cy, cxRight and the baseline.
 /// Thread-safety: value type (cv::Mat shares its data on copy: clone before mutating a shared copy).
 /// RT-safe: no (copying allocates); read it at init.
 struct StereoCalibration {
@@ -51,5 +52,10 @@ struct StereoCalibration {
 /// Thread-safety: reentrant. RT-safe: no.
 StereoCalibration makeRectifiedCalibration(cv::Size imageSize, double fx, double fy, double cx, double cy,
                                            double baselineM);
+/// The same with the right camera's principal point `cxRight` columns from the left's `cx` (a pair rectified without
+/// zero disparity, Middlebury's `doffs` = cxRight - cx): K2 and P2 carry it, and Rectifier moves the right image
+/// into the left's principal point, so that disparities are fx B / Z.
+StereoCalibration makeRectifiedCalibration(cv::Size imageSize, double fx, double fy, double cx, double cy,
+                                           double baselineM, double cxRight);
 
 } // namespace ugv::vision

@@ -7,7 +7,8 @@
 /// P1, P2, Q (opencv-matrix, dt d) and the quality figures rms_px, epipolar_px, rectified_dy_px, pairs_used,
 /// pairs_rejected.
 /// Already-rectified form (cameras that rectify on board, or simulation): `rectified: 1`, image_width,
-/// image_height, fx, fy, cx, cy, baseline_m.
+/// image_height, fx, fy, cx, cy, baseline_m, and `cx_right` when the right camera's principal point is elsewhere
+/// (a pair rectified without zero disparity; Middlebury's cx + doffs): the right image is then moved into the left's.
 /// Both forms take an optional `mount` map {height_m, pitch_deg, roll_deg}.
 
 #include <cstddef>
