@@ -126,10 +126,12 @@ Result<Rectifier, Error> Rectifier::create(const StereoCalibration& calib, const
     // that leaves the right camera's elsewhere (cv::stereoRectify without CALIB_ZERO_DISPARITY, a pair with
     // Middlebury's doffs) would add its offset to every disparity: the right image is rectified into the left's
     // principal point instead (P2 with P1's cx, cy; its baseline term kept).
+    const bool samePrincipalPoint = calib.P2.at<double>(0, 2) == calib.P1.at<double>(0, 2) &&
+                                    calib.P2.at<double>(1, 2) == calib.P1.at<double>(1, 2);
     cv::Mat p2 = calib.P2.clone();
     p2.at<double>(0, 2) = calib.P1.at<double>(0, 2);
     p2.at<double>(1, 2) = calib.P1.at<double>(1, 2);
-    sut.identity_ = calib.rectified && cv::norm(p2, calib.P2, cv::NORM_INF) == 0.0;
+    sut.identity_ = calib.rectified && samePrincipalPoint;
     try {
         if (!sut.identity_) {
             buildMaps(calib.K1, calib.D1, calib.R1, calib.P1, size, sut.roi_, sut.mapLeftXY_, sut.mapLeftFrac_);

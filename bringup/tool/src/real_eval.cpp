@@ -513,9 +513,10 @@ Result<RealImages, Error> readRealPair(const RealPair& pair, const std::optional
         gtRaw.convertTo(images.gt, CV_32F, 1.0 / kKittiScale);
     }
     if (pair.doffs != 0.0) {
-        // One principal point for both images, as every matcher here assumes (the right camera's is doffs right of
-        // the left's, Z = f B / (d + doffs)): the right image moved left by doffs (bilinear) and doffs added to the
-        // truth, so that every disparity is f B / Z.
+        // One principal point for both images (the right camera's is doffs right of the left's, Z = f B / (d +
+        // doffs)): the right image moved left by doffs (bilinear) and doffs added to the truth, so that every
+        // disparity is f B / Z. Done here, not by our Rectifier (a calibration's cx_right), because OpenCV's
+        // baseline matches these images directly.
         cv::add(images.gt, cv::Scalar(pair.doffs), images.gt, images.gt > 0.0F);
         const cv::Matx23d shift(1.0, 0.0, -pair.doffs, 0.0, 1.0, 0.0);
         cv::Mat moved;
