@@ -1,5 +1,8 @@
 #include "ugv/ipc/dds_bus.hpp"
 
+#include "ugv/ipc/handshake_watch.hpp"
+#include "ugv/platform/log.hpp"
+
 #include <ifaddrs.h>
 #include <net/if.h>
 #include <netinet/in.h>
@@ -179,12 +182,33 @@ void applyPartitions(const BusConfig& config, fdds::PublisherQos& pubq, fdds::Su
 
 } // namespace
 
-/// Writer GUID -> the identity of its partition (the part after the last '.'), filled from discovery (on a secured
-/// bus only authenticated participants' writers are discovered, and their partitions were checked against their
-/// signed permissions). Thread-safe: written by Fast DDS's discovery thread, read by the bus's users; a plain mutex,
-/// as no real-time task reads it (the correlator task is SCHED_OTHER).
+/// The secured bus's discovery listener. Writer GUID -> the identity of its partition (the part after the last '.'),
+/// filled from discovery (on a secured bus only authenticated participants' writers are discovered, and their
+/// partitions were checked against their signed permissions), and the handshakes that never ended (HandshakeWatch).
+/// Thread-safe: written by Fast DDS's discovery thread, read by the bus's users; plain mutexes, as no real-time task
+/// reads them (the correlator task is SCHED_OTHER).
 class WriterIdentities : public fdds::DomainParticipantListener {
 public:
+    void on_participant_discovery(fdds::DomainParticipant* participant,
+                                  eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override
+    {
+        using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
+        const std::string local = prefixKey(participant->guid().guidPrefix);
+        const std::string remote = prefixKey(info.info.m_guid.guidPrefix);
+        if (info.status == Status::DISCOVERED_PARTICIPANT) {
+            handshakes.discovered(local, remote, HandshakeWatch::Clock::now());
+        } else if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT) {
+            handshakes.removed(local, remote);
+        }
+    }
+    void onParticipantAuthentication(fdds::DomainParticipant* participant,
+                                     eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override
+    {
+        handshakes.ended(prefixKey(participant->guid().guidPrefix), prefixKey(info.guid.guidPrefix));
+        if (info.status == eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::UNAUTHORIZED_PARTICIPANT) {
+            refuse(info.guid.guidPrefix);
+        }
+    }
     void on_publisher_discovery(fdds::DomainParticipant* /*participant*/,
                                 eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override
     {
@@ -203,14 +227,54 @@ public:
         return it == byWriter_.end() ? std::string() : it->second;
     }
 
+    static std::string prefixKey(const rtps::GuidPrefix_t& p)
+    {
+        return {reinterpret_cast<const char*>(p.value), sizeof(p.value)};
+    }
+    static std::string prefixHex(const rtps::GuidPrefix_t& p)
+    {
+        static constexpr char kHex[] = "0123456789abcdef";
+        std::string out;
+        for (const auto byte : p.value) {
+            out += kHex[byte >> 4U];
+            out += kHex[byte & 0xFU];
+        }
+        return out;
+    }
+
+    HandshakeWatch handshakes; ///< the secured handshakes that never ended
+
 private:
+    static constexpr std::size_t kRefusalsNamed = 10;
+    /// Each refused participant is news to an operator (an intruder, or a team member with wrong files), but a
+    /// flood must not flood the journal: the first few participants are named once each (Fast DDS tries a refused
+    /// one again and again), the rest not.
+    void refuse(const rtps::GuidPrefix_t& who)
+    {
+        const std::string key = prefixKey(who);
+        bool last = false;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (named_.size() >= kRefusalsNamed || std::find(named_.begin(), named_.end(), key) != named_.end()) {
+                return;
+            }
+            named_.push_back(key);
+            last = named_.size() == kRefusalsNamed;
+        }
+        UGV_LOG(Ipc, Warn) << "dds: refused participant " << prefixHex(who)
+                           << ": it has no certificate (DDS Security off), or one this team's identity CA did not "
+                              "sign, or its signed permissions refuse it (if it is the team's, give it this team's "
+                              "files from make_security.sh)"
+                           << (last ? "; further refused participants are not named" : "");
+    }
     static std::string guidKey(const rtps::GUID_t& g)
     {
-        std::string k(reinterpret_cast<const char*>(g.guidPrefix.value), sizeof(g.guidPrefix.value));
-        return k.append(reinterpret_cast<const char*>(g.entityId.value), sizeof(g.entityId.value));
+        return prefixKey(g.guidPrefix)
+            .append(reinterpret_cast<const char*>(g.entityId.value), sizeof(g.entityId.value));
     }
     mutable std::mutex mutex_;
     std::unordered_map<std::string, std::string> byWriter_;
+    std::vector<std::string> named_; ///< the refused participants named on the log (at most kRefusalsNamed)
 };
 
 std::array<SecurityFile, 6> securityFiles(const SecurityConfig& c)
@@ -455,6 +519,23 @@ Bus::~Bus()
     deleteEntities(dds_);
 }
 
+std::size_t Bus::stalledHandshakes(std::chrono::steady_clock::duration olderThan) const
+{
+    const std::shared_lock lock(endpointGuard_);
+    if (identities_ == nullptr || dds_.participant == nullptr) {
+        return 0;
+    }
+    return identities_->handshakes.stalled(WriterIdentities::prefixKey(dds_.participant->guid().guidPrefix),
+                                           HandshakeWatch::Clock::now(), olderThan);
+}
+
+void Bus::forgetHandshakes(const Entities& entities) const
+{
+    if (identities_ != nullptr && entities.participant != nullptr) {
+        identities_->handshakes.forget(WriterIdentities::prefixKey(entities.participant->guid().guidPrefix));
+    }
+}
+
 std::string Bus::writerIdentity(const fdds::SampleInfo& info) const
 {
     return identities_ == nullptr ? std::string() : identities_->identity(info.sample_identity.writer_guid());
@@ -606,6 +687,7 @@ Result<void, Error> Bus::renewEndpoints()
         opened = remake(made[i]);
     }
     if (!opened) {
+        forgetHandshakes(dds_);
         deleteEntities(dds_);
         dds_ = old;
         return Unexpected(opened.error());
@@ -614,6 +696,7 @@ Result<void, Error> Bus::renewEndpoints()
         endpoints_[i].writer = made[i].writer;
         endpoints_[i].reader = made[i].reader;
     }
+    forgetHandshakes(old);
     deleteEntities(old);
     return rosNode_.empty() ? Result<void, Error>{} : writeRosNode();
 }

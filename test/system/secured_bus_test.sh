@@ -5,7 +5,10 @@
 # another has its own certificate, as on a real team, and the intruders join once the certified participants have
 # matched: with one certificate in two live participants, or intruders (failing handshakes) joining at the same
 # time, a certified sender sometimes matched 0 or 1 of its readers in 60 s on this machine (4 of 7 runs), and never
-# in 8 runs (3 beside stress-ng --cpu 2) with this order. Checked:
+# in 8 runs (3 beside stress-ng --cpu 2) with this order. Even so, beside a full CPU load (or the background builds of
+# the test command) Fast DDS 2.9.1 sometimes stalls one pair's handshake for good (2 of 7 runs beside stress-ng: one
+# pair of 5 never authenticated in 150 s while every other pair did in 1 s); bus-send and listen, still waiting for
+# what they expect after 10 s with a handshake unfinished, join the bus again (Bus::stalledHandshakes()). Checked:
 #   1. certified ugv-1 sends its observations: every one is applied (the positive control);
 #   2. a participant without a certificate, and one whose certificate another CA signed (named ugv-2), send UGV 2's
 #      observations, the UAV fixes and the confirmations: 0 of them reach the station;
@@ -156,6 +159,8 @@ listenRefused=$(grep -c "refused: a sample naming 'ugv-2' written by 'ugv-3'" "$
 [ "$listenRefused" -eq "$foreign" ] ||
     fail "$foreign observations naming ugv-2 sent by ugv-3, $listenRefused refused by a certified listen"
 grep -q '"ugv":"ugv-2"' "$work/listen-impersonated.log" && fail "a certified listen printed ugv-3's sample as ugv-2's"
+grep -q "dds: refused participant" "$work/gcs.log" || fail "the station named no refused participant on its log"
+echo "   the station named the participants it refused: $(grep -c "dds: refused participant" "$work/gcs.log")"
 echo "4. ugv-3 as ugv-2: $impersonated of $foreign samples dropped by the station and $listenRefused refused by a" \
     "certified listen; ugv-4's own permissions refuse ugv-2's partition; ugv-1's certificate with ugv-2's" \
     "permissions cannot join"

@@ -356,7 +356,7 @@ int runBusSend(int argc, char** argv)
         return reportError(kBusSendCommand, created.error());
     }
     dds::Bus& b = **created;
-    const bus::ReaderWait wait{static_cast<int>(*readers), *waitTimeout};
+    const bus::ReaderWait wait{static_cast<int>(*readers), *waitTimeout, &b};
     if (args.has("input")) {
         return sendInput(b, args, args.has("rate") ? *rate : 0.0, wait, *linger);
     }

@@ -353,8 +353,12 @@ int listenTo(dds::Bus& bus, const ListenOptions& o, dds::TopicId id = dds::Topic
     T sample;
     eprosima::fastdds::dds::SampleInfo info;
     const bool secured = bus.config().security.enabled;
+    bool rejoin = secured; // while nothing came, until joining again fails (said once)
     while (!gStop.load() && (o.count == 0 || printed < o.count)) {
         bus::followNetworkChanges(bus);
+        if (rejoin && printed + refused == 0 && bus::rejoinIfStalled(bus, kListenCommand) == bus::Rejoin::Failed) {
+            rejoin = false;
+        }
         auto slice = kPollSlice;
         if (o.timeoutS > 0.0) {
             const auto now = std::chrono::steady_clock::now();

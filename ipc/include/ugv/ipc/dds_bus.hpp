@@ -359,6 +359,13 @@ public:
     /// work on until every new one is made, and stay when that fails (a certificate replaced by a wrong one, a file
     /// gone: the error names it), so the bus is never left without them.
     Result<void, Error> renew();
+    /// On a secured bus, how many of this participant's handshakes started more than `olderThan` ago and never
+    /// ended (HandshakeWatch): a handshake Fast DDS 2.9.1 stalled for good (two participants that joined at the same
+    /// moment; renew() joins again with a new participant, whose handshakes start afresh), or one with a participant
+    /// of another CA, which Fast DDS 2.9.1 refuses on one side only (measured: the side that refuses it reports
+    /// nothing). So a count above 0 is a reason to join again only for a process that misses a reader it expects
+    /// (bus-send --wait-readers). 0 on an open bus. Thread-safe.
+    [[nodiscard]] std::size_t stalledHandshakes(std::chrono::steady_clock::duration olderThan) const;
     /// Why the last NetworkChange::Failed.
     [[nodiscard]] const Error& lastNetworkError() const noexcept { return networkError_; }
 
@@ -393,6 +400,8 @@ private:
     /// The participant of config_ with its publishers and subscribers into dds_ (its topics come with the first
     /// endpoints).
     Result<void, Error> openParticipant(const eprosima::fastdds::dds::DomainParticipantQos& qos);
+    /// Forgets the handshakes of the participant of `entities` (before it is deleted).
+    void forgetHandshakes(const Entities& entities) const;
     /// Deletes the participant of `entities` and everything in it.
     static void deleteEntities(Entities& entities) noexcept;
     /// Makes the participant and every endpoint again, the old ones kept until all the new are made (a renewal that

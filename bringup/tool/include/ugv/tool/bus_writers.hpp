@@ -37,9 +37,13 @@ bool sleepUntil(Clock::time_point until);
 struct ReaderWait {
     int readers = 1;
     double timeoutS = kDefaultWaitReadersS;
+    /// The bus to join again while a reader is missing and a secured handshake has not ended after kHandshakeStall
+    /// (rejoinIfStalled()); nullptr: just wait.
+    ipc::dds::Bus* bus = nullptr;
 };
 
-/// Waits until `until` for wait.readers matched readers of `writer`; a warning on stderr if fewer came.
+/// Waits until `until` for wait.readers matched readers of `writer`, joining wait.bus again while a handshake is
+/// stalled; a warning on stderr if fewer came.
 template <class T>
 void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, Clock::time_point until,
                     const std::string& topic, const std::string& command)
@@ -47,7 +51,11 @@ void waitForReaders(const ipc::dds::Writer<T>& writer, const ReaderWait& wait, C
     if (wait.readers <= 0) {
         return;
     }
+    bool rejoin = wait.bus != nullptr; // until joining again fails (said once)
     while (writer.matched() < wait.readers && Clock::now() < until && !gStop.load()) {
+        if (rejoin && rejoinIfStalled(*wait.bus, command) == Rejoin::Failed) {
+            rejoin = false;
+        }
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     if (writer.matched() < wait.readers && !gStop.load()) {

@@ -1,0 +1,63 @@
+#include "ugv/ipc/handshake_watch.hpp"
+
+#include <algorithm>
+#include <iterator>
+
+namespace ugv::ipc::dds {
+
+void HandshakeWatch::discovered(const std::string& local, const std::string& remote, Clock::time_point at)
+{
+    const std::lock_guard lock(mutex_);
+    // An authentication reported before the discovery (or a second discovery) keeps what is known.
+    entries_.try_emplace(key(local, remote), Entry{at, false});
+    trim();
+}
+
+void HandshakeWatch::ended(const std::string& local, const std::string& remote)
+{
+    const std::lock_guard lock(mutex_);
+    auto [it, added] = entries_.try_emplace(key(local, remote), Entry{Clock::now(), true});
+    it->second.ended = true;
+    if (added) {
+        trim();
+    }
+}
+
+void HandshakeWatch::removed(const std::string& local, const std::string& remote)
+{
+    const std::lock_guard lock(mutex_);
+    entries_.erase(key(local, remote));
+}
+
+void HandshakeWatch::forget(const std::string& local)
+{
+    const std::lock_guard lock(mutex_);
+    const std::string prefix = local + '|';
+    for (auto it = entries_.begin(); it != entries_.end();) {
+        it = it->first.compare(0, prefix.size(), prefix) == 0 ? entries_.erase(it) : std::next(it);
+    }
+}
+
+std::size_t HandshakeWatch::stalled(const std::string& local, Clock::time_point now, Clock::duration olderThan) const
+{
+    const std::lock_guard lock(mutex_);
+    const std::string prefix = local + '|';
+    return static_cast<std::size_t>(std::count_if(entries_.begin(), entries_.end(), [&](const auto& e) {
+        return !e.second.ended && e.second.since <= now - olderThan && e.first.compare(0, prefix.size(), prefix) == 0;
+    }));
+}
+
+void HandshakeWatch::trim()
+{
+    while (entries_.size() > kMaxEntries) {
+        // The ended entries go first (only a REMOVED would otherwise free them), then the oldest unfinished.
+        auto victim = std::find_if(entries_.begin(), entries_.end(), [](const auto& e) { return e.second.ended; });
+        if (victim == entries_.end()) {
+            victim = std::min_element(entries_.begin(), entries_.end(),
+                                      [](const auto& a, const auto& b) { return a.second.since < b.second.since; });
+        }
+        entries_.erase(victim);
+    }
+}
+
+} // namespace ugv::ipc::dds
