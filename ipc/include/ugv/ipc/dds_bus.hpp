@@ -363,8 +363,8 @@ public:
     /// ended (HandshakeWatch): a handshake Fast DDS 2.9.1 stalled for good (two participants that joined at the same
     /// moment; renew() joins again with a new participant, whose handshakes start afresh), or one with a participant
     /// of another CA, which Fast DDS 2.9.1 refuses on one side only (measured: the side that refuses it reports
-    /// nothing). So a count above 0 is a reason to join again only for a process that misses a reader it expects
-    /// (bus-send --wait-readers). 0 on an open bus. Thread-safe.
+    /// nothing). So a count above 0 is a reason to join again only for a process that misses what it expects
+    /// (bus-send's readers, listen's first sample). 0 on an open bus. Thread-safe.
     [[nodiscard]] std::size_t stalledHandshakes(std::chrono::steady_clock::duration olderThan) const;
     /// Why the last NetworkChange::Failed.
     [[nodiscard]] const Error& lastNetworkError() const noexcept { return networkError_; }
