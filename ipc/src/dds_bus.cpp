@@ -20,6 +20,9 @@
 #include <utility>
 #include <vector>
 
+#include <openssl/pem.h>
+#include <openssl/x509.h>
+
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
@@ -115,6 +118,26 @@ constexpr std::uintmax_t kMaxSecurityFileBytes = 1U << 20U;
 constexpr const char* kSecurityFix =
     "make the files with bringup/deploy/security/make_security.sh (README \"Secured bus\")";
 
+/// The subject of the CA certificate in PEM file `path`, in the form Fast DDS 2.9.1's PKI-DH announces it in a
+/// participant's identity token (`dds.ca.sn`: OpenSSL's one-line form, e.g. "/CN=ugvsense team CA 0123456789abcdef").
+Result<std::string, Error> caSubject(const std::string& path, const std::string& where)
+{
+    const Error bad{where, "cannot read a certificate from '" + path + "'", kSecurityFix};
+    std::unique_ptr<BIO, decltype(&BIO_free)> file(BIO_new_file(path.c_str(), "r"), &BIO_free);
+    if (!file) {
+        return Unexpected(bad);
+    }
+    std::unique_ptr<X509, decltype(&X509_free)> cert(PEM_read_bio_X509(file.get(), nullptr, nullptr, nullptr),
+                                                     &X509_free);
+    char* line = cert ? X509_NAME_oneline(X509_get_subject_name(cert.get()), nullptr, 0) : nullptr;
+    if (line == nullptr) {
+        return Unexpected(bad);
+    }
+    std::string subject(line);
+    OPENSSL_free(line);
+    return subject;
+}
+
 /// The Fast DDS properties that load the three builtin security plugins with `c`'s files.
 void addSecurityProperties(const SecurityConfig& c, fdds::DomainParticipantQos& pq)
 {
@@ -189,6 +212,9 @@ void applyPartitions(const BusConfig& config, fdds::PublisherQos& pubq, fdds::Su
 /// reads them (the correlator task is SCHED_OTHER).
 class WriterIdentities : public fdds::DomainParticipantListener {
 public:
+    /// @param[in] caSubject  the subject of this team's identity CA, as peers of the team announce it (caSubject())
+    explicit WriterIdentities(std::string caSubject) : caSubject_(std::move(caSubject)) {}
+
     void on_participant_discovery(fdds::DomainParticipant* participant,
                                   eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override
     {
@@ -196,7 +222,12 @@ public:
         const std::string local = prefixKey(participant->guid().guidPrefix);
         const std::string remote = prefixKey(info.info.m_guid.guidPrefix);
         if (info.status == Status::DISCOVERED_PARTICIPANT) {
-            handshakes.discovered(local, remote, HandshakeWatch::Clock::now());
+            // The identity token a peer announces names its CA (an open participant's names none).
+            const auto& token = info.info.identity_token_.properties();
+            const bool sameCa = std::any_of(token.begin(), token.end(), [this](const rtps::Property& p) {
+                return p.name() == "dds.ca.sn" && p.value() == caSubject_;
+            });
+            handshakes.discovered(local, remote, HandshakeWatch::Clock::now(), sameCa);
         } else if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT) {
             handshakes.removed(local, remote);
         }
@@ -272,6 +303,7 @@ private:
         return prefixKey(g.guidPrefix)
             .append(reinterpret_cast<const char*>(g.entityId.value), sizeof(g.entityId.value));
     }
+    const std::string caSubject_;
     mutable std::mutex mutex_;
     std::unordered_map<std::string, std::string> byWriter_;
     std::vector<std::string> named_; ///< the refused participants named on the log (at most kRefusalsNamed)
@@ -469,7 +501,11 @@ Result<std::unique_ptr<Bus>, Error> Bus::create(const BusConfig& config)
     std::unique_ptr<Bus> bus(new Bus());
     bus->config_ = config;
     if (config.security.enabled) {
-        bus->identities_ = std::make_unique<WriterIdentities>();
+        auto ca = caSubject(config.security.identityCa, "dds.security.identity_ca");
+        if (!ca) {
+            return Unexpected(ca.error());
+        }
+        bus->identities_ = std::make_unique<WriterIdentities>(std::move(*ca));
     }
     upIpv4Addresses(bus->startAddresses_);
     bus->lastAddresses_ = bus->startAddresses_;
@@ -519,14 +555,54 @@ Bus::~Bus()
     deleteEntities(dds_);
 }
 
-std::size_t Bus::stalledHandshakes(std::chrono::steady_clock::duration olderThan) const
+template <class Count>
+HandshakeWatch::ByCa Bus::watched(Count count) const
 {
     const std::shared_lock lock(endpointGuard_);
     if (identities_ == nullptr || dds_.participant == nullptr) {
-        return 0;
+        return {};
     }
-    return identities_->handshakes.stalled(WriterIdentities::prefixKey(dds_.participant->guid().guidPrefix),
-                                           HandshakeWatch::Clock::now(), olderThan);
+    return count(WriterIdentities::prefixKey(dds_.participant->guid().guidPrefix));
+}
+
+HandshakeWatch::ByCa Bus::unfinishedHandshakes(std::chrono::steady_clock::duration olderThan) const
+{
+    const auto now = HandshakeWatch::Clock::now();
+    return watched([&](const std::string& local) { return identities_->handshakes.unfinished(local, now, olderThan); });
+}
+
+HandshakeWatch::ByCa Bus::handshakePeers() const
+{
+    return watched([&](const std::string& local) { return identities_->handshakes.peers(local); });
+}
+
+std::string describe(const StallRejoin& r)
+{
+    std::string out = std::to_string(r.stalled) +
+                      " secured handshake(s) with participants of this team's CA unfinished after " +
+                      std::to_string(kHandshakeStall.count()) +
+                      " s (Fast DDS 2.9.1 sometimes stalls two participants that join at the same moment, for good; a "
+                      "participant that names this CA but holds another's certificate looks the same): ";
+    out += r.outcome == StallRejoin::Failed ? "joining the bus again failed: " + r.error.message()
+                                            : std::string("joined the bus again as a new participant");
+    const auto wait = std::chrono::duration_cast<std::chrono::seconds>(r.nextWait).count();
+    return out + "; the next join for a stall waits at least " + std::to_string(wait) + " s";
+}
+
+StallRejoin Bus::rejoinIfStalled()
+{
+    const auto now = HandshakeWatch::Clock::now();
+    const std::size_t stalled = stalledHandshakes(kHandshakeStall);
+    if (!rejoinBackoff_.due(now, stalled)) {
+        return StallRejoin{};
+    }
+    rejoinBackoff_.joined(now);
+    StallRejoin out{StallRejoin::Rejoined, stalled, rejoinBackoff_.wait(), {}};
+    if (auto renewed = renew(); !renewed) {
+        out.outcome = StallRejoin::Failed;
+        out.error = renewed.error();
+    }
+    return out;
 }
 
 void Bus::forgetHandshakes(const Entities& entities) const

@@ -5,18 +5,18 @@
 
 namespace ugv::ipc::dds {
 
-void HandshakeWatch::discovered(const std::string& local, const std::string& remote, Clock::time_point at)
+void HandshakeWatch::discovered(const std::string& local, const std::string& remote, Clock::time_point at, bool sameCa)
 {
     const std::lock_guard lock(mutex_);
     // An authentication reported before the discovery (or a second discovery) keeps what is known.
-    entries_.try_emplace(key(local, remote), Entry{at, false});
+    entries_.try_emplace(key(local, remote), Entry{at, false, sameCa});
     trim();
 }
 
 void HandshakeWatch::ended(const std::string& local, const std::string& remote)
 {
     const std::lock_guard lock(mutex_);
-    auto [it, added] = entries_.try_emplace(key(local, remote), Entry{Clock::now(), true});
+    auto [it, added] = entries_.try_emplace(key(local, remote), Entry{Clock::now(), true, true});
     it->second.ended = true;
     if (added) {
         trim();
@@ -38,13 +38,29 @@ void HandshakeWatch::forget(const std::string& local)
     }
 }
 
-std::size_t HandshakeWatch::stalled(const std::string& local, Clock::time_point now, Clock::duration olderThan) const
+HandshakeWatch::ByCa HandshakeWatch::unfinished(const std::string& local, Clock::time_point now,
+                                                Clock::duration olderThan) const
+{
+    return count(local, now - olderThan, true);
+}
+
+HandshakeWatch::ByCa HandshakeWatch::peers(const std::string& local) const
+{
+    return count(local, Clock::time_point::max(), false);
+}
+
+HandshakeWatch::ByCa HandshakeWatch::count(const std::string& local, Clock::time_point startedBy,
+                                           bool unfinishedOnly) const
 {
     const std::lock_guard lock(mutex_);
     const std::string prefix = local + '|';
-    return static_cast<std::size_t>(std::count_if(entries_.begin(), entries_.end(), [&](const auto& e) {
-        return !e.second.ended && e.second.since <= now - olderThan && e.first.compare(0, prefix.size(), prefix) == 0;
-    }));
+    ByCa out;
+    for (const auto& [k, e] : entries_) {
+        if (!(unfinishedOnly && e.ended) && e.since <= startedBy && k.compare(0, prefix.size(), prefix) == 0) {
+            ++(e.sameCa ? out.sameCa : out.otherCa);
+        }
+    }
+    return out;
 }
 
 void HandshakeWatch::trim()

@@ -18,6 +18,9 @@
 # list it as a node), and read rt/*.
 # Permissions of a ROS 2 node (--ros NAME): every ROS 2 topic (rt/*, rq/*, rr/*, ros_discovery_info) in the
 # default partition, none of ours: give its folder to the node as its SROS2 enclave.
+# The CA's subject is "CN=ugvsense team CA <16 random hex digits>": its own to this team, so a participant
+# can tell a peer of another team's CA (which names its CA in discovery) from a handshake of its own team that
+# stalled (ugvsense joins the bus again only for the latter).
 # A CA already in OUT is reused (add a vehicle later); an existing participant folder is replaced.
 # Usage: make_security.sh OUT --partition P [--days N] [--ros NAME]... NAME...
 set -euo pipefail
@@ -48,7 +51,8 @@ ca_key=$out/ca/ca.key ca_cert=$out/ca/ca.cert.pem
 if [ ! -s "$ca_key" ] || [ ! -s "$ca_cert" ]; then
     openssl genpkey -algorithm EC -pkeyopt ec_paramgen_curve:P-256 -out "$ca_key" 2>/dev/null
     chmod 600 "$ca_key"
-    openssl req -x509 -new -key "$ca_key" -subj "/CN=ugvsense team CA" -days "$days" -sha256 \
+    openssl req -x509 -new -key "$ca_key" -subj "/CN=ugvsense team CA $(openssl rand -hex 8)" -days "$days" \
+        -sha256 \
         -addext "basicConstraints=critical,CA:TRUE" -addext "keyUsage=critical,keyCertSign,cRLSign,digitalSignature" -out "$ca_cert"
 fi
 not_before=$(date -u +%Y-%m-%dT%H:%M:%S -d "-1 day")

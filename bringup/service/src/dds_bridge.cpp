@@ -43,6 +43,17 @@ ipc::dds::NetworkChange followNetworkChanges(ipc::dds::Bus& bus)
     return change;
 }
 
+bool rejoinIfStalled(ipc::dds::Bus& bus)
+{
+    const ipc::dds::StallRejoin r = bus.rejoinIfStalled();
+    if (r.outcome == ipc::dds::StallRejoin::Rejoined) {
+        UGV_LOG(Ipc, Warn) << ipc::dds::describe(r);
+    } else if (r.outcome == ipc::dds::StallRejoin::Failed) {
+        UGV_LOG(Ipc, Error) << ipc::dds::describe(r);
+    }
+    return r.outcome != ipc::dds::StallRejoin::None;
+}
+
 ipc::dds::BusConfig busConfig(const adapters::ServiceConfig& config)
 {
     ipc::dds::BusConfig b;
@@ -156,6 +167,9 @@ void DdsBridge::idle() noexcept
         if (followNetworkChanges(*bus_) != ipc::dds::NetworkChange::None) {
             interfaceChanges_.fetch_add(1, std::memory_order_relaxed);
         }
+        if (rejoinIfStalled(*bus_)) {
+            stallRejoins_.fetch_add(1, std::memory_order_relaxed);
+        }
     } catch (...) {
         writeFailures_.fetch_add(1, std::memory_order_relaxed);
     }
@@ -189,7 +203,8 @@ DdsBridgeStats DdsBridge::stats() const noexcept
     return {framesSent_.load(std::memory_order_relaxed),    writeFailures_.load(std::memory_order_relaxed),
             posesUsed_.load(std::memory_order_relaxed),     posesForeign_.load(std::memory_order_relaxed),
             posesRejected_.load(std::memory_order_relaxed), posesImpersonated_.load(std::memory_order_relaxed),
-            stalePoses_.load(std::memory_order_relaxed),    interfaceChanges_.load(std::memory_order_relaxed)};
+            stalePoses_.load(std::memory_order_relaxed),    interfaceChanges_.load(std::memory_order_relaxed),
+            stallRejoins_.load(std::memory_order_relaxed)};
 }
 
 } // namespace ugv::service

@@ -86,19 +86,21 @@ std::string summaryLine(const PublishedFrame& frame)
 std::string formatBusReport(const RunResult& r)
 {
     std::string out;
-    char line[400];
+    char line[512];
     if (r.bus) {
         (void)std::snprintf(
             line, sizeof(line),
             "dds: %llu frame(s) sent (sectors, two LaserScans, PointCloud2), %llu write failure(s); poses %llu "
             "used, %llu of other vehicles, %llu refused, %llu in this vehicle's name by another participant; %llu "
-            "frame(s) with a stale or no pose; %llu network interface change(s) followed\n",
+            "frame(s) with a stale or no pose; %llu network interface change(s) followed; %llu join(s) again for a "
+            "stalled secured handshake\n",
             static_cast<unsigned long long>(r.bus->framesSent), static_cast<unsigned long long>(r.bus->writeFailures),
             static_cast<unsigned long long>(r.bus->posesUsed), static_cast<unsigned long long>(r.bus->posesForeign),
             static_cast<unsigned long long>(r.bus->posesRejected),
             static_cast<unsigned long long>(r.bus->posesImpersonated),
             static_cast<unsigned long long>(r.bus->stalePoses),
-            static_cast<unsigned long long>(r.bus->interfaceChanges));
+            static_cast<unsigned long long>(r.bus->interfaceChanges),
+            static_cast<unsigned long long>(r.bus->stallRejoins));
         out += line;
     }
     if (r.correlator) {
@@ -158,6 +160,7 @@ Result<RunResult, Error> runCorrelatorOnly(const adapters::ServiceConfig& config
             lastPingNs = now;
         }
         (void)followNetworkChanges(bus); // a station's link that came up after the start (vehicles: DdsBridge)
+        (void)rejoinIfStalled(bus);      // a secured handshake Fast DDS left unfinished
         sleepMs(kMonitorPoll);
     }
     systemd.stopping();

@@ -3,11 +3,13 @@
 // and counted, while ugv-1's localisation (another participant with ugv-1's certificate) is used. The team's files
 // are made by bringup/deploy/security/make_security.sh (skipped with a message without openssl). And a renewal of a
 // secured bus (what it does when the network changes) makes new endpoints that pass the handshakes again, or, when it
-// cannot, leaves the bus working as it was.
+// cannot, leaves the bus working as it was. A handshake that never ends with a peer naming the team's CA makes the
+// service join the bus again (at the back-off's pace); one with a peer of another CA does not.
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -46,14 +48,16 @@ protected:
         std::filesystem::remove_all(folder_, ec); // the private keys too
     }
 
-    adapters::ServiceConfig vehicle(const std::string& identity) const
+    /// `identity`'s files from this team (or from `team`, another folder made by make_security.sh).
+    adapters::ServiceConfig vehicle(const std::string& identity, const std::filesystem::path& team = {}) const
     {
         adapters::ServiceConfig c;
         c.vehicleId = identity;
         c.dds.domainId = 150 + static_cast<int>(::getpid() % 80);
         c.dds.partition = partition_;
         c.dds.security.enabled = true;
-        const dds::SecurityConfig files = dds::securityFromFolder((folder_ / identity).string(), identity);
+        const dds::SecurityConfig files =
+            dds::securityFromFolder(((team.empty() ? folder_ : team) / identity).string(), identity);
         c.dds.security.identityCa = files.identityCa;
         c.dds.security.certificate = files.certificate;
         c.dds.security.privateKey = files.privateKey;
@@ -192,6 +196,133 @@ TEST_F(SecuredTeam, ARenewalThatCannotMakeTheParticipantLeavesTheBusWorkingAndTh
     EXPECT_NE(poseOut->guid(), before) << "the writer was not made again";
     EXPECT_TRUE(arrives(*poseOut, *poseIn, pose)) << "a renewed writer never passed the secured handshake";
     EXPECT_TRUE(arrives(*sectorsOut, *sectorsIn, sectors)) << "a renewed reader never passed the secured handshake";
+}
+
+/// Polls `done` every 100 ms for up to 30 s.
+template <class Done>
+bool eventually(Done done)
+{
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!done()) {
+        if (std::chrono::steady_clock::now() >= deadline) {
+            return false;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return true;
+}
+
+// A participant of another CA leaves a handshake unfinished for good on one side (Fast DDS 2.9.1 reports nothing
+// there); the peers' identity tokens tell it from a stalled handshake of the team's own, which alone makes a bus join
+// again (Bus::rejoinIfStalled()).
+TEST_F(SecuredTeam, APeerOfAnotherTeamsCaIsNotTakenForAStalledHandshake)
+{
+    // Arrange: two vehicles of the team, authenticated to each other before the intruder comes.
+    const std::filesystem::path rogueTeam = folder_ / "rogue";
+    const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" +
+                                rogueTeam.string() + "' --partition " + partition_ + " ugv-2 >/dev/null 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    auto a = dds::Bus::create(busConfig(vehicle("ugv-1")));
+    auto b = dds::Bus::create(busConfig(vehicle("ugv-2")));
+    ASSERT_TRUE(a) << a.error().message();
+    ASSERT_TRUE(b) << b.error().message();
+    const auto teamDone = [&] {
+        (void)(*a)->rejoinIfStalled(); // two participants that join at the same moment may stall (the remedy)
+        (void)(*b)->rejoinIfStalled();
+        return (*a)->handshakePeers().sameCa == 1 && (*b)->handshakePeers().sameCa == 1 &&
+               (*a)->stalledHandshakes(std::chrono::seconds(0)) == 0 &&
+               (*b)->stalledHandshakes(std::chrono::seconds(0)) == 0;
+    };
+    ASSERT_TRUE(eventually(teamDone)) << "the team's two participants never authenticated each other (or one was "
+                                         "not taken for a peer of this team's CA)";
+
+    // Act: ugv-2 of another CA joins.
+    auto rogue = dds::Bus::create(busConfig(vehicle("ugv-2", rogueTeam)));
+    ASSERT_TRUE(rogue) << rogue.error().message();
+    const auto foreignUnfinished = [&] {
+        std::size_t n = 0;
+        for (const auto* bus : {&*a, &*b, &*rogue}) {
+            n += (**bus).unfinishedHandshakes(std::chrono::seconds(0)).otherCa;
+        }
+        return n;
+    };
+
+    // Assert: each pair with the intruder stays unfinished on one side, counted apart from the team's own; none of
+    // the three has a stalled handshake, so none would join again.
+    EXPECT_TRUE(eventually([&] { return foreignUnfinished() >= 2; }))
+        << "expected the two handshakes with the intruder unfinished on one side each, got " << foreignUnfinished();
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    for (const auto* bus : {&*a, &*b, &*rogue}) {
+        EXPECT_EQ((**bus).stalledHandshakes(std::chrono::seconds(0)), 0U);
+    }
+    EXPECT_EQ((*rogue)->handshakePeers().sameCa, 0U) << "the intruder took the team's CA for its own";
+    EXPECT_EQ((*a)->handshakePeers().sameCa, 1U);
+}
+
+// What a stall looks like from one side: a peer that names this team's CA and whose handshake never ends. An impostor
+// (a CA of its own under the team CA's very subject) makes one for good: the side its certificate reaches refuses
+// it, the other waits forever. On that side the service's DDS task (DdsBridge) joins the bus again once the
+// handshake is 10 s old, then not again before the back-off's wait.
+TEST_F(SecuredTeam, AHandshakeWithAPeerNamingTheTeamsCaThatNeverEndsMakesTheServiceJoinAgainAtTheBackoffsPace)
+{
+    // Arrange: ugv-1 of the team, and an impostor ugv-2 whose CA bears the team CA's subject.
+    const std::filesystem::path impostor = folder_ / "impostor";
+    const std::string command =
+        "set -e; mkdir -p '" + impostor.string() + "/ca'; cd '" + impostor.string() +
+        "/ca'; openssl genpkey -algorithm EC -pkeyopt ec_paramgen_curve:P-256 -out ca.key 2>/dev/null; "
+        "openssl req -x509 -new -key ca.key -days 30 -sha256 -out ca.cert.pem -subj \"$(openssl x509 -in '" +
+        (folder_ / "ca" / "ca.cert.pem").string() +
+        "' -noout -subject -nameopt compat | sed 's/^subject=//')\" -addext basicConstraints=critical,CA:TRUE "
+        "-addext keyUsage=critical,keyCertSign,cRLSign,digitalSignature; bash '" UGV_SOURCE_DIR
+        "/bringup/deploy/security/make_security.sh' '" +
+        impostor.string() + "' --partition " + partition_ + " ugv-2 >/dev/null 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    // Each side runs a service's DDS task (the bridge's loop); the side the impostor's certificate never reaches
+    // waits for good (which side that is, is Fast DDS's choice).
+    const std::array<adapters::ServiceConfig, 2> configs{vehicle("ugv-1"), vehicle("ugv-2", impostor)};
+    std::array<std::unique_ptr<dds::Bus>, 2> buses;
+    std::array<std::unique_ptr<DdsBridge>, 2> bridges;
+    std::array<dds::Writer<dds::msg::VehiclePose>, 2> writers;
+    std::array<eprosima::fastrtps::rtps::GUID_t, 2> before;
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < 2; ++i) {
+        auto bus = dds::Bus::create(busConfig(configs[i]));
+        ASSERT_TRUE(bus) << bus.error().message();
+        buses[i] = std::move(*bus);
+        auto bridge = DdsBridge::create(*buses[i], configs[i], std::chrono::seconds(1));
+        ASSERT_TRUE(bridge) << bridge.error().message();
+        bridges[i] = std::move(*bridge);
+        auto writer = buses[i]->writer<dds::msg::VehiclePose>();
+        ASSERT_TRUE(writer) << writer.error().message();
+        writers[i] = *writer;
+        before[i] = writers[i].guid();
+    }
+    const auto rejoins = [&](std::size_t i) { return bridges[i]->stats().stallRejoins; };
+    const auto turn = [&] {
+        for (auto& bridge : bridges) {
+            bridge->idle();
+        }
+    };
+
+    // Act: the two services run until one joins again, and 3 s more.
+    const bool joined = eventually([&] {
+        turn();
+        return rejoins(0) + rejoins(1) > 0;
+    });
+    const auto firstJoin = std::chrono::steady_clock::now() - start;
+    for (int i = 0; i < 30; ++i) {
+        turn();
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+
+    // Assert: one side joined again (a new participant: its writers made again), not before the handshake was 10 s
+    // old, and not a second time within the back-off's wait.
+    ASSERT_TRUE(joined) << "neither service joined again";
+    EXPECT_GE(firstJoin, dds::kHandshakeStall);
+    const std::size_t side = rejoins(0) > 0 ? 0 : 1;
+    EXPECT_EQ(rejoins(side), 1U);
+    EXPECT_NE(writers[side].guid(), before[side]) << "the writer was not made again";
+    EXPECT_EQ(buses[side]->rejoinIfStalled().outcome, dds::StallRejoin::None);
 }
 
 } // namespace

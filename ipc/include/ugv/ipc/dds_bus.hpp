@@ -56,6 +56,7 @@
 
 #include "rmw_dds_commonPubSubTypes.h"
 #include "ros2PubSubTypes.h"
+#include "ugv/ipc/handshake_watch.hpp"
 #include "ugv/platform/error.hpp"
 #include "ugv/platform/result.hpp"
 #include "ugvsensePubSubTypes.h"
@@ -293,6 +294,25 @@ constexpr const char* kNetworkFollowedNote =
 /// What they say on NetworkChange::Failed, before Bus::lastNetworkError().
 constexpr const char* kNetworkFailedPrefix = "network interfaces changed, and the DDS bus could not follow: ";
 
+/// How long a secured handshake with a peer of this team's CA may stay unfinished before it counts as stalled
+/// (every other handshake here ends in about 1 s, 20 s on a loaded CI machine at the worst seen).
+constexpr std::chrono::seconds kHandshakeStall{10};
+
+/// What Bus::rejoinIfStalled() did.
+struct StallRejoin {
+    enum Outcome : std::uint8_t {
+        None,     ///< no handshake stalled, or the back-off's wait is not over
+        Rejoined, ///< the bus joined again (a new participant; handles kept)
+        Failed,   ///< joining again failed (`error`); the old participant is kept, the next try waits `nextWait`
+    };
+    Outcome outcome = None;
+    std::size_t stalled = 0;                        ///< the stalled handshakes that made it join
+    std::chrono::steady_clock::duration nextWait{}; ///< the least time before it joins again for a stall
+    Error error;
+};
+/// What the service and the tools say on a StallRejoin that joined or failed.
+std::string describe(const StallRejoin& rejoin);
+
 class Bus {
 public:
     /// The participant (domain, name, transports, discovery) and its publishers and subscribers.
@@ -359,13 +379,28 @@ public:
     /// work on until every new one is made, and stay when that fails (a certificate replaced by a wrong one, a file
     /// gone: the error names it), so the bus is never left without them.
     Result<void, Error> renew();
-    /// On a secured bus, how many of this participant's handshakes started more than `olderThan` ago and never
-    /// ended (HandshakeWatch): a handshake Fast DDS 2.9.1 stalled for good (two participants that joined at the same
-    /// moment; renew() joins again with a new participant, whose handshakes start afresh), or one with a participant
-    /// of another CA, which Fast DDS 2.9.1 refuses on one side only (measured: the side that refuses it reports
-    /// nothing). So a count above 0 is a reason to join again only for a process that misses what it expects
-    /// (bus-send's readers, listen's first sample). 0 on an open bus. Thread-safe.
-    [[nodiscard]] std::size_t stalledHandshakes(std::chrono::steady_clock::duration olderThan) const;
+    /// On a secured bus, how many of this participant's handshakes with peers that name this team's CA in their
+    /// identity token started more than `olderThan` ago and never ended (HandshakeWatch): a handshake Fast DDS 2.9.1
+    /// stalled for good (two participants that joined at the same moment; renew() joins again with a new
+    /// participant, whose handshakes start afresh). A participant of another CA, which Fast DDS 2.9.1 refuses on one
+    /// side only (measured: the side that it refuses reports nothing), is not counted. 0 on an open bus.
+    /// Thread-safe.
+    [[nodiscard]] std::size_t stalledHandshakes(std::chrono::steady_clock::duration olderThan) const
+    {
+        return unfinishedHandshakes(olderThan).sameCa;
+    }
+    /// The same, with the handshakes that never ended with participants naming another CA or none (refused on their
+    /// side; joining again cannot help) counted apart. {0, 0} on an open bus. Thread-safe.
+    [[nodiscard]] HandshakeWatch::ByCa unfinishedHandshakes(std::chrono::steady_clock::duration olderThan) const;
+    /// The participants this one discovered on a secured bus (and has not lost), by the CA they name (tests and
+    /// diagnostics). {0, 0} on an open bus. Thread-safe.
+    [[nodiscard]] HandshakeWatch::ByCa handshakePeers() const;
+    /// Joins the bus again (renew()) when a handshake with a peer of this team's CA has stalled for kHandshakeStall,
+    /// at RejoinBackoff's pace (at once, then after 10 s, 20 s ... 320 s while stalls persist): a handshake Fast DDS
+    /// 2.9.1 left unfinished costs the pair every sample for good (measured: one pair of 5 in 2 of 7 loaded runs),
+    /// and a new participant's handshakes start afresh. Call it on the owner thread's loop, as
+    /// followNetworkChanges() (the service's DDS task, a ground station's main loop, the tools while they wait).
+    StallRejoin rejoinIfStalled();
     /// Why the last NetworkChange::Failed.
     [[nodiscard]] const Error& lastNetworkError() const noexcept { return networkError_; }
 
@@ -400,6 +435,9 @@ private:
     /// The participant of config_ with its publishers and subscribers into dds_ (its topics come with the first
     /// endpoints).
     Result<void, Error> openParticipant(const eprosima::fastdds::dds::DomainParticipantQos& qos);
+    /// `count`(this participant's HandshakeWatch key), {0, 0} on an open bus (endpointGuard_ held shared).
+    template <class Count>
+    [[nodiscard]] HandshakeWatch::ByCa watched(Count count) const;
     /// Forgets the handshakes of the participant of `entities` (before it is deleted).
     void forgetHandshakes(const Entities& entities) const;
     /// Deletes the participant of `entities` and everything in it.
@@ -424,6 +462,7 @@ private:
     std::vector<std::uint32_t> startAddresses_; ///< the interfaces' IPv4 addresses the endpoints were made with
     std::vector<std::uint32_t> lastAddresses_;  ///< at the last check
     std::chrono::steady_clock::time_point nextInterfaceCheck_{};
+    RejoinBackoff rejoinBackoff_; ///< rejoinIfStalled()'s pace
 };
 
 // ---- template bodies ----

@@ -32,6 +32,7 @@ struct DdsBridgeStats {
     std::uint64_t posesImpersonated = 0; ///< secured bus: poses naming this vehicle written by another participant
     std::uint64_t stalePoses = 0;        ///< frames sent with a stale or no pose
     std::uint64_t interfaceChanges = 0;  ///< network interface changes the bus followed (or failed to: logged)
+    std::uint64_t stallRejoins = 0;      ///< secured bus: joins again for a stalled handshake (or tries: logged)
 };
 
 class DdsBridge final : public BusSink {
@@ -81,12 +82,15 @@ private:
     std::atomic<std::uint64_t> posesImpersonated_{0};
     std::atomic<std::uint64_t> stalePoses_{0};
     std::atomic<std::uint64_t> interfaceChanges_{0};
+    std::atomic<std::uint64_t> stallRejoins_{0};
 };
 
 /// The ROS 2 namespace of the config: dds.ros_namespace, else vehicle_id's letters, digits and _ (ugv-1 -> ugv1).
 std::string rosNamespace(const adapters::ServiceConfig& config);
 /// Bus::followNetworkChanges() with its outcome logged (a vehicle's bus task, a ground station's main loop).
 ipc::dds::NetworkChange followNetworkChanges(ipc::dds::Bus& bus);
+/// Bus::rejoinIfStalled() with its outcome logged (the same two places). @return whether it joined again or tried
+bool rejoinIfStalled(ipc::dds::Bus& bus);
 /// The bus settings of the config (participant "ugvsense/<vehicle>").
 ipc::dds::BusConfig busConfig(const adapters::ServiceConfig& config);
 

@@ -52,34 +52,21 @@ inline void followNetworkChanges(ipc::dds::Bus& bus)
     }
 }
 
-/// A secured handshake unfinished this long, while a command still waits for what it expects, is taken as stalled
-/// for good; one that ends takes about 1 s here, 2 s beside a full CPU load.
-inline constexpr auto kHandshakeStall = std::chrono::seconds(10);
-
 /// What rejoinIfStalled() did.
 enum class Rejoin : std::uint8_t { NotNeeded, Joined, Failed };
 
-/// For a command still waiting for what it expects (bus-send's readers, listen's first sample): when a secured
-/// handshake of `bus` has not ended after kHandshakeStall (Bus::stalledHandshakes(): Fast DDS 2.9.1 sometimes stalls
-/// two participants that join at the same moment, for good), says so on stderr and joins the bus again
-/// (Bus::renew(): a new participant, whose handshakes start afresh; readers and writers keep their handles). A
-/// participant of another CA leaves a handshake unfinished too; then this joins again every kHandshakeStall for
-/// nothing worse than the warning.
+/// For a command still waiting for what it expects (bus-send's readers, listen's first sample): Bus::rejoinIfStalled()
+/// (a secured handshake with a peer of this team's CA unfinished after 10 s: Fast DDS 2.9.1 sometimes stalls two
+/// participants that join at the same moment, for good; a new participant's handshakes start afresh), saying on
+/// stderr what it did.
 inline Rejoin rejoinIfStalled(ipc::dds::Bus& bus, const std::string& command)
 {
-    const std::size_t stalled = bus.stalledHandshakes(kHandshakeStall);
-    if (stalled == 0) {
+    const ipc::dds::StallRejoin r = bus.rejoinIfStalled();
+    if (r.outcome == ipc::dds::StallRejoin::None) {
         return Rejoin::NotNeeded;
     }
-    std::cerr << "ugvsense " << command << ": warning: still waiting, and " << stalled
-              << " secured handshake(s) have not ended after " << kHandshakeStall.count()
-              << " s (Fast DDS 2.9.1 sometimes stalls two participants that join at the same moment, for good; a "
-                 "participant of another CA leaves one unfinished too): joining the bus again\n";
-    if (auto renewed = bus.renew(); !renewed) {
-        std::cerr << "ugvsense " << command << ": warning: joining again failed: " << renewed.error().message() << '\n';
-        return Rejoin::Failed;
-    }
-    return Rejoin::Joined;
+    std::cerr << "ugvsense " << command << ": warning: still waiting; " << ipc::dds::describe(r) << '\n';
+    return r.outcome == ipc::dds::StallRejoin::Failed ? Rejoin::Failed : Rejoin::Joined;
 }
 
 /// --security DIR [--identity NAME]: the files of one participant (ipc::dds::securityFromFolder).
