@@ -76,4 +76,33 @@ void HandshakeWatch::trim()
     }
 }
 
+void RefusedPrefixes::add(const std::uint8_t* prefix)
+{
+    std::string key(reinterpret_cast<const char*>(prefix), kPrefixBytes);
+    const std::unique_lock lock(mutex_);
+    if (!set_.insert(key).second) {
+        return;
+    }
+    order_.push_back(std::move(key));
+    if (order_.size() > kMaxEntries) {
+        set_.erase(order_.front());
+        order_.pop_front();
+    }
+    size_.store(set_.size(), std::memory_order_release);
+}
+
+bool RefusedPrefixes::drop(const std::uint8_t* prefix) const
+{
+    if (size_.load(std::memory_order_acquire) == 0) {
+        return false;
+    }
+    const std::string key(reinterpret_cast<const char*>(prefix), kPrefixBytes); // 12 bytes: no allocation (SSO)
+    const std::shared_lock lock(mutex_);
+    if (set_.count(key) == 0) {
+        return false;
+    }
+    dropped_.fetch_add(1, std::memory_order_relaxed);
+    return true;
+}
+
 } // namespace ugv::ipc::dds

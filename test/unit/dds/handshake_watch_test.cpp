@@ -2,7 +2,9 @@
 
 #include "ugv/ipc/handshake_watch.hpp"
 
+#include <array>
 #include <chrono>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -112,6 +114,41 @@ TEST(RejoinBackoff, ACheckWithoutAStallStartsThePaceAgain)
     EXPECT_TRUE(b.due(kT0 + seconds(12), 1));  // a new stall is met at once
     b.joined(kT0 + seconds(12));
     EXPECT_EQ(b.wait(), seconds(10));
+}
+
+/// A GUID prefix whose first bytes are `n`.
+std::array<std::uint8_t, RefusedPrefixes::kPrefixBytes> prefix(std::uint32_t n)
+{
+    std::array<std::uint8_t, RefusedPrefixes::kPrefixBytes> p{};
+    for (std::size_t i = 0; i < 4; ++i) {
+        p[i] = static_cast<std::uint8_t>(n >> (8 * i));
+    }
+    return p;
+}
+
+TEST(RefusedPrefixes, OnlyARefusedParticipantsDatagramsAreDroppedAndCounted)
+{
+    RefusedPrefixes r;
+    EXPECT_FALSE(r.drop(prefix(1).data())); // nothing refused yet
+    r.add(prefix(1).data());
+    r.add(prefix(1).data()); // Fast DDS reports a refused participant again and again
+    EXPECT_TRUE(r.drop(prefix(1).data()));
+    EXPECT_FALSE(r.drop(prefix(2).data()));
+    EXPECT_TRUE(r.drop(prefix(1).data()));
+    EXPECT_EQ(r.dropped(), 2U);
+}
+
+TEST(RefusedPrefixes, AFloodOfRefusedParticipantsKeepsTheNewestAndForgetsTheOldest)
+{
+    RefusedPrefixes r;
+    const auto n = static_cast<std::uint32_t>(RefusedPrefixes::kMaxEntries + 10);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        r.add(prefix(i).data());
+    }
+    EXPECT_FALSE(r.drop(prefix(0).data()));
+    EXPECT_FALSE(r.drop(prefix(9).data()));
+    EXPECT_TRUE(r.drop(prefix(10).data()));
+    EXPECT_TRUE(r.drop(prefix(n - 1).data()));
 }
 
 } // namespace

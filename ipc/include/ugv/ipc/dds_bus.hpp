@@ -392,6 +392,13 @@ public:
     /// The same, with the handshakes that never ended with participants naming another CA or none (refused on their
     /// side; joining again cannot help) counted apart. {0, 0} on an open bus. Thread-safe.
     [[nodiscard]] HandshakeWatch::ByCa unfinishedHandshakes(std::chrono::steady_clock::duration olderThan) const;
+    /// On a secured bus: the refusals Fast DDS reported, and the datagrams of refused participants dropped on arrival
+    /// since (RefusedPrefixes: Fast DDS 2.9.1 leaks memory on each refused handshake it answers). Thread-safe.
+    struct Refusals {
+        std::uint64_t reported = 0;
+        std::uint64_t datagramsDropped = 0;
+    };
+    [[nodiscard]] Refusals refusals() const;
     /// The participants this one discovered on a secured bus (and has not lost), by the CA they name (tests and
     /// diagnostics). {0, 0} on an open bus. Thread-safe.
     [[nodiscard]] HandshakeWatch::ByCa handshakePeers() const;
@@ -435,6 +442,8 @@ private:
     /// The participant of config_ with its publishers and subscribers into dds_ (its topics come with the first
     /// endpoints).
     Result<void, Error> openParticipant(const eprosima::fastdds::dds::DomainParticipantQos& qos);
+    /// The refused participants' prefixes (null on an open bus), for the UDP transport's filter.
+    [[nodiscard]] std::shared_ptr<const RefusedPrefixes> refusedPrefixes() const;
     /// `count`(this participant's HandshakeWatch key), {0, 0} on an open bus (endpointGuard_ held shared).
     template <class Count>
     [[nodiscard]] HandshakeWatch::ByCa watched(Count count) const;

@@ -14,11 +14,16 @@
 ///
 /// Plain bookkeeping, fed by the participant listener: thread-safe, no Fast DDS types.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
+#include <deque>
 #include <mutex>
+#include <shared_mutex>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace ugv::ipc::dds {
 
@@ -67,6 +72,33 @@ private:
 
     mutable std::mutex mutex_;
     std::unordered_map<std::string, Entry> entries_; ///< local|remote -> when discovered, and whether it ended
+};
+
+/// The GUID prefixes of the participants the secured bus refused, whose datagrams its UDP transport then drops on
+/// arrival. Fast DDS 2.9.1 answers every handshake request of a refused participant again (one a second from a
+/// Fast DDS peer, as fast as an attacker likes from another) and leaks the certificate it parses from each (ASan:
+/// `PKIDH::begin_handshake_reply`; measured: a ground station's RSS grew 4.4 kB/s while one participant of another
+/// CA was on the network, flat without). Dropped, a refused participant costs one refusal. Bounded: kMaxEntries,
+/// the oldest forgotten first. Thread-safe: contains() runs on Fast DDS's receive threads for every datagram (no
+/// lock while the set is empty, a shared one after).
+class RefusedPrefixes {
+public:
+    static constexpr std::size_t kPrefixBytes = 12;
+    static constexpr std::size_t kMaxEntries = 1024;
+
+    /// Refuses the participant of the kPrefixBytes-byte GUID prefix at `prefix`.
+    void add(const std::uint8_t* prefix);
+    /// Whether the GUID prefix at `prefix` (kPrefixBytes bytes) was refused; counts a drop when it was.
+    [[nodiscard]] bool drop(const std::uint8_t* prefix) const;
+    /// Datagrams drop() said to drop.
+    [[nodiscard]] std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
+
+private:
+    mutable std::shared_mutex mutex_;
+    std::unordered_set<std::string> set_;
+    std::deque<std::string> order_; ///< oldest first
+    std::atomic<std::size_t> size_{0};
+    mutable std::atomic<std::uint64_t> dropped_{0};
 };
 
 /// When a process whose handshakes stalled joins the bus again: at once the first time, then after 10 s, 20 s, 40 s
