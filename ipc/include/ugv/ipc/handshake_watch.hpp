@@ -79,7 +79,7 @@ private:
 /// Fast DDS peer, as fast as an attacker likes from another) and leaks the certificate it parses from each (ASan:
 /// `PKIDH::begin_handshake_reply`; measured: a ground station's RSS grew 4.4 kB/s while one participant of another
 /// CA was on the network, flat without). Dropped, a refused participant costs one refusal. Bounded: kMaxEntries,
-/// the oldest forgotten first. Thread-safe: contains() runs on Fast DDS's receive threads for every datagram (no
+/// the oldest forgotten first. Thread-safe: drop() runs on Fast DDS's receive threads for every datagram (no
 /// lock while the set is empty, a shared one after).
 class RefusedPrefixes {
 public:
