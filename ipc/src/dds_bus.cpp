@@ -157,10 +157,9 @@ void addSecurityProperties(const SecurityConfig& c, fdds::DomainParticipantQos& 
     p.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
 }
 
-/// UDP with the datagrams of refused participants dropped on arrival (RefusedPrefixes: Fast DDS 2.9.1 leaks memory
-/// on every handshake request of a refused participant it answers). A datagram's RTPS header carries its sender's
-/// GUID prefix in clear at bytes 8-19, whatever the protection. Shared memory stays as it is: Fast DDS 2.9.1 tells
-/// its shared-memory transport by the descriptor's type, and a chained one would turn it off.
+/// A transport with the messages of refused participants dropped on arrival (RefusedPrefixes: Fast DDS 2.9.1 leaks
+/// memory on every handshake request of a refused participant it answers). A message's RTPS header carries its
+/// sender's GUID prefix in clear at bytes 8-19, whatever the protection.
 class RefusedFilterTransport : public eprosima::fastdds::rtps::ChainingTransport {
 public:
     RefusedFilterTransport(const eprosima::fastdds::rtps::ChainingTransportDescriptor& descriptor,
@@ -191,10 +190,11 @@ private:
     std::shared_ptr<const RefusedPrefixes> refused_;
 };
 
+/// `low` (UDPv4) through the filter.
 struct RefusedFilterDescriptor : eprosima::fastdds::rtps::ChainingTransportDescriptor {
-    explicit RefusedFilterDescriptor(std::shared_ptr<const RefusedPrefixes> refusedPrefixes)
-        : ChainingTransportDescriptor(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>()),
-          refused(std::move(refusedPrefixes))
+    RefusedFilterDescriptor(std::shared_ptr<eprosima::fastdds::rtps::TransportDescriptorInterface> low,
+                            std::shared_ptr<const RefusedPrefixes> refusedPrefixes)
+        : ChainingTransportDescriptor(std::move(low)), refused(std::move(refusedPrefixes))
     {
     }
     eprosima::fastdds::rtps::TransportInterface* create_transport() const override
@@ -204,7 +204,22 @@ struct RefusedFilterDescriptor : eprosima::fastdds::rtps::ChainingTransportDescr
     std::shared_ptr<const RefusedPrefixes> refused;
 };
 
-/// The participant's QoS: name, transports (UDP through the filter of `refused` when given), discovery servers, the
+/// Shared memory through the filter. Fast DDS 2.9.1 tells a participant's shared-memory transport by its
+/// descriptor's type (and announces shared-memory locators only then), so this descriptor is one, and makes the
+/// chained transport over a plain one.
+struct RefusedFilterSharedMemDescriptor : eprosima::fastdds::rtps::SharedMemTransportDescriptor {
+    explicit RefusedFilterSharedMemDescriptor(std::shared_ptr<const RefusedPrefixes> refused)
+        : chained(std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>(), std::move(refused))
+    {
+    }
+    eprosima::fastdds::rtps::TransportInterface* create_transport() const override
+    {
+        return chained.create_transport();
+    }
+    RefusedFilterDescriptor chained;
+};
+
+/// The participant's QoS: name, transports (through the filter of `refused` when given), discovery servers, the
 /// security plugins.
 Result<fdds::DomainParticipantQos, Error> participantQos(const BusConfig& config,
                                                          const std::shared_ptr<const RefusedPrefixes>& refused)
@@ -216,12 +231,15 @@ Result<fdds::DomainParticipantQos, Error> participantQos(const BusConfig& config
     const std::string enclave = "enclave=/;";
     pq.user_data().data_vec(std::vector<rtps::octet>(enclave.begin(), enclave.end()));
     pq.transport().use_builtin_transports = false;
-    if (config.sharedMemory) {
+    if (config.sharedMemory && refused) {
+        pq.transport().user_transports.push_back(std::make_shared<RefusedFilterSharedMemDescriptor>(refused));
+    } else if (config.sharedMemory) {
         pq.transport().user_transports.push_back(
             std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
     }
     if (refused) {
-        pq.transport().user_transports.push_back(std::make_shared<RefusedFilterDescriptor>(refused));
+        pq.transport().user_transports.push_back(std::make_shared<RefusedFilterDescriptor>(
+            std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(), refused));
     } else {
         pq.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
     }

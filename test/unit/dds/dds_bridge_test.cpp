@@ -260,34 +260,39 @@ TEST_F(SecuredTeam, APeerOfAnotherTeamsCaIsNotTakenForAStalledHandshake)
 }
 
 // Fast DDS 2.9.1 answers every handshake request of a participant it refused (one a second) and leaks the
-// certificate it parses each time (ASan; 4.4 kB/s of a station's RSS). The bus drops a refused participant's UDP
-// datagrams on arrival, so it is answered once.
+// certificate it parses each time (ASan; 4.4 kB/s of a station's RSS). The bus drops a refused participant's
+// messages on arrival, over UDP and over shared memory, so it is answered once.
 TEST_F(SecuredTeam, ARefusedParticipantsDatagramsAreDroppedSoItIsAnsweredOnce)
 {
-    // Arrange: ugv-1 of the team and ugv-2 of another CA, over UDP (the filter's transport).
     const std::filesystem::path rogueTeam = folder_ / "rogue";
     const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" +
                                 rogueTeam.string() + "' --partition " + partition_ + " ugv-2 >/dev/null 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    adapters::ServiceConfig teamConfig = vehicle("ugv-1");
-    adapters::ServiceConfig rogueConfig = vehicle("ugv-2", rogueTeam);
-    teamConfig.dds.sharedMemory = false;
-    rogueConfig.dds.sharedMemory = false;
-    auto team = dds::Bus::create(busConfig(teamConfig));
-    auto rogue = dds::Bus::create(busConfig(rogueConfig));
-    ASSERT_TRUE(team) << team.error().message();
-    ASSERT_TRUE(rogue) << rogue.error().message();
-    const auto reported = [&] { return (*team)->refusals().reported + (*rogue)->refusals().reported; };
-    const auto dropped = [&] { return (*team)->refusals().datagramsDropped + (*rogue)->refusals().datagramsDropped; };
+    for (const bool sharedMemory : {false, true}) {
+        SCOPED_TRACE(sharedMemory ? "UDP and shared memory" : "UDP alone");
+        // Arrange: ugv-1 of the team and ugv-2 of another CA.
+        adapters::ServiceConfig teamConfig = vehicle("ugv-1");
+        adapters::ServiceConfig rogueConfig = vehicle("ugv-2", rogueTeam);
+        teamConfig.dds.sharedMemory = sharedMemory;
+        rogueConfig.dds.sharedMemory = sharedMemory;
+        auto team = dds::Bus::create(busConfig(teamConfig));
+        auto rogue = dds::Bus::create(busConfig(rogueConfig));
+        ASSERT_TRUE(team) << team.error().message();
+        ASSERT_TRUE(rogue) << rogue.error().message();
+        const auto reported = [&] { return (*team)->refusals().reported + (*rogue)->refusals().reported; };
+        const auto dropped = [&] {
+            return (*team)->refusals().datagramsDropped + (*rogue)->refusals().datagramsDropped;
+        };
 
-    // Act: the first refusal, then 5 s of the refused side's retries.
-    ASSERT_TRUE(eventually([&] { return reported() > 0; })) << "neither side refused the other";
-    const std::uint64_t first = reported();
-    std::this_thread::sleep_for(std::chrono::seconds(5));
+        // Act: the first refusal, then 5 s of the refused side's retries.
+        ASSERT_TRUE(eventually([&] { return reported() > 0; })) << "neither side refused the other";
+        const std::uint64_t first = reported();
+        std::this_thread::sleep_for(std::chrono::seconds(5));
 
-    // Assert: its retries dropped on arrival, none answered (about 5 without the filter).
-    EXPECT_LE(reported(), first + 1) << "Fast DDS answered a refused participant again";
-    EXPECT_GT(dropped(), 0U);
+        // Assert: its retries dropped on arrival, none answered (about 5 without the filter).
+        EXPECT_LE(reported(), first + 1) << "Fast DDS answered a refused participant again";
+        EXPECT_GT(dropped(), 0U);
+    }
 }
 
 // What a stall looks like from one side: a peer that names this team's CA and whose handshake never ends. An impostor
