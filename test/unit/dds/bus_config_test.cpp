@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -157,6 +158,44 @@ TEST(BusSecurity, AFifoIsRefusedWithoutOpeningIt)
 
     ASSERT_FALSE(sut);
     EXPECT_NE(sut.error().what.find("cannot be read"), std::string::npos) << sut.error().message();
+}
+
+// The identity CA's subject is read before the participant is made (peers that name it are the team's): a file
+// that looks like a certificate but is none is named with its key and path.
+TEST(BusSecurity, AnIdentityCaThatIsNoCertificateIsNamedBeforeAnyParticipant)
+{
+    const std::string dir = "/tmp/ugv-bus-security-ca-" + std::to_string(::getpid());
+    ASSERT_EQ(::mkdir(dir.c_str(), 0700), 0);
+    const auto write = [&](const std::string& name, const std::string& text) {
+        const std::string path = dir + "/" + name;
+        std::ofstream(path) << text;
+        return path;
+    };
+    const std::string notACertificate = "-----BEGIN CERTIFICATE-----\nnot base64 at all\n-----END CERTIFICATE-----\n";
+    BusConfig c = good();
+    c.partitions = {"team"};
+    c.security.enabled = true;
+    c.security.identity = "ugv-1";
+    c.security.identityCa = write("ca.pem", notACertificate);
+    c.security.certificate = write("cert.pem", notACertificate);
+    c.security.privateKey = write("key.pem", "-----BEGIN PRIVATE KEY-----\n-----END PRIVATE KEY-----\n");
+    c.security.permissionsCa = c.security.identityCa;
+    c.security.governance = write("governance.p7s", "Content-Type: application/pkcs7-signature\n");
+    c.security.permissions = write("permissions.p7s", "Content-Type: application/pkcs7-signature\n");
+    ASSERT_TRUE(validate(c, "dds")) << "the files should pass the checks before the CA is read";
+
+    const auto sut = Bus::create(c);
+    for (const char* name : {"ca.pem", "cert.pem", "key.pem", "governance.p7s", "permissions.p7s"}) {
+        ::unlink((dir + "/" + name).c_str());
+    }
+    ::rmdir(dir.c_str());
+
+    ASSERT_FALSE(sut);
+    EXPECT_EQ(sut.error().where, "dds.security.identity_ca");
+    EXPECT_NE(sut.error().what.find("cannot read a certificate from '" + c.security.identityCa + "'"),
+              std::string::npos)
+        << sut.error().message();
+    EXPECT_NE(sut.error().fix.find("make_security.sh"), std::string::npos) << sut.error().message();
 }
 
 TEST(BusSecurity, TheIdentityMustNameAPartition)
