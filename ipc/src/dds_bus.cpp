@@ -292,6 +292,8 @@ public:
     /// The participants refused, for the UDP transport's filter.
     const std::shared_ptr<RefusedPrefixes> refused = std::make_shared<RefusedPrefixes>();
     std::atomic<std::uint64_t> refusals{0}; ///< refusals Fast DDS reported (each retry of a refused one counts)
+    /// Participants refused as they were discovered: naming another CA than this team's, or none.
+    std::atomic<std::uint64_t> refusedAtDiscovery{0};
 
     void on_participant_discovery(fdds::DomainParticipant* participant,
                                   eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override
@@ -302,10 +304,20 @@ public:
         if (info.status == Status::DISCOVERED_PARTICIPANT) {
             // The identity token a peer announces names its CA (an open participant's names none).
             const auto& token = info.info.identity_token_.properties();
-            const bool sameCa = std::any_of(token.begin(), token.end(), [this](const rtps::Property& p) {
-                return p.name() == "dds.ca.sn" && p.value() == caSubject_;
-            });
+            const auto ca = std::find_if(token.begin(), token.end(),
+                                         [](const rtps::Property& p) { return p.name() == "dds.ca.sn"; });
+            const bool sameCa = ca != token.end() && ca->value() == caSubject_;
             handshakes.discovered(local, remote, HandshakeWatch::Clock::now(), sameCa);
+            if (ca != token.end() && !sameCa) {
+                // Its certificate cannot be of this team's CA, so its handshake would be refused, and Fast DDS 2.9.1
+                // leaks the certificate of every handshake request it refuses: its messages are dropped from now on,
+                // before any handshake. A peer that names no CA is left to the handshake: an open participant sends
+                // no handshake request, and a Cyclone DDS participant (a ROS 2 node) of the team names none here
+                // (measured: system.cyclone-interop-secured).
+                refusedAtDiscovery.fetch_add(1, std::memory_order_relaxed);
+                refused->add(info.info.m_guid.guidPrefix.value);
+                refuse(info.info.m_guid.guidPrefix, "it names another identity CA, '" + ca->value() + "'");
+            }
         } else if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT) {
             handshakes.removed(local, remote);
         }
@@ -317,7 +329,8 @@ public:
         if (info.status == eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::UNAUTHORIZED_PARTICIPANT) {
             refusals.fetch_add(1, std::memory_order_relaxed);
             refused->add(info.guid.guidPrefix.value);
-            refuse(info.guid.guidPrefix);
+            refuse(info.guid.guidPrefix, "it has no certificate (DDS Security off), or one this team's identity CA "
+                                         "did not sign, or its signed permissions refuse it");
         }
     }
     void on_publisher_discovery(fdds::DomainParticipant* /*participant*/,
@@ -360,7 +373,7 @@ private:
     /// Each refused participant is news to an operator (an intruder, or a team member with wrong files), but a
     /// flood must not flood the journal: the first few participants are named once each (Fast DDS tries a refused
     /// one again and again), the rest not.
-    void refuse(const rtps::GuidPrefix_t& who)
+    void refuse(const rtps::GuidPrefix_t& who, const std::string& why)
     {
         const std::string key = prefixKey(who);
         bool last = false;
@@ -372,10 +385,8 @@ private:
             named_.push_back(key);
             last = named_.size() == kRefusalsNamed;
         }
-        UGV_LOG(Ipc, Warn) << "dds: refused participant " << prefixHex(who)
-                           << ": it has no certificate (DDS Security off), or one this team's identity CA did not "
-                              "sign, or its signed permissions refuse it (if it is the team's, give it this team's "
-                              "files from make_security.sh)"
+        UGV_LOG(Ipc, Warn) << "dds: refused participant " << prefixHex(who) << ": " << why
+                           << " (if it is the team's, give it this team's files from make_security.sh)"
                            << (last ? "; further refused participants are not named" : "");
     }
     static std::string guidKey(const rtps::GUID_t& g)
@@ -666,7 +677,8 @@ Bus::Refusals Bus::refusals() const
     if (identities_ == nullptr) {
         return {};
     }
-    return {identities_->refusals.load(std::memory_order_relaxed), identities_->refused->dropped()};
+    return {identities_->refusals.load(std::memory_order_relaxed),
+            identities_->refusedAtDiscovery.load(std::memory_order_relaxed), identities_->refused->dropped()};
 }
 
 std::string describe(const StallRejoin& r)

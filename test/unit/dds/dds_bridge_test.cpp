@@ -260,9 +260,10 @@ TEST_F(SecuredTeam, APeerOfAnotherTeamsCaIsNotTakenForAStalledHandshake)
 }
 
 // Fast DDS 2.9.1 answers every handshake request of a participant it refused (one a second) and leaks the
-// certificate it parses each time (ASan; 4.4 kB/s of a station's RSS). The bus drops a refused participant's
-// messages on arrival, over UDP and over shared memory, so it is answered once.
-TEST_F(SecuredTeam, ARefusedParticipantsDatagramsAreDroppedSoItIsAnsweredOnce)
+// certificate it parses each time (ASan; 4.4 kB/s of a station's RSS). A participant whose identity names another CA
+// is refused as it is discovered and its messages are dropped on arrival, over UDP and over shared memory, so that no
+// handshake of it is answered (before, one on each side, then every retry).
+TEST_F(SecuredTeam, AParticipantOfAnotherCaIsRefusedAtDiscoveryAndNoHandshakeOfItIsAnswered)
 {
     const std::filesystem::path rogueTeam = folder_ / "rogue";
     const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" +
@@ -279,19 +280,23 @@ TEST_F(SecuredTeam, ARefusedParticipantsDatagramsAreDroppedSoItIsAnsweredOnce)
         auto rogue = dds::Bus::create(busConfig(rogueConfig));
         ASSERT_TRUE(team) << team.error().message();
         ASSERT_TRUE(rogue) << rogue.error().message();
-        const auto reported = [&] { return (*team)->refusals().reported + (*rogue)->refusals().reported; };
+        const auto answered = [&] { return (*team)->refusals().reported + (*rogue)->refusals().reported; };
         const auto dropped = [&] {
             return (*team)->refusals().datagramsDropped + (*rogue)->refusals().datagramsDropped;
         };
 
-        // Act: the first refusal, then 5 s of the refused side's retries.
-        ASSERT_TRUE(eventually([&] { return reported() > 0; })) << "neither side refused the other";
-        const std::uint64_t first = reported();
+        // Act: each discovers the other, then 5 s of the other's retries.
+        ASSERT_TRUE(eventually([&] {
+            return (*team)->refusals().atDiscovery > 0 && (*rogue)->refusals().atDiscovery > 0;
+        })) << "a side did not refuse the other as it discovered it";
         std::this_thread::sleep_for(std::chrono::seconds(5));
 
-        // Assert: its retries dropped on arrival, none answered (about 5 without the filter).
-        EXPECT_LE(reported(), first + 1) << "Fast DDS answered a refused participant again";
+        // Assert: no handshake answered and refused (about 6 in 5 s without the refusal at discovery and the
+        // filter), the other's messages dropped on arrival.
+        EXPECT_EQ(answered(), 0U) << "Fast DDS answered a handshake of a participant of another CA";
         EXPECT_GT(dropped(), 0U);
+        EXPECT_EQ((*team)->refusals().atDiscovery, 1U);
+        EXPECT_EQ((*rogue)->refusals().atDiscovery, 1U);
     }
 }
 
