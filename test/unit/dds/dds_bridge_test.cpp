@@ -261,43 +261,38 @@ TEST_F(SecuredTeam, APeerOfAnotherTeamsCaIsNotTakenForAStalledHandshake)
 
 // Fast DDS 2.9.1 answers every handshake request of a participant it refused (one a second) and leaks the
 // certificate it parses each time (ASan; 4.4 kB/s of a station's RSS). A participant whose identity names another CA
-// is refused as it is discovered and its messages are dropped on arrival, over UDP and over shared memory, so that no
-// handshake of it is answered (before, one on each side, then every retry).
+// is refused as it is discovered and its UDP datagrams are dropped on arrival, so that no handshake of it is answered
+// (before, one on each side, then every retry). Over UDP alone, as between vehicles: shared memory is not filtered
+// (the filter there made the secured hand-over's tail 2.5 times as long; dds_bus.cpp).
 TEST_F(SecuredTeam, AParticipantOfAnotherCaIsRefusedAtDiscoveryAndNoHandshakeOfItIsAnswered)
 {
     const std::filesystem::path rogueTeam = folder_ / "rogue";
     const std::string command = "bash '" UGV_SOURCE_DIR "/bringup/deploy/security/make_security.sh' '" +
                                 rogueTeam.string() + "' --partition " + partition_ + " ugv-2 >/dev/null 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    for (const bool sharedMemory : {false, true}) {
-        SCOPED_TRACE(sharedMemory ? "UDP and shared memory" : "UDP alone");
-        // Arrange: ugv-1 of the team and ugv-2 of another CA.
-        adapters::ServiceConfig teamConfig = vehicle("ugv-1");
-        adapters::ServiceConfig rogueConfig = vehicle("ugv-2", rogueTeam);
-        teamConfig.dds.sharedMemory = sharedMemory;
-        rogueConfig.dds.sharedMemory = sharedMemory;
-        auto team = dds::Bus::create(busConfig(teamConfig));
-        auto rogue = dds::Bus::create(busConfig(rogueConfig));
-        ASSERT_TRUE(team) << team.error().message();
-        ASSERT_TRUE(rogue) << rogue.error().message();
-        const auto answered = [&] { return (*team)->refusals().reported + (*rogue)->refusals().reported; };
-        const auto dropped = [&] {
-            return (*team)->refusals().datagramsDropped + (*rogue)->refusals().datagramsDropped;
-        };
+    // Arrange: ugv-1 of the team and ugv-2 of another CA, over UDP.
+    adapters::ServiceConfig teamConfig = vehicle("ugv-1");
+    adapters::ServiceConfig rogueConfig = vehicle("ugv-2", rogueTeam);
+    teamConfig.dds.sharedMemory = false;
+    rogueConfig.dds.sharedMemory = false;
+    auto team = dds::Bus::create(busConfig(teamConfig));
+    auto rogue = dds::Bus::create(busConfig(rogueConfig));
+    ASSERT_TRUE(team) << team.error().message();
+    ASSERT_TRUE(rogue) << rogue.error().message();
+    const auto answered = [&] { return (*team)->refusals().reported + (*rogue)->refusals().reported; };
+    const auto dropped = [&] { return (*team)->refusals().datagramsDropped + (*rogue)->refusals().datagramsDropped; };
 
-        // Act: each discovers the other, then 5 s of the other's retries.
-        ASSERT_TRUE(eventually([&] {
-            return (*team)->refusals().atDiscovery > 0 && (*rogue)->refusals().atDiscovery > 0;
-        })) << "a side did not refuse the other as it discovered it";
-        std::this_thread::sleep_for(std::chrono::seconds(5));
+    // Act: each discovers the other, then 5 s of the other's retries.
+    ASSERT_TRUE(eventually([&] { return (*team)->refusals().atDiscovery > 0 && (*rogue)->refusals().atDiscovery > 0; }))
+        << "a side did not refuse the other as it discovered it";
+    std::this_thread::sleep_for(std::chrono::seconds(5));
 
-        // Assert: no handshake answered and refused (about 6 in 5 s without the refusal at discovery and the
-        // filter), the other's messages dropped on arrival.
-        EXPECT_EQ(answered(), 0U) << "Fast DDS answered a handshake of a participant of another CA";
-        EXPECT_GT(dropped(), 0U);
-        EXPECT_EQ((*team)->refusals().atDiscovery, 1U);
-        EXPECT_EQ((*rogue)->refusals().atDiscovery, 1U);
-    }
+    // Assert: no handshake answered and refused (1 without the refusal at discovery, about 6 in 5 s without the
+    // filter), the other's datagrams dropped on arrival.
+    EXPECT_EQ(answered(), 0U) << "Fast DDS answered a handshake of a participant of another CA";
+    EXPECT_GT(dropped(), 0U);
+    EXPECT_EQ((*team)->refusals().atDiscovery, 1U);
+    EXPECT_EQ((*rogue)->refusals().atDiscovery, 1U);
 }
 
 // What a stall looks like from one side: a peer that names this team's CA and whose handshake never ends. An impostor
