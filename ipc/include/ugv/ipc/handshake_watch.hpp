@@ -74,11 +74,12 @@ private:
     std::unordered_map<std::string, Entry> entries_; ///< local|remote -> when discovered, and whether it ended
 };
 
-/// The GUID prefixes of the participants the secured bus refused, whose messages its transports (UDP and shared memory)
-/// then drop on arrival. Fast DDS 2.9.1 answers every handshake request of a refused participant again (one a second
+/// The GUID prefixes of the participants the secured bus refused (after a refused handshake, or at discovery when a
+/// participant names another CA), whose datagrams its UDP transport then drops on arrival (shared memory is not
+/// filtered: dds_bus.cpp). Fast DDS 2.9.1 answers every handshake request of a refused participant again (one a second
 /// from a Fast DDS peer, as fast as an attacker likes from another) and leaks the certificate it parses from each
 /// (ASan: `PKIDH::begin_handshake_reply`; measured: a ground station's RSS grew 4.4 kB/s while one participant of
-/// another CA was on the network, flat without). Dropped, a refused participant costs one refusal. Bounded:
+/// another CA was on the network, flat without). Dropped, a refused participant costs one refusal at most. Bounded:
 /// kMaxEntries, the oldest forgotten first. Thread-safe: drop() runs on Fast DDS's receive threads for every datagram
 /// (no lock while the set is empty, a shared one after).
 class RefusedPrefixes {
