@@ -279,7 +279,7 @@ public:
     /// The participants refused, for the UDP transport's filter.
     const std::shared_ptr<RefusedPrefixes> refused = std::make_shared<RefusedPrefixes>();
     std::atomic<std::uint64_t> refusals{0}; ///< refusals Fast DDS reported (each retry of a refused one counts)
-    /// Participants refused as they were discovered: naming another CA than this team's, or none.
+    /// Participants refused as they were discovered: naming another CA than this team's (one naming none is not).
     std::atomic<std::uint64_t> refusedAtDiscovery{0};
 
     void on_participant_discovery(fdds::DomainParticipant* participant,

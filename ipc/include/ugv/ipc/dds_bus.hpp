@@ -393,7 +393,7 @@ public:
     /// side; joining again cannot help) counted apart. {0, 0} on an open bus. Thread-safe.
     [[nodiscard]] HandshakeWatch::ByCa unfinishedHandshakes(std::chrono::steady_clock::duration olderThan) const;
     /// On a secured bus: the refusals Fast DDS reported (handshakes it answered and refused), the participants refused
-    /// as they were discovered (naming another identity CA than this team's, or none: refused before any handshake),
+    /// as they were discovered (naming another identity CA than this team's: refused before any handshake),
     /// and the datagrams of refused participants dropped on arrival since (RefusedPrefixes: Fast DDS 2.9.1 leaks
     /// memory on each refused handshake it answers). Thread-safe.
     struct Refusals {
